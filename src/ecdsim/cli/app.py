@@ -1,0 +1,188 @@
+"""``ecdsim``: the command-line entry point.
+
+Commands import the library lazily so that ``ecdsim --help`` starts fast. User errors
+(bad config, bad arguments, a model asked outside its domain) print one line per
+problem on stderr and exit with code 2, with no traceback.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, NoReturn
+
+import typer
+
+from ecdsim._version import __version__
+
+if TYPE_CHECKING:
+    from ecdsim.config import Config
+    from ecdsim.deployment import Prediction
+
+USER_ERROR = 2
+
+app = typer.Typer(
+    name="ecdsim",
+    help=(
+        "Model, size and verify eddy current dampers (ECDs) in spring-driven deployments.\n\n"
+        "Example: [bold]ecdsim deploy examples/paper_cc16.toml --plot plots[/bold]"
+    ),
+    rich_markup_mode="rich",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+
+def _version_callback(value: bool) -> None:
+    if value:
+        typer.echo(f"ecdsim {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_version_callback, is_eager=True, help="Print the version."
+        ),
+    ] = False,
+) -> None:
+    """Model, size and verify eddy current dampers in spring-driven deployments."""
+
+
+def fail(problems: list[str]) -> NoReturn:
+    """Print user errors on stderr, one line each, and exit with code 2."""
+    for problem in problems:
+        typer.echo(f"error: {problem}", err=True)
+    raise typer.Exit(USER_ERROR)
+
+
+def _load(config_path: Path, temperatures: list[str] | None, methods: list[str] | None) -> Config:
+    from dataclasses import replace
+
+    from ecdsim.config import ConfigError, load_config
+    from ecdsim.config.units import TEMPERATURE, QuantityError
+    from ecdsim.solvers import SOLVERS
+
+    try:
+        config = load_config(config_path)
+    except ConfigError as exc:
+        fail(str(exc).splitlines())
+    problems: list[str] = []
+    temps = config.temperatures
+    if temperatures:
+        parsed = []
+        for text in temperatures:
+            # A bare number on the command line means degC, the field's convention.
+            value = text if any(c.isalpha() for c in text) else f"{text} degC"
+            try:
+                parsed.append(TEMPERATURE.parse(value))
+            except QuantityError as exc:
+                problems.append(f"--temperature: {exc}")
+        temps = tuple(parsed)
+    chosen = config.methods
+    if methods:
+        unknown = [m for m in methods if m not in SOLVERS]
+        problems += [
+            f"--method: {m!r} is not a method; expected one of {sorted(SOLVERS)}" for m in unknown
+        ]
+        chosen = tuple(methods)
+    if problems:
+        fail(problems)
+    return replace(config, temperatures=temps, methods=chosen)
+
+
+def _predict(config: Config) -> Prediction:
+    from ecdsim.deployment import ModelDomainError, predict
+
+    try:
+        return predict(config.system, config.temperatures, config.methods)
+    except ModelDomainError as exc:
+        fail([f"{config.source}: {exc}"])
+
+
+def _warn(prediction: Prediction) -> None:
+    for warning in prediction.warnings:
+        where = f"[{warning.method}] " if warning.method else ""
+        typer.echo(f"warning: {where}{warning.message}", err=True)
+
+
+def _render(prediction: Prediction, as_json: bool, plot_dir: Path | None) -> None:
+    from ecdsim.cli import render
+
+    if plot_dir is not None:
+        from ecdsim.plotting import write_deployment_plots
+
+        try:
+            written = write_deployment_plots(prediction, plot_dir)
+        except OSError as exc:
+            fail([f"--plot {plot_dir}: cannot write plots ({exc.strerror or exc})"])
+    else:
+        written = []
+    if as_json:
+        typer.echo(render.to_json(prediction))
+    else:
+        render.print_tables(prediction)
+    _warn(prediction)
+    for path in written:
+        typer.echo(f"wrote {path}", err=as_json)
+
+
+ConfigArg = Annotated[Path, typer.Argument(help="TOML configuration file (see docs/config.md).")]
+JsonOpt = Annotated[
+    bool, typer.Option("--json", help="Print stable JSON on stdout (docs/json.md).")
+]
+PlotOpt = Annotated[
+    Path | None, typer.Option("--plot", help="Write PNG plots into this folder.", metavar="DIR")
+]
+TempOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--temperature",
+        "-T",
+        help="Analysis temperature, repeatable; overrides [analysis] (bare numbers are degC).",
+    ),
+]
+MethodOpt = Annotated[
+    list[str] | None,
+    typer.Option("--method", "-m", help="Solver, repeatable: paper, exact. Overrides [analysis]."),
+]
+
+
+@app.command(
+    epilog=(
+        "Example: [bold]ecdsim deploy examples/paper_cc16.toml -T -40 -T 25 -T 100 --json[/bold]"
+    )
+)
+def deploy(
+    config: ConfigArg,
+    as_json: JsonOpt = False,
+    plot: PlotOpt = None,
+    temperature: TempOpt = None,
+    method: MethodOpt = None,
+) -> None:
+    """Predict deployment time, speeds and stall at each temperature (paper Eq. 1-13)."""
+    loaded = _load(config, temperature, method)
+    _render(_predict(loaded), as_json, plot)
+
+
+@app.command(epilog="Example: [bold]ecdsim demo --out ecdsim-demo[/bold]")
+def demo(
+    out: Annotated[
+        Path, typer.Option("--out", help="Folder for the demo's plots.", metavar="DIR")
+    ] = Path("ecdsim-demo"),
+) -> None:
+    """Run the paper's Cc-16 example (section 6) and write its plots."""
+    from importlib.resources import as_file, files
+
+    resource = files("ecdsim") / "data" / "paper_cc16.toml"
+    with as_file(resource) as path:
+        loaded = _load(path, None, None)
+    typer.echo(f"{loaded.system.name}\n(config: examples/paper_cc16.toml)")
+    _render(_predict(loaded), False, out)
+
+
+def main() -> None:
+    """Console-script entry point."""
+    app()

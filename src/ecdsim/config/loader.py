@@ -1,0 +1,103 @@
+"""Read a TOML configuration into model objects, gathering every problem at once."""
+
+from __future__ import annotations
+
+import hashlib
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from ecdsim.config.errors import ConfigError
+from ecdsim.config.schema import ConfigSpec, describe_field
+from ecdsim.model import DeploymentSystem
+
+
+@dataclass(frozen=True)
+class Config:
+    """A validated configuration, in SI units.
+
+    Attributes
+    ----------
+    system : the deployment system
+    temperatures : analysis temperatures [degC]
+    methods : solver names to run
+    spec : the validated file content (for reports and round trips)
+    source : where it came from (a path or "<string>")
+    sha256 : hash of the file's bytes, for provenance
+    """
+
+    system: DeploymentSystem
+    temperatures: tuple[float, ...]
+    methods: tuple[str, ...]
+    spec: ConfigSpec
+    source: str
+    sha256: str
+
+
+def load_config(path: str | Path) -> Config:
+    """Read and validate a TOML file; :class:`ConfigError` lists every problem."""
+    file = Path(path)
+    try:
+        data = file.read_bytes()
+    except FileNotFoundError:
+        raise ConfigError([f"config file not found: {file}"]) from None
+    except OSError as exc:
+        raise ConfigError([f"cannot read config file {file}: {exc.strerror}"]) from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(["the file is not UTF-8 text"], str(file)) from None
+    return parse_config(text, str(file))
+
+
+def parse_config(text: str, source: str = "<string>") -> Config:
+    """Validate TOML text; :class:`ConfigError` lists every problem."""
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError([f"not valid TOML: {exc}"], source) from None
+    spec = validate(raw, source)
+    system = DeploymentSystem(ecd=spec.ecd(), load=spec.load.to_model(), name=spec.title)
+    return Config(
+        system=system,
+        temperatures=tuple(spec.analysis.temperatures),
+        methods=tuple(spec.analysis.methods),
+        spec=spec,
+        source=source,
+        sha256=hashlib.sha256(text.encode("utf-8")).hexdigest(),
+    )
+
+
+def validate(raw: dict[str, Any], source: str = "<string>") -> ConfigSpec:
+    """Validate a parsed TOML document against the schema."""
+    try:
+        return ConfigSpec.model_validate(raw)
+    except ValidationError as exc:
+        raise ConfigError([_message(e) for e in exc.errors()], source) from None
+
+
+def _path(loc: tuple[Any, ...]) -> str:
+    text = ""
+    for part in loc:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text or "(top level)"
+
+
+def _message(error: Any) -> str:
+    loc = tuple(error["loc"])
+    path = _path(loc)
+    kind = error["type"]
+    expected, known = describe_field(loc)
+    if kind == "missing":
+        return f"{path}: missing; {expected}" if expected else f"{path}: missing"
+    if kind == "extra_forbidden":
+        return f"{path}: unknown key (known keys here: {', '.join(known)})"
+    if kind in {"quantity", "method"}:
+        return f"{path}: {error['msg']}"
+    message = str(error["msg"]).removeprefix("Value error, ")
+    if kind == "value_error":
+        return f"{path}: {message}"
+    return f"{path} = {error.get('input')!r}: {message}"

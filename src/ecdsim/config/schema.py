@@ -1,0 +1,315 @@
+"""The configuration schema: pydantic models whose quantity fields parse unit strings.
+
+Each quantity field is ``Annotated[float, <parser>, <Kind>]``: the parser turns the string
+into an SI float (or a clear error), and the :class:`~ecdsim.config.units.Kind` lets a
+missing-key message say which unit was expected.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Annotated, Any
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic_core import PydanticCustomError
+
+from ecdsim.config.units import (
+    ABSOLUTE_ZERO_C,
+    ANGLE,
+    DAMPING,
+    NUMBER,
+    PER_KELVIN,
+    SPEED,
+    TEMPERATURE,
+    TORQUE,
+    TORQUE_PER_KELVIN,
+    Kind,
+    QuantityError,
+)
+from ecdsim.model import (
+    Ecd,
+    Gearbox,
+    HighSpeedDamper,
+    LinearSpring,
+    LinearTemperatureLaw,
+    Load,
+    Spring,
+    TabulatedSpring,
+    TabulatedTemperatureLaw,
+    TemperatureLaw,
+)
+from ecdsim.solvers import SOLVERS
+
+Check = Callable[[float], str | None]
+
+
+def _positive(x: float) -> str | None:
+    return None if x > 0.0 else "must be > 0"
+
+
+def _non_negative(x: float) -> str | None:
+    return None if x >= 0.0 else "must be >= 0"
+
+
+def _physical_temperature(x: float) -> str | None:
+    return None if x > ABSOLUTE_ZERO_C else "is below absolute zero"
+
+
+def _parser(kind: Kind, check: Check | None = None) -> BeforeValidator:
+    def parse(value: object) -> float:
+        try:
+            number = kind.parse(value)
+        except QuantityError as exc:
+            raise PydanticCustomError("quantity", "{detail}", {"detail": str(exc)}) from None
+        problem = check(number) if check else None
+        if problem:
+            shown = value if isinstance(value, str) else repr(value)
+            raise PydanticCustomError(
+                "quantity", "{detail}", {"detail": f"{shown!r} {problem}; {kind.expected}"}
+            )
+        return number
+
+    return BeforeValidator(parse)
+
+
+Torque = Annotated[float, _parser(TORQUE), TORQUE]
+PositiveTorque = Annotated[float, _parser(TORQUE, _positive), TORQUE]
+NonNegativeTorque = Annotated[float, _parser(TORQUE, _non_negative), TORQUE]
+PositiveDamping = Annotated[float, _parser(DAMPING, _positive), DAMPING]
+NonNegativeDamping = Annotated[float, _parser(DAMPING, _non_negative), DAMPING]
+Angle = Annotated[float, _parser(ANGLE), ANGLE]
+PositiveAngle = Annotated[float, _parser(ANGLE, _positive), ANGLE]
+NonNegativeAngle = Annotated[float, _parser(ANGLE, _non_negative), ANGLE]
+PositiveSpeed = Annotated[float, _parser(SPEED, _positive), SPEED]
+Temperature = Annotated[float, _parser(TEMPERATURE, _physical_temperature), TEMPERATURE]
+PerKelvin = Annotated[float, _parser(PER_KELVIN), PER_KELVIN]
+TorquePerKelvin = Annotated[float, _parser(TORQUE_PER_KELVIN), TORQUE_PER_KELVIN]
+PositiveNumber = Annotated[float, _parser(NUMBER, _positive), NUMBER]
+NonNegativeNumber = Annotated[float, _parser(NUMBER, _non_negative), NUMBER]
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class FrictionLawSpec(_Section):
+    """A friction that depends on temperature: ``{slope, at_0C}`` or ``{table = [[T, F], ...]}``."""
+
+    slope: TorquePerKelvin | None = None
+    at_0C: Torque | None = None  # noqa: N815 - the paper's name, "value at 0 degC"
+    table: list[tuple[Temperature, Torque]] | None = None
+
+    @model_validator(mode="after")
+    def _one_form(self) -> FrictionLawSpec:
+        linear = self.slope is not None or self.at_0C is not None
+        if linear and self.table is not None:
+            raise ValueError("give either slope and at_0C, or table, not both")
+        if self.table is not None:
+            temps = [t for t, _ in self.table]
+            if len(temps) < 2:
+                raise ValueError("table needs at least two [temperature, torque] points")
+            if any(b <= a for a, b in zip(temps, temps[1:], strict=False)):
+                raise ValueError(
+                    f"table temperatures must be strictly increasing, got {temps} degC"
+                )
+        elif self.slope is None or self.at_0C is None:
+            missing = "slope" if self.slope is None else "at_0C"
+            raise ValueError(f"missing {missing} (give slope and at_0C, or a table)")
+        return self
+
+    def to_law(self) -> TemperatureLaw:
+        """The model's temperature law (SI)."""
+        if self.table is not None:
+            return TabulatedTemperatureLaw(
+                tuple(t for t, _ in self.table), tuple(v for _, v in self.table)
+            )
+        # _one_form guarantees both are present here.
+        assert self.slope is not None
+        assert self.at_0C is not None
+        return LinearTemperatureLaw(self.slope, self.at_0C)
+
+
+class DamperSpec(_Section):
+    """``[damper]``: the high-speed magnetic damper (paper section 2)."""
+
+    damping_rate: PositiveDamping
+    reference_temperature: Temperature = 25.0
+    damping_temperature_coefficient: PerKelvin = -0.004
+    coulomb_friction: NonNegativeTorque
+    lubrication_friction: FrictionLawSpec | None = None
+    max_linear_speed: PositiveSpeed | None = None
+    max_linear_torque: PositiveTorque | None = None
+
+    def to_model(self) -> HighSpeedDamper:
+        """The model object (SI)."""
+        return HighSpeedDamper(
+            damping_rate=self.damping_rate,
+            coulomb_friction=self.coulomb_friction,
+            lubrication_friction=(
+                self.lubrication_friction.to_law()
+                if self.lubrication_friction
+                else LinearTemperatureLaw()
+            ),
+            reference_temperature=self.reference_temperature,
+            damping_temperature_coefficient=self.damping_temperature_coefficient,
+            max_linear_speed=self.max_linear_speed,
+            max_linear_torque=self.max_linear_torque,
+        )
+
+
+class GearboxSpec(_Section):
+    """``[gearbox]``: the step-up gearbox (paper section 3)."""
+
+    ratio: PositiveNumber
+    damping_fraction: NonNegativeNumber | None = None
+    damping_rate: NonNegativeDamping | None = None
+    coulomb_friction: NonNegativeTorque
+    lost_motion: NonNegativeAngle = 0.0
+
+    @model_validator(mode="after")
+    def _one_damping(self) -> GearboxSpec:
+        if (self.damping_fraction is None) == (self.damping_rate is None):
+            raise ValueError(
+                "give exactly one of damping_fraction (BG/BD, e.g. 0.26) and damping_rate "
+                "(BG in N*m*s/rad)"
+            )
+        return self
+
+    def to_model(self) -> Gearbox:
+        """The model object (SI)."""
+        return Gearbox(
+            ratio=self.ratio,
+            coulomb_friction=self.coulomb_friction,
+            damping_rate=self.damping_rate,
+            damping_fraction=self.damping_fraction,
+            lost_motion=self.lost_motion,
+        )
+
+
+class LoadSpec(_Section):
+    """``[load]``: spring torque over the travel and system friction (paper section 5)."""
+
+    start_torque: PositiveTorque | None = None
+    end_torque: NonNegativeTorque | None = None
+    spring_table: list[tuple[Angle, NonNegativeTorque]] | None = None
+    travel: PositiveAngle
+    system_friction: FrictionLawSpec | None = None
+    spring_temperature_coefficient: PerKelvin = 0.0
+    reference_temperature: Temperature = 25.0
+
+    @model_validator(mode="after")
+    def _one_spring(self) -> LoadSpec:
+        linear = self.start_torque is not None or self.end_torque is not None
+        if linear and self.spring_table is not None:
+            raise ValueError("give either start_torque and end_torque, or spring_table, not both")
+        if self.spring_table is None:
+            if self.start_torque is None or self.end_torque is None:
+                missing = "start_torque" if self.start_torque is None else "end_torque"
+                raise ValueError(
+                    f"missing {missing}; expected a torque in N*m or compatible units, "
+                    "e.g. '3.73 N*m' (or give spring_table)"
+                )
+            return self
+        angles = [a for a, _ in self.spring_table]
+        if len(angles) < 2:
+            raise ValueError("spring_table needs at least two [angle, torque] points")
+        if angles[0] != 0.0:
+            raise ValueError(f"spring_table must start at angle 0 (got {angles[0]:g} rad)")
+        if any(b <= a for a, b in zip(angles, angles[1:], strict=False)):
+            raise ValueError("spring_table angles must be strictly increasing")
+        if angles[-1] < self.travel * (1.0 - 1e-12):
+            raise ValueError(
+                f"spring_table ends at {angles[-1]:g} rad, before the travel {self.travel:g} rad"
+            )
+        return self
+
+    def spring(self) -> Spring:
+        """The spring model (SI)."""
+        if self.spring_table is not None:
+            return TabulatedSpring(
+                tuple(a for a, _ in self.spring_table),
+                tuple(t for _, t in self.spring_table),
+                self.spring_temperature_coefficient,
+                self.reference_temperature,
+            )
+        assert self.start_torque is not None
+        assert self.end_torque is not None
+        return LinearSpring(
+            self.start_torque,
+            self.end_torque,
+            self.spring_temperature_coefficient,
+            self.reference_temperature,
+        )
+
+    def to_model(self) -> Load:
+        """The model object (SI)."""
+        return Load(
+            spring=self.spring(),
+            travel=self.travel,
+            system_friction=(
+                self.system_friction.to_law() if self.system_friction else LinearTemperatureLaw()
+            ),
+        )
+
+
+def _known_method(name: str) -> str:
+    if name not in SOLVERS:
+        raise PydanticCustomError(
+            "method",
+            "{detail}",
+            {"detail": f"{name!r} is not a method; expected one of {sorted(SOLVERS)}"},
+        )
+    return name
+
+
+Method = Annotated[str, BeforeValidator(_known_method)]
+
+
+class AnalysisSpec(_Section):
+    """``[analysis]``: what to compute."""
+
+    temperatures: list[Temperature] = Field(default_factory=lambda: [25.0], min_length=1)
+    methods: list[Method] = Field(default_factory=lambda: ["paper", "exact"], min_length=1)
+
+
+class ConfigSpec(_Section):
+    """A whole configuration file."""
+
+    title: str = "deployment"
+    damper: DamperSpec
+    gearbox: GearboxSpec
+    load: LoadSpec
+    analysis: AnalysisSpec = Field(default_factory=AnalysisSpec)
+
+    def ecd(self) -> Ecd:
+        """The ECD model (SI)."""
+        return Ecd(self.damper.to_model(), self.gearbox.to_model())
+
+
+def describe_field(loc: tuple[Any, ...]) -> tuple[str | None, list[str]]:
+    """For a key path: the expected-unit phrase of the field, and the section's known keys."""
+    model: type[BaseModel] | None = ConfigSpec
+    expected: str | None = None
+    known: list[str] = list(ConfigSpec.model_fields)
+    for part in loc:
+        if model is None or not isinstance(part, str) or part not in model.model_fields:
+            return expected, known
+        info = model.model_fields[part]
+        known = list(model.model_fields)
+        kinds = [m for m in info.metadata if isinstance(m, Kind)]
+        expected = kinds[0].expected if kinds else None
+        nested = _model_in(info.annotation)
+        if nested is not None:
+            known = list(nested.model_fields)
+        model = nested
+    return expected, known
+
+
+def _model_in(annotation: Any) -> type[BaseModel] | None:
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None

@@ -1,0 +1,124 @@
+"""Quantities written as strings ("1.3e-4 N*m*s/rad", "90 deg", "25 degC"), parsed with pint.
+
+This is the only module that imports pint; it does so lazily and once. Each physical kind
+of quantity has a :class:`Kind` naming its SI unit and an example, so that every error
+message can say what was expected.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from functools import cache
+from typing import Any
+
+_NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
+# Offset units are ambiguous inside compound units; in a rate ("per degC") they mean a
+# temperature difference, which pint spells delta_degC.
+_OFFSET_UNIT = re.compile(r"(?<![A-Za-z_])(degC|degF|celsius|fahrenheit)(?![A-Za-z_])")
+
+
+class QuantityError(ValueError):
+    """A value that is not a quantity of the expected kind; the message says why."""
+
+
+@cache
+def _registry() -> Any:
+    import pint
+
+    return pint.UnitRegistry()
+
+
+@dataclass(frozen=True)
+class Kind:
+    """A physical kind of quantity: how to read it and what to say when it is wrong.
+
+    Attributes
+    ----------
+    name : readable name ("torque")
+    unit : the SI unit ecdsim uses inside ("N*m")
+    example : a valid example string ("3.73 N*m")
+    offset : True for absolute temperatures (converted to degC, not SI kelvin)
+    """
+
+    name: str
+    unit: str
+    example: str
+    offset: bool = False
+
+    @property
+    def expected(self) -> str:
+        """Phrase for error messages."""
+        article = "an" if self.name[0] in "aeiou" else "a"
+        if self.unit == "":
+            return f"expected {article} {self.name} (a plain number, e.g. {self.example})"
+        return (
+            f"expected {article} {self.name} in {self.unit} or compatible units, "
+            f"e.g. '{self.example}'"
+        )
+
+    def parse(self, value: object) -> float:
+        """The value in this kind's SI unit (degC for temperatures); QuantityError if not."""
+        if isinstance(value, bool):
+            raise QuantityError(f"{value!r} is not a number; {self.expected}")
+        if isinstance(value, int | float):
+            number = float(value)
+            if self.unit != "":
+                raise QuantityError(f"{value!r} has no unit; {self.expected}")
+            return _finite(number, value, self)
+        if not isinstance(value, str):
+            raise QuantityError(f"{value!r} is not a quantity; {self.expected}")
+        match = _NUMBER.match(value)
+        if match is None:
+            raise QuantityError(f"{value!r} does not start with a finite number; {self.expected}")
+        number = _finite(float(match.group(1)), value, self)
+        unit_text = match.group(2)
+        if self.unit == "":
+            if unit_text:
+                return _convert(number, unit_text, value, self)
+            return number
+        if not unit_text:
+            raise QuantityError(f"{value!r} has no unit; {self.expected}")
+        return _convert(number, unit_text, value, self)
+
+
+def _finite(number: float, raw: object, kind: Kind) -> float:
+    if not math.isfinite(number):
+        raise QuantityError(f"{raw!r} is not finite; {kind.expected}")
+    return number
+
+
+def _convert(number: float, unit_text: str, raw: str, kind: Kind) -> float:
+    import pint
+
+    registry = _registry()
+    if unit_text.startswith("/"):
+        unit_text = "1 " + unit_text
+    if not kind.offset:
+        unit_text = _OFFSET_UNIT.sub(r"delta_\1", unit_text)
+    try:
+        quantity = registry.Quantity(number, unit_text)
+        if kind.offset:
+            result = float(quantity.to("degC").magnitude)
+        else:
+            result = float(quantity.to(kind.unit or "dimensionless").magnitude)
+    except pint.errors.DimensionalityError:
+        raise QuantityError(f"{raw!r} has the wrong dimension; {kind.expected}") from None
+    except (pint.errors.UndefinedUnitError, pint.errors.DefinitionSyntaxError, AttributeError):
+        raise QuantityError(f"{raw!r} has a unit pint does not know; {kind.expected}") from None
+    except (pint.errors.PintError, ValueError, TypeError) as exc:
+        raise QuantityError(f"{raw!r} could not be read ({exc}); {kind.expected}") from None
+    return _finite(result, raw, kind)
+
+
+TORQUE = Kind("torque", "N*m", "3.73 N*m")
+DAMPING = Kind("damping rate", "N*m*s/rad", "1.3e-4 N*m*s/rad")
+ANGLE = Kind("angle", "rad", "1.57 rad")
+SPEED = Kind("angular speed", "rad/s", "2000 rad/s")
+TEMPERATURE = Kind("temperature", "degC", "25 degC", offset=True)
+PER_KELVIN = Kind("fractional change per kelvin", "1/K", "-0.004 / K")
+TORQUE_PER_KELVIN = Kind("torque change per kelvin", "N*m/K", "-0.0044 N*m/K")
+NUMBER = Kind("dimensionless number", "", "380")
+
+ABSOLUTE_ZERO_C = -273.15

@@ -1,0 +1,332 @@
+"""Predict a deployment over temperature: the system layer over the solvers.
+
+:func:`predict` evaluates the ECD (Eq. 1-4) and the load at each temperature, runs each
+requested solver on the same quasi-static problem, checks the damper's linear range,
+stalls and table ranges, and returns a :class:`Prediction`. It never prints; warnings are
+structured :class:`ModelWarning` records in the result.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, BoolArray, FloatArray
+from ecdsim._version import __version__
+from ecdsim.model import DeploymentSystem, EcdState
+from ecdsim.physics.assembly import damper_torque
+from ecdsim.solvers import SOLVERS, DeploymentSolution, QuasiStaticProblem, Trajectory
+
+DEFAULT_METHODS = ("paper", "exact")
+
+
+class ModelDomainError(ValueError):
+    """The model cannot be evaluated for these inputs (for example damping <= 0 at T).
+
+    ``key`` names the config field that leads there, for the one-line user message.
+    """
+
+    def __init__(self, key: str, message: str) -> None:
+        super().__init__(f"{key}: {message}")
+        self.key = key
+
+
+@dataclass(frozen=True)
+class ModelWarning:
+    """A non-fatal finding about one case: a flag with a readable message.
+
+    Attributes
+    ----------
+    code : machine-readable kind ("stall", "linear_range_speed", ...)
+    message : one readable sentence
+    temperature_C : the case's temperature [degC], None if not specific to one
+    method : the solver concerned, None if not specific to one
+    """
+
+    code: str
+    message: str
+    temperature_C: float | None = None
+    method: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form."""
+        return {
+            "code": self.code,
+            "message": self.message,
+            "temperature_C": self.temperature_C,
+            "method": self.method,
+        }
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Deployment predictions for one system over temperatures, by each method.
+
+    Arrays have the batch shape of the temperatures broadcast against the parameters.
+
+    Attributes
+    ----------
+    system : the system that was solved
+    temperatures : T [degC]
+    ecd : the ECD's component values at T (Eq. 1-4)
+    system_friction : FS_T [N*m]
+    problem : the quasi-static problem every method solved
+    solutions : one solution per method name
+    warnings : findings (stall, linear range, table extrapolation, negative friction)
+    """
+
+    system: DeploymentSystem
+    temperatures: FloatArray
+    ecd: EcdState
+    system_friction: FloatArray
+    problem: QuasiStaticProblem
+    solutions: dict[str, DeploymentSolution]
+    warnings: list[ModelWarning] = field(default_factory=list)
+
+    def trajectory(self, method: str, times: ArrayLike) -> Trajectory:
+        """Angle and speed against time [s] by one method."""
+        return SOLVERS[method].trajectory(self.problem, times)
+
+    def time_difference(self, method: str = "paper", reference: str = "exact") -> FloatArray:
+        """Deployment time by ``method`` minus that by ``reference`` [s]; NaN-free.
+
+        Where either method stalls the difference is reported as 0 if both stall (they
+        agree) and is not defined otherwise; both stall together in ecdsim, so it is 0.
+        """
+        a = self.solutions[method].deployment_time
+        b = self.solutions[reference].deployment_time
+        both_finite = np.isfinite(a) & np.isfinite(b)
+        return np.where(
+            both_finite, np.where(both_finite, a, 0.0) - np.where(both_finite, b, 0.0), 0.0
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The stable JSON document of ``ecdsim deploy --json`` (see ``docs/json.md``)."""
+        if self.temperatures.ndim != 1 or self.problem.batch_shape != self.temperatures.shape:
+            raise ValueError("to_dict() needs one case per temperature (a 1-D sweep)")
+        cases = []
+        for i, temp in enumerate(self.temperatures):
+            cases.append(self._case_dict(i, float(temp)))
+        return {
+            "ecdsim_version": __version__,
+            "system": self.system.name,
+            "methods": list(self.solutions),
+            "cases": cases,
+            "warnings": [w.to_dict() for w in self.warnings],
+        }
+
+    def _case_dict(self, i: int, temperature: float) -> dict[str, Any]:
+        e = self.ecd
+
+        def at(array: FloatArray) -> float:
+            return float(np.broadcast_to(array, self.temperatures.shape)[i])
+
+        case: dict[str, Any] = {
+            "temperature_C": temperature,
+            "damping_rate_Nms_per_rad": at(e.ecd_damping_rate),
+            "friction_Nm": at(e.ecd_friction),
+            "system_friction_Nm": at(self.system_friction),
+            "total_friction_Nm": at(self.problem.friction),
+            "start_torque_Nm": at(self.problem.torques[0]),
+            "end_torque_Nm": at(self.problem.torques[-1]),
+            "travel_rad": at(self.problem.travel),
+            "components": {
+                "damper_damping_rate_Nms_per_rad": at(e.damper_damping_rate),
+                "gearbox_damping_rate_Nms_per_rad": at(e.gearbox_damping_rate),
+                "total_damping_rate_Nms_per_rad": at(e.total_damping_rate),
+                "damper_friction_Nm": at(e.damper_friction),
+                "lubrication_friction_Nm": at(e.lubrication_friction),
+                "gearbox_friction_Nm": at(e.gearbox_friction),
+                "total_friction_Nm": at(e.total_friction),
+                "gear_ratio": at(e.gear_ratio),
+                "lost_motion_rad": float(self.system.ecd.gearbox.lost_motion),
+            },
+        }
+        for name, solution in self.solutions.items():
+            time = at(solution.deployment_time)
+            stalled = bool(np.broadcast_to(solution.stalled, self.temperatures.shape)[i])
+            case[name] = {
+                "deployment_time_s": time if np.isfinite(time) else None,
+                "start_speed_rad_s": at(solution.start_speed),
+                "end_speed_rad_s": at(solution.end_speed),
+                "max_speed_rad_s": at(solution.max_speed),
+                "stalled": stalled,
+                "stall_angle_rad": at(solution.stall_angle) if stalled else None,
+            }
+        if "paper" in self.solutions and "exact" in self.solutions:
+            paper_t = case["paper"]["deployment_time_s"]
+            exact_t = case["exact"]["deployment_time_s"]
+            if paper_t is None or exact_t is None:
+                case["difference"] = {"deployment_time_s": None, "relative": None}
+            else:
+                case["difference"] = {
+                    "deployment_time_s": paper_t - exact_t,
+                    "relative": (paper_t - exact_t) / exact_t,
+                }
+        return case
+
+
+def build_problem(
+    system: DeploymentSystem, ecd: EcdState, temperatures: FloatArray
+) -> tuple[QuasiStaticProblem, FloatArray]:
+    """The quasi-static problem at the given temperatures, and FS_T [N*m]."""
+    load = system.load
+    angles, torques = load.spring.breakpoints(load.travel, temperatures)
+    fs = np.asarray(load.system_friction(temperatures), dtype=float)
+    friction = np.asarray(ecd.ecd_friction + fs, dtype=float)
+    problem = QuasiStaticProblem(
+        angles=np.asarray(angles, dtype=float),
+        torques=np.asarray(torques, dtype=float),
+        friction=friction,
+        damping_rate=np.asarray(ecd.ecd_damping_rate, dtype=float),
+    )
+    return problem, fs
+
+
+def predict(
+    system: DeploymentSystem,
+    temperatures: ArrayLike,
+    methods: Sequence[str] = DEFAULT_METHODS,
+) -> Prediction:
+    """Predict the deployment at each temperature [degC] by each named method.
+
+    Raises :class:`ModelDomainError` where the damping law gives a non-positive damping
+    rate (the model has no meaning there) and ``KeyError`` for an unknown method.
+    """
+    unknown = [m for m in methods if m not in SOLVERS]
+    if unknown:
+        raise KeyError(f"unknown method(s) {unknown}; known: {sorted(SOLVERS)}")
+    temps = np.asarray(temperatures, dtype=float)
+    ecd = system.ecd.at(temps)
+    _check_damping_positive(ecd)
+    problem, fs = build_problem(system, ecd, temps)
+    solutions = {name: SOLVERS[name].solve(problem) for name in methods}
+    prediction = Prediction(
+        system=system,
+        temperatures=temps,
+        ecd=ecd,
+        system_friction=fs,
+        problem=problem,
+        solutions=solutions,
+    )
+    prediction.warnings.extend(collect_warnings(prediction))
+    return prediction
+
+
+def _check_damping_positive(ecd: EcdState) -> None:
+    bad = ~(ecd.ecd_damping_rate > 0.0)
+    if np.any(bad):
+        where = np.broadcast_to(ecd.temperature, bad.shape)[bad]
+        value = np.broadcast_to(ecd.damper_damping_rate, bad.shape)[bad]
+        raise ModelDomainError(
+            "damper.damping_temperature_coefficient",
+            f"at {float(where.flat[0]):g} degC the damping law gives a total damping rate "
+            f"<= 0 (BD_T = {float(value.flat[0]):.4g} N*m*s/rad); the linear temperature law "
+            "does not reach that far",
+        )
+
+
+def _temperature_at(prediction: Prediction, mask: BoolArray) -> list[float]:
+    temps = np.broadcast_to(prediction.temperatures, mask.shape)
+    return sorted({float(t) for t in temps[mask]})
+
+
+def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
+    """Every finding for the prediction: stalls, linear range, tables, negative friction."""
+    found: list[ModelWarning] = []
+    system = prediction.system
+    temps = prediction.temperatures
+    laws = {
+        "damper.lubrication_friction": system.ecd.damper.lubrication_friction,
+        "load.system_friction": system.load.system_friction,
+    }
+    for key, law in laws.items():
+        outside = law.out_of_range(temps)
+        for t in _temperature_at(prediction, np.asarray(outside)):
+            found.append(
+                ModelWarning(
+                    "table_extrapolation",
+                    f"{key}: {t:g} degC is outside the table ({law.describe()}); "
+                    "the value is held at the nearest end point",
+                    t,
+                )
+            )
+    negative = {
+        "FECD": prediction.ecd.ecd_friction,
+        "FS": prediction.system_friction,
+    }
+    for label, values in negative.items():
+        below = np.broadcast_to(values < 0.0, prediction.problem.batch_shape)
+        for t in _temperature_at(prediction, below):
+            found.append(
+                ModelWarning(
+                    "negative_friction",
+                    f"{label} is negative at {t:g} degC: the friction law is outside the range "
+                    "it was fitted over; the result is not physical",
+                    t,
+                )
+            )
+    for name, solution in prediction.solutions.items():
+        found.extend(_stall_warnings(prediction, name, solution))
+        found.extend(_linear_range_warnings(prediction, name, solution))
+    return found
+
+
+def _stall_warnings(
+    prediction: Prediction, name: str, solution: DeploymentSolution
+) -> list[ModelWarning]:
+    out = []
+    temps = np.broadcast_to(prediction.temperatures, solution.stalled.shape)
+    for t, angle in zip(
+        temps[solution.stalled], solution.stall_angle[solution.stalled], strict=True
+    ):
+        out.append(
+            ModelWarning(
+                "stall",
+                f"stalls at {float(angle):.4g} rad ({np.degrees(float(angle)):.1f} deg) at "
+                f"{float(t):g} degC: spring torque falls to the friction before the end of travel",
+                float(t),
+                name,
+            )
+        )
+    return out
+
+
+def _linear_range_warnings(
+    prediction: Prediction, name: str, solution: DeploymentSolution
+) -> list[ModelWarning]:
+    damper = prediction.system.ecd.damper
+    ecd = prediction.ecd
+    shaft_speed = solution.max_speed * ecd.gear_ratio
+    checks: list[tuple[str, float | None, FloatArray, str]] = [
+        ("linear_range_speed", damper.max_linear_speed, shaft_speed, "rad/s"),
+        (
+            "linear_range_torque",
+            damper.max_linear_torque,
+            damper_torque(ecd.damper_damping_rate, shaft_speed),
+            "N*m",
+        ),
+    ]
+    out = []
+    for code, limit, value, unit in checks:
+        if limit is None:
+            continue
+        value_b = np.broadcast_to(value, solution.max_speed.shape)
+        over = value_b > limit
+        temps = np.broadcast_to(prediction.temperatures, over.shape)
+        for t, v in zip(temps[over], value_b[over], strict=True):
+            what = "speed" if code.endswith("speed") else "eddy-current torque"
+            excess = 100.0 * (float(v) / limit - 1.0)
+            out.append(
+                ModelWarning(
+                    code,
+                    f"peak damper {what} {float(v):.4g} {unit} at {float(t):g} degC exceeds the "
+                    f"linear-range limit {limit:.4g} {unit} by {excess:.1f} %",
+                    float(t),
+                    name,
+                )
+            )
+    return out

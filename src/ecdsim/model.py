@@ -1,0 +1,364 @@
+"""Thin frozen dataclasses that hold an ECD system's parameters and delegate to physics.
+
+Every numeric field is in SI units (temperatures in degC) and may be a float or a NumPy
+array; arrays broadcast against the temperatures passed in, so one object can describe a
+whole batch of parameter sets (a tolerance study, a catalogue sweep). No formula lives
+here that a test cannot reach directly in :mod:`ecdsim.physics`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol, TypeAlias
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
+from ecdsim.physics import assembly, laws, load
+
+Param: TypeAlias = float | FloatArray
+
+
+class TemperatureLaw(Protocol):
+    """A quantity that depends on temperature: FL_T or FS_T in the paper."""
+
+    def __call__(self, temperature: ArrayLike) -> FloatArray:
+        """The quantity at temperature T [degC], in its SI unit."""
+        ...
+
+    def out_of_range(self, temperature: ArrayLike) -> BoolArray:
+        """True where T [degC] lies outside the law's stated validity range."""
+        ...
+
+    def describe(self) -> str:
+        """A one-line human description of the law."""
+        ...
+
+
+@dataclass(frozen=True)
+class LinearTemperatureLaw:
+    """``slope * T + at_0c``, the paper's form for FL_T and FS_T (sections 2.3 and 5).
+
+    Attributes
+    ----------
+    slope : change per kelvin [unit / K]
+    at_0c : value at 0 degC [unit]
+    """
+
+    slope: Param = 0.0
+    at_0c: Param = 0.0
+
+    def __call__(self, temperature: ArrayLike) -> FloatArray:
+        """Evaluate the law at T [degC]."""
+        return laws.linear_in_temperature(temperature, self.slope, self.at_0c)
+
+    def out_of_range(self, temperature: ArrayLike) -> BoolArray:
+        """A linear law has no stated range: never out of range."""
+        return np.zeros(np.shape(temperature), dtype=bool)
+
+    def describe(self) -> str:
+        """One-line description."""
+        return f"linear: {self.slope:g} per K * T + {self.at_0c:g}"
+
+
+@dataclass(frozen=True)
+class TabulatedTemperatureLaw:
+    """A measured (T, value) table, interpolated linearly, held at its ends outside.
+
+    Attributes
+    ----------
+    temperatures : strictly increasing table temperatures [degC]
+    values : the quantity at those temperatures [unit]
+    """
+
+    temperatures: tuple[float, ...]
+    values: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        if len(self.temperatures) != len(self.values) or len(self.temperatures) < 2:
+            raise ValueError("a temperature table needs at least two (T, value) points")
+        if np.any(np.diff(self.temperatures) <= 0.0):
+            raise ValueError("table temperatures must be strictly increasing")
+
+    def __call__(self, temperature: ArrayLike) -> FloatArray:
+        """Evaluate the table at T [degC]."""
+        return laws.interpolate_table(temperature, self.temperatures, self.values)
+
+    def out_of_range(self, temperature: ArrayLike) -> BoolArray:
+        """True outside [first, last] table temperature."""
+        return laws.outside_table(temperature, self.temperatures)
+
+    def describe(self) -> str:
+        """One-line description."""
+        first, last = self.temperatures[0], self.temperatures[-1]
+        return f"table of {len(self.temperatures)} points, {first:g} to {last:g} degC"
+
+
+ZERO_LAW = LinearTemperatureLaw()
+
+
+@dataclass(frozen=True)
+class HighSpeedDamper:
+    """The high-speed magnetic damper (paper section 2), parameters at its own shaft.
+
+    Attributes
+    ----------
+    damping_rate : BD at the reference temperature [N*m*s/rad]
+    coulomb_friction : FD [N*m]
+    lubrication_friction : FL_T, a temperature law [N*m]
+    reference_temperature : temperature at which BD is rated [degC]
+    damping_temperature_coefficient : fractional change of BD per kelvin [1/K]
+    max_linear_speed : end of the linear range, as a shaft speed [rad/s]; None if unknown
+    max_linear_torque : end of the linear range, as an eddy-current torque [N*m]; None if unknown
+    """
+
+    damping_rate: Param
+    coulomb_friction: Param = 0.0
+    lubrication_friction: TemperatureLaw = ZERO_LAW
+    reference_temperature: float = 25.0
+    damping_temperature_coefficient: Param = -0.004
+    max_linear_speed: float | None = None
+    max_linear_torque: float | None = None
+
+    def damping_rate_at(self, temperature: ArrayLike) -> FloatArray:
+        """BD_T at temperature T [degC] (Eq. 1, first term) [N*m*s/rad]."""
+        return assembly.damper_damping_rate(
+            self.damping_rate,
+            temperature,
+            self.reference_temperature,
+            self.damping_temperature_coefficient,
+        )
+
+
+@dataclass(frozen=True)
+class Gearbox:
+    """The step-up gearbox (paper section 3), damping and friction at the high-speed shaft.
+
+    Give the gearbox damping either as an absolute ``damping_rate`` or as a
+    ``damping_fraction`` of the damper's BD (the paper's example: 0.26); the paper holds
+    BG constant over temperature (matched CTE, section 3.2).
+
+    Attributes
+    ----------
+    ratio : N, high-speed turns per input turn [-]
+    coulomb_friction : FG [N*m]
+    damping_rate : BG [N*m*s/rad], or None to use damping_fraction
+    damping_fraction : BG / BD [-], or None to use damping_rate
+    lost_motion : gear backlash seen at the input shaft [rad] (reported; used by dynamics)
+    """
+
+    ratio: Param
+    coulomb_friction: Param = 0.0
+    damping_rate: Param | None = None
+    damping_fraction: Param | None = None
+    lost_motion: float = 0.0
+
+    def __post_init__(self) -> None:
+        if (self.damping_rate is None) == (self.damping_fraction is None):
+            raise ValueError("give exactly one of gearbox damping_rate and damping_fraction")
+
+    def damping_rate_for(self, damper: HighSpeedDamper) -> FloatArray:
+        """BG at the high-speed shaft [N*m*s/rad], resolving a fraction against BD."""
+        if self.damping_rate is not None:
+            return np.asarray(self.damping_rate, dtype=float)
+        fraction = np.asarray(self.damping_fraction, dtype=float)
+        return as_float(fraction * np.asarray(damper.damping_rate, dtype=float))
+
+
+@dataclass(frozen=True)
+class EcdState:
+    """The ECD's component values at given temperatures; every field broadcasts.
+
+    Attributes
+    ----------
+    temperature : T [degC]
+    damper_damping_rate : BD_T [N*m*s/rad]
+    gearbox_damping_rate : BG [N*m*s/rad]
+    total_damping_rate : BT_T = BD_T + BG (Eq. 1) [N*m*s/rad]
+    damper_friction : FD [N*m]
+    lubrication_friction : FL_T [N*m]
+    gearbox_friction : FG [N*m]
+    total_friction : FT_T (Eq. 2) [N*m]
+    ecd_damping_rate : BECD_T at the input shaft (Eq. 3) [N*m*s/rad]
+    ecd_friction : FECD_T at the input shaft (Eq. 4) [N*m]
+    gear_ratio : N [-]
+    """
+
+    temperature: FloatArray
+    damper_damping_rate: FloatArray
+    gearbox_damping_rate: FloatArray
+    total_damping_rate: FloatArray
+    damper_friction: FloatArray
+    lubrication_friction: FloatArray
+    gearbox_friction: FloatArray
+    total_friction: FloatArray
+    ecd_damping_rate: FloatArray
+    ecd_friction: FloatArray
+    gear_ratio: FloatArray
+
+    def input_speed(self, torque: ArrayLike) -> FloatArray:
+        """Steady input speed under a constant input torque [N*m] (Eq. 5) [rad/s]."""
+        return assembly.input_speed(torque, self.ecd_friction, self.ecd_damping_rate)
+
+    def dynamic_damping_rate(self, torque: ArrayLike) -> FloatArray:
+        """CDA's dynamic damping rate at input torque [N*m] (Eq. 6) [N*m*s/rad]."""
+        return assembly.dynamic_damping_rate(torque, self.input_speed(torque))
+
+
+@dataclass(frozen=True)
+class Ecd:
+    """An ECD assembly: a high-speed damper behind a step-up gearbox (paper section 4)."""
+
+    damper: HighSpeedDamper
+    gearbox: Gearbox
+
+    def at(self, temperature: ArrayLike) -> EcdState:
+        """Evaluate Eq. 1-4 at temperature(s) T [degC]."""
+        t = np.asarray(temperature, dtype=float)
+        bd_t = self.damper.damping_rate_at(t)
+        bg = self.gearbox.damping_rate_for(self.damper)
+        fd = np.asarray(self.damper.coulomb_friction, dtype=float)
+        fl = self.damper.lubrication_friction(t)
+        fg = np.asarray(self.gearbox.coulomb_friction, dtype=float)
+        bt = assembly.total_damping_rate(bd_t, bg)
+        ft = assembly.total_friction(fd, fl, fg)
+        n = np.asarray(self.gearbox.ratio, dtype=float)
+        return EcdState(
+            temperature=t,
+            damper_damping_rate=bd_t,
+            gearbox_damping_rate=bg,
+            total_damping_rate=bt,
+            damper_friction=fd,
+            lubrication_friction=fl,
+            gearbox_friction=fg,
+            total_friction=ft,
+            ecd_damping_rate=assembly.refer_damping_to_input(bt, n),
+            ecd_friction=assembly.refer_friction_to_input(ft, n),
+            gear_ratio=n,
+        )
+
+
+class Spring(Protocol):
+    """A spring torque over the travel, as a piecewise-linear table of breakpoints."""
+
+    def breakpoints(
+        self, travel: ArrayLike, temperature: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
+        """Deployed angles [rad] and torques [N*m] at the breakpoints, along axis 0."""
+        ...
+
+    def describe(self) -> str:
+        """A one-line human description of the spring."""
+        ...
+
+
+@dataclass(frozen=True)
+class LinearSpring:
+    """Spring torque linear from ``start_torque`` to ``end_torque`` over the travel (Eq. 7).
+
+    Attributes
+    ----------
+    start_torque : Ts at the reference temperature [N*m]
+    end_torque : Te at the reference temperature [N*m]
+    temperature_coefficient : fractional change of torque per kelvin [1/K]
+    reference_temperature : temperature at which the torques are given [degC]
+    """
+
+    start_torque: Param
+    end_torque: Param
+    temperature_coefficient: Param = 0.0
+    reference_temperature: float = 25.0
+
+    def breakpoints(
+        self, travel: ArrayLike, temperature: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
+        """Two breakpoints, (0, Ts) and (travel, Te), scaled for temperature."""
+        factor = load.spring_temperature_factor(
+            temperature, self.temperature_coefficient, self.reference_temperature
+        )
+        trav = np.asarray(travel, dtype=float)
+        angles = np.stack(np.broadcast_arrays(np.zeros_like(trav), trav))
+        torques = np.stack(
+            np.broadcast_arrays(
+                np.asarray(self.start_torque, dtype=float) * factor,
+                np.asarray(self.end_torque, dtype=float) * factor,
+            )
+        )
+        return angles, torques
+
+    def describe(self) -> str:
+        """One-line description."""
+        return "linear from start_torque to end_torque (Eq. 7)"
+
+
+@dataclass(frozen=True)
+class TabulatedSpring:
+    """Spring torque interpolated linearly in an (angle, torque) table.
+
+    The table starts at angle 0 and reaches at least the travel; points beyond the travel
+    are not used (the torque is interpolated at the travel).
+
+    Attributes
+    ----------
+    angles : strictly increasing deployed angles, the first 0 [rad]
+    torques : spring torque at those angles, at the reference temperature [N*m]
+    temperature_coefficient : fractional change of torque per kelvin [1/K]
+    reference_temperature : temperature at which the torques are given [degC]
+    """
+
+    angles: tuple[float, ...]
+    torques: tuple[float, ...]
+    temperature_coefficient: Param = 0.0
+    reference_temperature: float = 25.0
+
+    def __post_init__(self) -> None:
+        if len(self.angles) != len(self.torques) or len(self.angles) < 2:
+            raise ValueError("a spring table needs at least two (angle, torque) points")
+        if self.angles[0] != 0.0:
+            raise ValueError("a spring table must start at angle 0 (the start of travel)")
+        if np.any(np.diff(self.angles) <= 0.0):
+            raise ValueError("spring table angles must be strictly increasing")
+
+    def breakpoints(
+        self, travel: ArrayLike, temperature: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
+        """The table's angles clipped to the travel, torques interpolated there."""
+        factor = load.spring_temperature_factor(
+            temperature, self.temperature_coefficient, self.reference_temperature
+        )
+        trav = np.asarray(travel, dtype=float)
+        table = np.asarray(self.angles, dtype=float).reshape((-1,) + (1,) * trav.ndim)
+        clipped = np.minimum(table, trav)
+        clipped[-1] = trav  # the last breakpoint is the latch, whatever the table's end
+        torque = load.tabulated_torque(clipped, self.angles, self.torques)
+        angles, torques = np.broadcast_arrays(clipped, torque * factor)
+        return np.array(angles), np.array(torques)
+
+    def describe(self) -> str:
+        """One-line description."""
+        return f"table of {len(self.angles)} (angle, torque) points"
+
+
+@dataclass(frozen=True)
+class Load:
+    """The deployment load seen by the ECD's input shaft (paper section 5).
+
+    Attributes
+    ----------
+    spring : the driving spring torque over the travel
+    travel : deployment angle, delta_theta [rad]
+    system_friction : FS_T, hinge and harness friction, a temperature law [N*m]
+    """
+
+    spring: Spring
+    travel: Param
+    system_friction: TemperatureLaw = ZERO_LAW
+
+
+@dataclass(frozen=True)
+class DeploymentSystem:
+    """A spring-driven deployment slowed by an ECD: the full quasi-static model."""
+
+    ecd: Ecd
+    load: Load
+    name: str = field(default="deployment")

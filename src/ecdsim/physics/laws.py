@@ -1,0 +1,58 @@
+"""Temperature laws for friction-like terms: the paper's linear law and a measured table.
+
+Used for the lubrication friction FL_T (paper section 2.3) and the system friction FS_T
+(paper section 5), both printed in the paper as ``slope * T + value_at_0C`` with T in degC.
+"""
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
+
+
+def linear_in_temperature(temperature: ArrayLike, slope: ArrayLike, at_0c: ArrayLike) -> FloatArray:
+    """A quantity linear in temperature: ``slope * T + at_0C`` (the paper's FL_T and FS_T).
+
+    Parameters
+    ----------
+    temperature : T [degC]
+    slope : change per kelvin [unit of the quantity / K]
+    at_0c : value at 0 degC [unit of the quantity]
+
+    >>> round(float(linear_in_temperature(25.0, -0.0044, 0.58)), 6)  # FS_25, paper section 6
+    0.47
+    """
+    return as_float(
+        np.asarray(slope, dtype=float) * np.asarray(temperature, dtype=float)
+        + np.asarray(at_0c, dtype=float)
+    )
+
+
+def interpolate_table(
+    temperature: ArrayLike, table_temperatures: ArrayLike, table_values: ArrayLike
+) -> FloatArray:
+    """Piecewise-linear interpolation in a (T, value) table; held at the end values outside.
+
+    Holding the end value (rather than extrapolating the end slope) keeps a friction from
+    turning negative; callers flag the out-of-range points with :func:`outside_table`.
+
+    Parameters
+    ----------
+    temperature : T [degC]
+    table_temperatures : strictly increasing table temperatures [degC]
+    table_values : values at the table temperatures [unit of the quantity]
+
+    >>> float(interpolate_table(10.0, [0.0, 20.0], [1.0, 3.0]))
+    2.0
+    """
+    t = np.asarray(temperature, dtype=float)
+    return np.asarray(
+        np.interp(t, np.asarray(table_temperatures, float), np.asarray(table_values, float)),
+        dtype=float,
+    )
+
+
+def outside_table(temperature: ArrayLike, table_temperatures: ArrayLike) -> BoolArray:
+    """True where T lies outside the table's temperature range [degC]."""
+    t = np.asarray(temperature, dtype=float)
+    grid = np.asarray(table_temperatures, dtype=float)
+    return np.asarray((t < grid[0]) | (t > grid[-1]))

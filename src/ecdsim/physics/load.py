@@ -1,0 +1,88 @@
+"""The deployment load: spring torque over the travel (paper section 5).
+
+Angle convention. The paper's Eq. 7 measures theta from the *end* of travel: theta = theta_s
+(= the deployment angle) at the start and 0 at the end. ecdsim measures the deployed angle
+phi from the *start*: phi = 0 at the start and phi = travel at the latch, so that angle and
+time grow together. The two are related by ``theta = travel - phi``.
+"""
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, FloatArray, as_float
+
+
+def spring_torque_eq7(
+    theta: ArrayLike, start_torque: ArrayLike, end_torque: ArrayLike, travel: ArrayLike
+) -> FloatArray:
+    """Linear spring torque in the paper's own angle (Eq. 7): ``T = theta/theta_s*(Ts-Te) + Te``.
+
+    Parameters
+    ----------
+    theta : angle remaining to the end of travel (paper convention) [rad]
+    start_torque : Ts, torque at the start of deployment [N*m]
+    end_torque : Te, torque at the end of deployment [N*m]
+    travel : theta_s = delta_theta, the deployment angle [rad]
+
+    >>> round(float(spring_torque_eq7(1.57, 3.73, 1.58, 1.57)), 12)
+    3.73
+    """
+    ts = np.asarray(start_torque, dtype=float)
+    te = np.asarray(end_torque, dtype=float)
+    return as_float(
+        np.asarray(theta, dtype=float) / np.asarray(travel, dtype=float) * (ts - te) + te
+    )
+
+
+def spring_torque_linear(
+    angle: ArrayLike, start_torque: ArrayLike, end_torque: ArrayLike, travel: ArrayLike
+) -> FloatArray:
+    """Linear spring torque at deployed angle phi: Eq. 7 with ``theta = travel - phi``.
+
+    Parameters
+    ----------
+    angle : deployed angle phi, 0 at the start [rad]
+    start_torque : Ts [N*m]
+    end_torque : Te [N*m]
+    travel : deployment angle [rad]
+    """
+    trav = np.asarray(travel, dtype=float)
+    return spring_torque_eq7(trav - np.asarray(angle, dtype=float), start_torque, end_torque, trav)
+
+
+def spring_temperature_factor(
+    temperature: ArrayLike, coefficient: ArrayLike, reference_temperature: ArrayLike = 25.0
+) -> FloatArray:
+    """Scale factor of spring torque with temperature: ``1 + k * (T - T_ref)``.
+
+    The paper asks the engineer not to assume spring torque constant over temperature
+    (section 4) without giving a law; ecdsim offers this linear one (k = 0 by default).
+
+    Parameters
+    ----------
+    temperature : T [degC]
+    coefficient : fractional change of spring torque per kelvin, k [1/K]
+    reference_temperature : temperature at which the torques are given [degC]
+    """
+    dt = np.asarray(temperature, dtype=float) - np.asarray(reference_temperature, dtype=float)
+    return as_float(1.0 + np.asarray(coefficient, dtype=float) * dt)
+
+
+def tabulated_torque(
+    angle: ArrayLike, table_angles: ArrayLike, table_torques: ArrayLike
+) -> FloatArray:
+    """Spring torque interpolated linearly in an (angle, torque) table.
+
+    Parameters
+    ----------
+    angle : deployed angle phi [rad]
+    table_angles : strictly increasing table angles, starting at 0 [rad]
+    table_torques : torques at the table angles [N*m]
+    """
+    return np.asarray(
+        np.interp(
+            np.asarray(angle, dtype=float),
+            np.asarray(table_angles, dtype=float),
+            np.asarray(table_torques, dtype=float),
+        ),
+        dtype=float,
+    )

@@ -1,0 +1,131 @@
+"""Plots of results. Every function returns a matplotlib Figure and never shows it.
+
+matplotlib is imported lazily (inside the functions) so that the CLI starts fast; the
+non-interactive Agg backend is used, so plotting works on machines with no display.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ecdsim.atomic import write_with
+from ecdsim.deployment import Prediction
+from ecdsim.solvers import SOLVERS
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+_LINESTYLES = {"exact": "-", "paper": "--"}
+
+
+def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def _time_span(prediction: Prediction) -> float:
+    """A time axis long enough for every finite deployment, or a multiple of B/k if stalled."""
+    finite = [
+        t
+        for s in prediction.solutions.values()
+        for t in np.ravel(s.deployment_time)
+        if np.isfinite(t)
+    ]
+    if finite:
+        return 1.1 * max(finite)
+    problem = prediction.problem
+    drop = np.abs(problem.torques[0] - problem.torques[-1]) / problem.travel
+    scale = problem.damping_rate / np.where(drop > 0.0, drop, 1.0)
+    return float(5.0 * np.max(scale))
+
+
+def plot_deployment(prediction: Prediction, n_points: int = 400) -> Figure:
+    """Deployed angle against time at each temperature, by each method (paper Fig. 4-6)."""
+    fig = _figure()
+    ax = fig.add_subplot()
+    times = np.linspace(0.0, _time_span(prediction), n_points)
+    temps = np.ravel(prediction.temperatures)
+    colors = _colors(len(temps))
+    for name in prediction.solutions:
+        trajectory = prediction.trajectory(name, times)
+        angle = np.degrees(trajectory.angle.reshape(len(times), -1))
+        for j, temp in enumerate(temps):
+            ax.plot(
+                times,
+                angle[:, j],
+                _LINESTYLES.get(name, ":"),
+                color=colors[j],
+                label=f"{temp:g} degC, {SOLVERS[name].label}",
+            )
+    ax.set_xlabel("time since release [s]")
+    ax.set_ylabel("deployed angle [deg]")
+    ax.set_title(f"{prediction.system.name}: angle against time")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return fig
+
+
+def plot_torque_speed(prediction: Prediction, n_points: int = 50) -> Figure:
+    """The ECD's input torque against speed at each temperature (paper Fig. 8).
+
+    Each line is ``T = FECD_T + BECD_T * omega`` (Eq. 5 inverted); the markers show the
+    deployment's operating range, from the start to the end speed of the exact solution.
+    """
+    fig = _figure()
+    ax = fig.add_subplot()
+    ecd = prediction.ecd
+    temps = np.ravel(prediction.temperatures)
+    damping = np.ravel(np.broadcast_to(ecd.ecd_damping_rate, prediction.temperatures.shape))
+    friction = np.ravel(np.broadcast_to(ecd.ecd_friction, prediction.temperatures.shape))
+    reference = prediction.solutions.get("exact") or next(iter(prediction.solutions.values()))
+    start = np.ravel(reference.start_speed)
+    end = np.ravel(reference.end_speed)
+    top = 1.2 * float(np.max(start)) if np.max(start) > 0 else 1.0
+    speeds = np.linspace(0.0, top, n_points)
+    colors = _colors(len(temps))
+    for j, temp in enumerate(temps):
+        ax.plot(
+            speeds,
+            friction[j] + damping[j] * speeds,
+            color=colors[j],
+            label=f"{temp:g} degC: BECD {damping[j]:.3g} N*m*s/rad, FECD {friction[j]:.3g} N*m",
+        )
+        ends = np.array([end[j], start[j]])
+        ax.plot(ends, friction[j] + damping[j] * ends, "o", color=colors[j])
+    ax.set_xlabel("input shaft speed [rad/s]")
+    ax.set_ylabel("ECD reaction torque [N*m]")
+    ax.set_title(f"{prediction.system.name}: ECD torque against speed")
+    ax.set_xlim(left=0.0)
+    ax.set_ylim(bottom=0.0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return fig
+
+
+def _colors(n: int) -> list[tuple[float, float, float, float]]:
+    from matplotlib import colormaps
+
+    # Cold blue to hot red through green: every temperature stays readable on white,
+    # which a diverging map with a pale middle (coolwarm) is not.
+    cmap = colormaps["turbo"]
+    return [cmap(x) for x in np.linspace(0.1, 0.9, n)] if n > 1 else [cmap(0.1)]
+
+
+def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> Path:
+    """Save a figure atomically; the format follows the file's suffix (PNG, SVG, PDF)."""
+    target = Path(path)
+    fmt = target.suffix.lstrip(".") or "png"
+    return write_with(target, lambda stream: fig.savefig(stream, format=fmt, dpi=dpi))
+
+
+def write_deployment_plots(prediction: Prediction, folder: str | Path) -> list[Path]:
+    """Write the standard plots of a prediction as PNG files into ``folder``."""
+    out = Path(folder)
+    return [
+        save_figure(plot_deployment(prediction), out / "angle_vs_time.png"),
+        save_figure(plot_torque_speed(prediction), out / "torque_vs_speed.png"),
+    ]

@@ -1,0 +1,145 @@
+"""The quasi-static deployment problem and the shape of a solver's answer."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, BoolArray, FloatArray
+
+
+@dataclass(frozen=True)
+class QuasiStaticProblem:
+    """``B * dphi/dt = T_spring(phi) - F`` with a piecewise-linear spring torque.
+
+    Axis 0 of ``angles`` and ``torques`` runs over the spring's breakpoints (two for a
+    linear spring); the remaining axes, and ``friction`` and ``damping_rate``, broadcast
+    over the batch (temperatures x samples).
+
+    Attributes
+    ----------
+    angles : deployed angle of each breakpoint, 0 first, the travel last [rad]
+    torques : spring torque at each breakpoint [N*m]
+    friction : total resisting Coulomb torque at the input shaft, FECD_T + FS_T [N*m]
+    damping_rate : BECD_T at the input shaft [N*m*s/rad]
+    """
+
+    angles: FloatArray
+    torques: FloatArray
+    friction: FloatArray
+    damping_rate: FloatArray
+
+    def __post_init__(self) -> None:
+        # Right-align the batch axes of the breakpoint arrays with the scalar fields and
+        # broadcast everything to one shape, so that every solver sees (n_points, *batch).
+        angles = np.asarray(self.angles, dtype=float)
+        torques = np.asarray(self.torques, dtype=float)
+        friction = np.asarray(self.friction, dtype=float)
+        damping = np.asarray(self.damping_rate, dtype=float)
+        if angles.ndim < 1 or torques.ndim < 1 or angles.shape[0] != torques.shape[0]:
+            raise ValueError("angles and torques need the same number of breakpoints on axis 0")
+        batch = np.broadcast_shapes(
+            angles.shape[1:], torques.shape[1:], friction.shape, damping.shape
+        )
+        points = (angles.shape[0], *batch)
+        object.__setattr__(
+            self, "angles", np.broadcast_to(angles.reshape(_aligned(angles, batch)), points)
+        )
+        object.__setattr__(
+            self, "torques", np.broadcast_to(torques.reshape(_aligned(torques, batch)), points)
+        )
+        object.__setattr__(self, "friction", np.broadcast_to(friction, batch))
+        object.__setattr__(self, "damping_rate", np.broadcast_to(damping, batch))
+
+    @property
+    def travel(self) -> FloatArray:
+        """Deployment angle [rad]."""
+        return np.asarray(self.angles[-1])
+
+    @property
+    def net_torques(self) -> FloatArray:
+        """Spring torque minus friction at each breakpoint [N*m]."""
+        return np.asarray(self.torques - self.friction)
+
+    @property
+    def batch_shape(self) -> tuple[int, ...]:
+        """Broadcast shape of one result."""
+        return tuple(self.friction.shape)
+
+
+def _aligned(points: FloatArray, batch: tuple[int, ...]) -> tuple[int, ...]:
+    """Shape of a (n_points, *own_batch) array with its batch axes right-aligned to batch."""
+    own = points.shape[1:]
+    return (points.shape[0], *((1,) * (len(batch) - len(own))), *own)
+
+
+@dataclass(frozen=True)
+class DeploymentSolution:
+    """One method's deployment prediction; every array has the problem's batch shape.
+
+    Attributes
+    ----------
+    method : solver name ("paper", "exact", ...)
+    deployment_time : time from release to the end of travel [s]; +inf where stalled
+    start_speed : input-shaft speed at the start of travel [rad/s]
+    end_speed : speed on arrival at the end of travel [rad/s]; 0 where stalled
+    max_speed : highest speed over the travel [rad/s]
+    stalled : True where the spring torque falls to the friction before the end of travel
+    stall_angle : deployed angle at which it stalls [rad]; NaN where not stalled
+    """
+
+    method: str
+    deployment_time: FloatArray
+    start_speed: FloatArray
+    end_speed: FloatArray
+    max_speed: FloatArray
+    stalled: BoolArray
+    stall_angle: FloatArray
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Angle and speed against time; arrays have shape (n_times, *batch_shape).
+
+    Attributes
+    ----------
+    method : solver name
+    time : times [s], shape (n_times,)
+    angle : deployed angle [rad]
+    speed : input-shaft speed [rad/s]
+    """
+
+    method: str
+    time: FloatArray
+    angle: FloatArray
+    speed: FloatArray
+
+
+class Solver(Protocol):
+    """A named deployment method."""
+
+    @property
+    def name(self) -> str:
+        """Registry name of the method."""
+        ...
+
+    @property
+    def label(self) -> str:
+        """Human label for tables and plots."""
+        ...
+
+    def solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
+        """Deployment time and speeds for every case of the batch."""
+        ...
+
+    def trajectory(self, problem: QuasiStaticProblem, times: ArrayLike) -> Trajectory:
+        """Angle and speed at the given times [s] for every case of the batch."""
+        ...
+
+
+def times_against_batch(times: ArrayLike, batch_ndim: int) -> FloatArray:
+    """Reshape a 1-D time vector to (n_times, 1, ..., 1) so that it broadcasts."""
+    t = np.asarray(times, dtype=float).reshape(-1)
+    return t.reshape((-1,) + (1,) * batch_ndim)

@@ -1,0 +1,180 @@
+"""The paper's closed-form method, Eq. 8 to 13, exactly as printed.
+
+Eq. 12 is missing from the paper's text; the deceleration that makes Eq. 13 reach the end
+of travel at Eq. 11's time is ``alpha = (omega_e - omega_s) / delta_t`` (negative for a
+falling spring torque), and ecdsim uses that. With it, Eq. 13 in ecdsim's deployed angle
+phi = theta_s - theta reads ``phi(t) = omega_s t + alpha t**2 / 2``.
+
+The method only looks at the torques at the start and the end of travel (for a tabulated
+spring, the first and last points). Where the spring torque falls to the friction before
+the end of travel, Eq. 8-11 are invalid: the method then reports the same stall as the
+exact solver (the stall is a property of load and friction, not of the method).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim.physics.quasistatic import locate_stall
+from ecdsim.solvers.base import (
+    DeploymentSolution,
+    QuasiStaticProblem,
+    Trajectory,
+    times_against_batch,
+)
+
+
+def start_speed(
+    start_torque: ArrayLike, friction: ArrayLike, damping_rate: ArrayLike
+) -> FloatArray:
+    """Speed at the start of deployment (Eq. 8): ``omega_s = (Ts - (FECD_T + FS_T)) / BECD_T``.
+
+    Parameters
+    ----------
+    start_torque : Ts [N*m]
+    friction : FECD_T + FS_T [N*m]
+    damping_rate : BECD_T [N*m*s/rad]
+    """
+    return as_float(
+        (np.asarray(start_torque, float) - np.asarray(friction, float))
+        / np.asarray(damping_rate, float)
+    )
+
+
+def end_speed(end_torque: ArrayLike, friction: ArrayLike, damping_rate: ArrayLike) -> FloatArray:
+    """Speed at the end of deployment (Eq. 9): ``omega_e = (Te - (FECD_T + FS_T)) / BECD_T``.
+
+    Parameters
+    ----------
+    end_torque : Te [N*m]
+    friction : FECD_T + FS_T [N*m]
+    damping_rate : BECD_T [N*m*s/rad]
+    """
+    return start_speed(end_torque, friction, damping_rate)
+
+
+def mean_speed(omega_s: ArrayLike, omega_e: ArrayLike) -> FloatArray:
+    """Average velocity (Eq. 10): ``(omega_s + omega_e) / 2``.
+
+    Parameters
+    ----------
+    omega_s : start speed [rad/s]
+    omega_e : end speed [rad/s]
+    """
+    return as_float((np.asarray(omega_s, float) + np.asarray(omega_e, float)) / 2.0)
+
+
+def deployment_time(travel: ArrayLike, omega_mean: ArrayLike) -> FloatArray:
+    """Deployment time (Eq. 11): ``delta_t = delta_theta / omega_mean``.
+
+    Parameters
+    ----------
+    travel : deployment angle delta_theta [rad]
+    omega_mean : average velocity [rad/s], > 0
+
+    >>> round(float(deployment_time(1.57, 0.0785)), 6)
+    20.0
+    """
+    return as_float(np.asarray(travel, float) / np.asarray(omega_mean, float))
+
+
+def deceleration(omega_s: ArrayLike, omega_e: ArrayLike, delta_t: ArrayLike) -> FloatArray:
+    """Constant acceleration (the missing Eq. 12): ``alpha = (omega_e - omega_s) / delta_t``.
+
+    Parameters
+    ----------
+    omega_s : start speed [rad/s]
+    omega_e : end speed [rad/s]
+    delta_t : deployment time [s]
+    """
+    return as_float(
+        (np.asarray(omega_e, float) - np.asarray(omega_s, float)) / np.asarray(delta_t, float)
+    )
+
+
+def position_eq13(
+    time: ArrayLike, start_angle: ArrayLike, omega_s: ArrayLike, alpha: ArrayLike
+) -> FloatArray:
+    """Angle to the end of travel at time t (Eq. 13): ``theta_s - omega_s t - alpha t**2 / 2``.
+
+    Written with the sign that makes theta reach 0 at Eq. 11's time when alpha is the
+    (negative) value of Eq. 12.
+
+    Parameters
+    ----------
+    time : t since release [s]
+    start_angle : theta_s, the deployment angle [rad]
+    omega_s : start speed [rad/s]
+    alpha : acceleration from Eq. 12 [rad/s**2]
+    """
+    t = np.asarray(time, float)
+    return as_float(
+        np.asarray(start_angle, float)
+        - np.asarray(omega_s, float) * t
+        - 0.5 * np.asarray(alpha, float) * t * t
+    )
+
+
+@dataclass(frozen=True)
+class PaperMethod:
+    """The paper's mean-velocity, constant-deceleration method (Eq. 8-13)."""
+
+    name: str = "paper"
+    label: str = "paper (Eq. 8-13)"
+
+    def solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
+        """Eq. 8-11 for every case; stalled cases get +inf and the stall angle."""
+        shape = problem.batch_shape
+        stalled, stall_angle = locate_stall(problem.angles, problem.net_torques)
+        omega_s = start_speed(problem.torques[0], problem.friction, problem.damping_rate)
+        omega_e = end_speed(problem.torques[-1], problem.friction, problem.damping_rate)
+        omega_bar = mean_speed(omega_s, omega_e)
+        safe_mean = np.where(stalled | (omega_bar <= 0.0), 1.0, omega_bar)
+        delta_t = np.where(stalled, np.inf, deployment_time(problem.travel, safe_mean))
+        return DeploymentSolution(
+            method=self.name,
+            deployment_time=np.broadcast_to(delta_t, shape).astype(float),
+            start_speed=np.broadcast_to(np.maximum(omega_s, 0.0), shape).astype(float),
+            end_speed=np.broadcast_to(np.where(stalled, 0.0, omega_e), shape).astype(float),
+            max_speed=np.broadcast_to(np.maximum(np.maximum(omega_s, omega_e), 0.0), shape).astype(
+                float
+            ),
+            stalled=np.broadcast_to(stalled, shape).copy(),
+            stall_angle=np.broadcast_to(stall_angle, shape).astype(float),
+        )
+
+    def trajectory(self, problem: QuasiStaticProblem, times: ArrayLike) -> Trajectory:
+        """Eq. 13 up to the end of travel, then held at the latch.
+
+        A stalled case has no Eq. 11 time; the same constant-deceleration idea is applied
+        up to the stall angle (uniform deceleration from omega_s to rest over the angle to
+        the stall), so that the curve stays defined and ends where the exact one does.
+        """
+        solution = self.solve(problem)
+        t = times_against_batch(times, len(solution.deployment_time.shape))
+        omega_s = solution.start_speed
+        stalled = solution.stalled
+        target = np.where(stalled, np.nan_to_num(solution.stall_angle), problem.travel)
+        # Time to the target at the mean of start and final speed (Eq. 10-11 logic).
+        final = np.where(stalled, 0.0, solution.end_speed)
+        mean = 0.5 * (omega_s + final)
+        moving = mean > 0.0
+        duration = np.where(moving, target / np.where(moving, mean, 1.0), np.inf)
+        finite = np.isfinite(duration) & (duration > 0.0)
+        alpha = np.where(finite, (final - omega_s) / np.where(finite, duration, 1.0), 0.0)
+        tc = np.minimum(t, np.where(finite, duration, 0.0))
+        angle = target - position_eq13(tc, target, omega_s, alpha)
+        speed = np.where(t < duration, omega_s + alpha * tc, 0.0)
+        speed = np.where(finite, speed, 0.0)
+        return Trajectory(
+            method=self.name,
+            time=np.asarray(times, dtype=float).reshape(-1),
+            angle=np.asarray(angle),
+            speed=np.asarray(speed),
+        )
+
+
+PAPER = PaperMethod()
