@@ -98,6 +98,12 @@ def _message(error: Any) -> str:
     if kind in {"quantity", "method"}:
         return f"{path}: {error['msg']}"
     message = str(error["msg"]).removeprefix("Value error, ")
+    if kind in {"model_type", "model_attributes_type", "dict_type"}:
+        message = f"expected a TOML table ([{path}] section or {{ key = value, ... }})"
+    elif kind in {"list_type", "tuple_type"}:
+        message = "expected a list [ ... ]"
+    elif kind == "too_short":
+        message = "expected at least one entry"
     if kind == "value_error":
         return f"{path}: {message}"
     return f"{path} = {error.get('input')!r}: {message}"

@@ -32,6 +32,9 @@ def interpolate_table(
 ) -> FloatArray:
     """Piecewise-linear interpolation in a (T, value) table; held at the end values outside.
 
+    The measured alternative to the paper's linear FL_T and FS_T (sections 2.3 and 5),
+    for lubricants whose friction is not linear in temperature.
+
     Holding the end value (rather than extrapolating the end slope) keeps a friction from
     turning negative; callers flag the out-of-range points with :func:`outside_table`.
 
@@ -52,7 +55,13 @@ def interpolate_table(
 
 
 def outside_table(temperature: ArrayLike, table_temperatures: ArrayLike) -> BoolArray:
-    """True where T lies outside the table's temperature range [degC]."""
+    """True where T lies outside the table's range (paper section 2.3: no silent extrapolation).
+
+    Parameters
+    ----------
+    temperature : T [degC]
+    table_temperatures : strictly increasing table temperatures [degC]
+    """
     t = np.asarray(temperature, dtype=float)
     grid = np.asarray(table_temperatures, dtype=float)
     return np.asarray((t < grid[0]) | (t > grid[-1]))

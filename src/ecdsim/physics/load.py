@@ -72,6 +72,9 @@ def tabulated_torque(
 ) -> FloatArray:
     """Spring torque interpolated linearly in an (angle, torque) table.
 
+    The measured alternative to Eq. 7 for springs that are not linear in angle (the paper,
+    section 4, asks for the torque to be characterised over the deployment angle).
+
     Parameters
     ----------
     angle : deployed angle phi [rad]

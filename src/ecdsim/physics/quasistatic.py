@@ -25,6 +25,8 @@ _SERIES_LIMIT = 1e-6
 def log_mean(a: ArrayLike, b: ArrayLike) -> FloatArray:
     """Logarithmic mean ``(a - b) / ln(a / b)`` of positive a, b; a where a == b.
 
+    The exact counterpart of the paper's mean of Eq. 10 (derivation in docs/model.md).
+
     Evaluated stably near a == b. Returns 0 where either argument is <= 0 (the net
     torque has reached zero: the segment can never be completed).
 
@@ -53,6 +55,9 @@ def segment_duration(
     length: ArrayLike, damping_rate: ArrayLike, net_start: ArrayLike, net_end: ArrayLike
 ) -> FloatArray:
     """Exact time to cross a segment of linear net torque: ``B * L / logmean(a, b)``.
+
+    Eq. 5 with the linear spring of Eq. 7 integrated exactly; the paper's Eq. 11 uses the
+    arithmetic mean of a and b instead.
 
     +inf where the net torque reaches zero within the segment (stall). A zero-length
     segment takes zero time.
@@ -84,6 +89,8 @@ def segment_angle(
 ) -> FloatArray:
     """Angle advanced within a segment after time s: ``(a / B) * s * h(k s / B)``.
 
+    The exact counterpart of the paper's Eq. 13 (``h(y) = (1 - exp(-y)) / y``).
+
     Parameters
     ----------
     elapsed : time since the segment's start, s [s]
@@ -104,6 +111,8 @@ def segment_speed(
 ) -> FloatArray:
     """Speed within a segment after time s: ``(a / B) * exp(-k s / B)``.
 
+    Eq. 5 along the exact trajectory (speed = net torque / BECD at every instant).
+
     Parameters
     ----------
     elapsed : time since the segment's start, s [s]
@@ -120,6 +129,8 @@ def locate_stall(
     breakpoint_angles: ArrayLike, net_torques: ArrayLike
 ) -> tuple[BoolArray, FloatArray]:
     """Where a piecewise-linear net torque first falls to zero over the travel.
+
+    Eq. 5 gives zero speed there: the paper's Eq. 8-11 are invalid for such a case.
 
     A quasi-static mechanism cannot pass the first angle at which spring torque no longer
     exceeds friction. Axis 0 of both arrays runs over the breakpoints.

@@ -1,0 +1,90 @@
+"""Atomic output, and the docstring contract: every physical parameter has a unit."""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import pkgutil
+import re
+from pathlib import Path
+
+import pytest
+
+import ecdsim
+from ecdsim import atomic
+
+
+def test_failed_write_keeps_the_earlier_file(tmp_path: Path) -> None:
+    target = tmp_path / "result.json"
+    atomic.write_text(target, "first")
+
+    def explode(stream: object) -> None:
+        raise RuntimeError("disk full")
+
+    with pytest.raises(RuntimeError, match="disk full"):
+        atomic.write_with(target, explode)
+    assert target.read_text() == "first"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["result.json"]
+
+
+def test_failed_plot_keeps_the_earlier_plot(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from matplotlib.figure import Figure
+
+    from ecdsim.plotting import save_figure
+
+    target = tmp_path / "plot.png"
+    fig = Figure()
+    fig.add_subplot().plot([0, 1], [0, 1])
+    save_figure(fig, target)
+    before = target.read_bytes()
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise OSError("interrupted")
+
+    monkeypatch.setattr(Figure, "savefig", broken)
+    with pytest.raises(OSError, match="interrupted"):
+        save_figure(fig, target)
+    assert target.read_bytes() == before
+
+
+PHYSICS_MODULES = [
+    "ecdsim.physics.assembly",
+    "ecdsim.physics.laws",
+    "ecdsim.physics.load",
+    "ecdsim.physics.quasistatic",
+    "ecdsim.solvers.paper",
+]
+PARAMETER = re.compile(r"^\s{4}(\w+) : .*\[[^\]]+\]", re.MULTILINE)
+
+
+def public_functions() -> list[tuple[str, object]]:
+    found: list[tuple[str, object]] = []
+    for name in PHYSICS_MODULES:
+        module = importlib.import_module(name)
+        for attr, value in vars(module).items():
+            if attr.startswith("_") or not inspect.isfunction(value):
+                continue
+            if value.__module__ == name:
+                found.append((f"{name}.{attr}", value))
+    return found
+
+
+@pytest.mark.parametrize(("name", "function"), public_functions(), ids=lambda x: str(x))
+def test_every_physics_parameter_documents_its_unit(name: str, function: object) -> None:
+    assert callable(function)
+    doc = inspect.getdoc(function) or ""
+    documented = set(PARAMETER.findall("    " + doc.replace("\n", "\n    ")))
+    parameters = set(inspect.signature(function).parameters)
+    missing = parameters - documented
+    assert not missing, f"{name}: parameters without 'name : ... [unit]' docs: {missing}"
+    assert re.search(r"Eq\.|paper|section|ECD", doc), f"{name} cites no source"
+
+
+def test_every_module_has_a_docstring() -> None:
+    for info in pkgutil.walk_packages(ecdsim.__path__, "ecdsim."):
+        if info.name.endswith("__main__"):
+            continue
+        module = importlib.import_module(info.name)
+        assert module.__doc__, f"{info.name} has no module docstring"

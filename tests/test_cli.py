@@ -1,0 +1,204 @@
+"""The command line, in process (CliRunner) and as the installed console script."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from ecdsim import __version__
+from ecdsim.cli.app import app
+from tests import hand
+from tests.conftest import PAPER_CONFIG
+
+runner = CliRunner()
+
+
+def test_deploy_json_is_stable_and_correct() -> None:
+    result = runner.invoke(app, ["deploy", str(PAPER_CONFIG), "--json"])
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert document["ecdsim_version"] == __version__
+    assert [c["temperature_C"] for c in document["cases"]] == [-40.0, 25.0, 100.0]
+    for case in document["cases"]:
+        t = case["temperature_C"]
+        assert case["damping_rate_Nms_per_rad"] == pytest.approx(hand.becd(t), rel=1e-12)
+        assert case["friction_Nm"] == pytest.approx(hand.fecd(t), rel=1e-12)
+        assert case["system_friction_Nm"] == pytest.approx(hand.fs(t), rel=1e-12)
+        assert case["paper"]["deployment_time_s"] == pytest.approx(hand.paper_time(t), rel=1e-12)
+        assert case["exact"]["deployment_time_s"] == pytest.approx(hand.exact_time(t), rel=1e-12)
+        for method in ("paper", "exact"):
+            assert set(case[method]) >= {
+                "deployment_time_s",
+                "start_speed_rad_s",
+                "end_speed_rad_s",
+                "stalled",
+                "stall_angle_rad",
+            }
+            assert case[method]["stalled"] is False
+            assert case[method]["stall_angle_rad"] is None
+        diff = case["difference"]["deployment_time_s"]
+        assert diff == pytest.approx(hand.paper_time(t) - hand.exact_time(t), rel=1e-9)
+    assert document["warnings"] == []
+
+
+def test_deploy_table_output() -> None:
+    result = runner.invoke(app, ["deploy", str(PAPER_CONFIG)])
+    assert result.exit_code == 0, result.output
+    # Exact time at 25 degC to 4 significant digits: 26.86 s (hand.exact_time).
+    assert f"{hand.exact_time(25.0):.4g}" in result.stdout
+    assert f"{hand.paper_time(-40.0):.4g}" in result.stdout
+    assert "BECD" in result.stdout
+    assert "T [degC]" in result.stdout
+
+
+def test_temperature_and_method_overrides() -> None:
+    result = runner.invoke(
+        app, ["deploy", str(PAPER_CONFIG), "--json", "-T", "0", "-T", "323.15 K", "-m", "exact"]
+    )
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert [c["temperature_C"] for c in document["cases"]] == pytest.approx([0.0, 50.0])
+    assert document["methods"] == ["exact"]
+    assert "paper" not in document["cases"][0]
+
+
+def test_stall_warning_goes_to_stderr_and_json(tmp_path: Path) -> None:
+    config = tmp_path / "stall.toml"
+    # End torque 0.5 N*m is below the total friction at every temperature
+    # (F = 1.343, 1.005, 0.614 N*m at -40, 25, 100 degC by tests/hand.py).
+    config.write_text(PAPER_CONFIG.read_text().replace('"1.58 N*m"', '"0.5 N*m"'))
+    result = runner.invoke(app, ["deploy", str(config), "--json"])
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)  # stdout holds the JSON alone
+    assert all(c["exact"]["stalled"] for c in document["cases"])
+    assert all(c["exact"]["deployment_time_s"] is None for c in document["cases"])
+    assert {w["code"] for w in document["warnings"]} == {"stall"}
+    assert "warning: [exact] stalls at" in result.stderr
+
+
+@pytest.mark.parametrize(
+    ("replace", "fragment"),
+    [
+        (("ratio = 380", "ratio = -380"), "gearbox.ratio: '-380' must be > 0"),
+        (('"1.57 rad"', '"1.57 N*m"'), "load.travel: '1.57 N*m' has the wrong dimension"),
+        (("[gearbox]", "[gearbox]\nspeed = 3"), "gearbox.speed: unknown key"),
+        (("title =", "title = = "), "not valid TOML"),
+    ],
+)
+def test_bad_config_exits_2_without_traceback(
+    tmp_path: Path, replace: tuple[str, str], fragment: str
+) -> None:
+    config = tmp_path / "bad.toml"
+    config.write_text(PAPER_CONFIG.read_text().replace(*replace, 1))
+    result = runner.invoke(app, ["deploy", str(config)])
+    assert result.exit_code == 2
+    assert f"error: {config}: {fragment}" in result.stderr
+    assert "Traceback" not in result.output
+    assert result.stdout == ""
+
+
+def test_bad_arguments_exit_2(tmp_path: Path) -> None:
+    missing = runner.invoke(app, ["deploy", str(tmp_path / "none.toml")])
+    assert missing.exit_code == 2
+    assert "config file not found" in missing.stderr
+    bad = runner.invoke(app, ["deploy", str(PAPER_CONFIG), "-T", "warm", "-m", "guess"])
+    assert bad.exit_code == 2
+    assert "--temperature: 'warm'" in bad.stderr
+    assert "--method: 'guess' is not a method" in bad.stderr
+    domain = runner.invoke(app, ["deploy", str(PAPER_CONFIG), "-T", "400"])
+    assert domain.exit_code == 2
+    assert "damping_temperature_coefficient" in domain.stderr
+
+
+def test_plots_are_written(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["deploy", str(PAPER_CONFIG), "--plot", str(tmp_path / "p")])
+    assert result.exit_code == 0, result.output
+    for name in ("angle_vs_time.png", "torque_vs_speed.png"):
+        data = (tmp_path / "p" / name).read_bytes()
+        assert data.startswith(b"\x89PNG")
+    assert not list((tmp_path / "p").glob(".*.tmp"))  # no temporary file left behind
+
+
+def test_plot_to_unwritable_place_exits_2(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    result = runner.invoke(app, ["deploy", str(PAPER_CONFIG), "--plot", str(blocker)])
+    assert result.exit_code == 2
+    assert "cannot write plots" in result.stderr
+
+
+def test_demo_writes_plots(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["demo", "--out", str(tmp_path / "demo")])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "demo" / "angle_vs_time.png").exists()
+    assert f"{hand.exact_time(100.0):.4g}" in result.stdout
+
+
+def test_help_and_version() -> None:
+    top = runner.invoke(app, ["--help"])
+    assert top.exit_code == 0
+    assert "Example:" in top.stdout
+    for command in ("deploy", "demo"):
+        sub = runner.invoke(app, [command, "--help"])
+        assert sub.exit_code == 0
+        assert "Example:" in sub.stdout
+    version = runner.invoke(app, ["--version"])
+    assert version.stdout.strip() == f"ecdsim {__version__}"
+
+
+def installed_command() -> Path:
+    """The console script installed beside this interpreter (make test installs it)."""
+    path = Path(sys.executable).parent / "ecdsim"
+    assert path.exists(), f"ecdsim console script not installed next to {sys.executable}"
+    return path
+
+
+def test_installed_command_json() -> None:
+    env = {**os.environ, "COLUMNS": "200"}
+    done = subprocess.run(
+        [installed_command(), "deploy", str(PAPER_CONFIG), "--json"],
+        capture_output=True,
+        text=True,
+        check=False,
+        env=env,
+    )
+    assert done.returncode == 0, done.stderr
+    document = json.loads(done.stdout)
+    assert document["cases"][1]["exact"]["deployment_time_s"] == pytest.approx(
+        hand.exact_time(25.0), rel=1e-12
+    )
+
+
+def test_installed_command_bad_config(tmp_path: Path) -> None:
+    config = tmp_path / "bad.toml"
+    config.write_text(PAPER_CONFIG.read_text().replace('"1.3e-4 N*m*s/rad"', '"1.3e-4 N*m"'))
+    done = subprocess.run(
+        [installed_command(), "deploy", str(config)], capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 2
+    assert "damper.damping_rate: '1.3e-4 N*m' has the wrong dimension" in done.stderr
+    assert "Traceback" not in done.stderr
+
+
+def test_help_does_not_import_heavy_modules() -> None:
+    code = (
+        "import sys, ecdsim.cli.app as a\n"
+        "heavy = [m for m in ('numpy', 'scipy', 'matplotlib', 'pint', 'pydantic') "
+        "if m in sys.modules]\n"
+        "print(','.join(heavy))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == ""
+
+
+def test_python_dash_m() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "ecdsim", "--version"], capture_output=True, text=True, check=True
+    )
+    assert done.stdout.strip() == f"ecdsim {__version__}"
