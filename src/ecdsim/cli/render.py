@@ -66,7 +66,7 @@ def print_tables(prediction: Prediction) -> None:
     table.add_column(escape("end speed\n[rad/s]"), justify="right")
     if "difference" in cases[0]:
         table.add_column(escape("paper - exact\n[s]"), justify="right")
-        table.add_column(escape("[%]"), justify="right")
+        table.add_column(escape("rel.\n[%]"), justify="right")
     table.add_column("stall", justify="left")
     reference = "exact" if "exact" in methods else methods[0]
     for case in cases:
