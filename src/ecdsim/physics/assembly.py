@@ -32,9 +32,9 @@ def damper_damping_rate(
     >>> round(float(damper_damping_rate(1.3e-4, -40.0)), 10)
     0.0001638
     """
-    bd = np.asarray(reference_damping_rate, dtype=float)
-    dt = np.asarray(temperature, dtype=float) - np.asarray(reference_temperature, dtype=float)
-    return as_float(bd * (1.0 + np.asarray(temperature_coefficient, dtype=float) * dt))
+    bd = as_float(reference_damping_rate)
+    dt = as_float(temperature) - as_float(reference_temperature)
+    return as_float(bd * (1.0 + as_float(temperature_coefficient) * dt))
 
 
 def total_damping_rate(damper_rate: ArrayLike, gearbox_rate: ArrayLike) -> FloatArray:
@@ -45,7 +45,7 @@ def total_damping_rate(damper_rate: ArrayLike, gearbox_rate: ArrayLike) -> Float
     damper_rate : BD_T, the high-speed damper's rate at T [N*m*s/rad]
     gearbox_rate : BG, the gearbox damping referred to the high-speed shaft [N*m*s/rad]
     """
-    return as_float(np.asarray(damper_rate, dtype=float) + np.asarray(gearbox_rate, dtype=float))
+    return as_float(as_float(damper_rate) + as_float(gearbox_rate))
 
 
 def total_friction(
@@ -60,9 +60,7 @@ def total_friction(
     gearbox_friction : FG, the gearbox friction referred to the high-speed shaft [N*m]
     """
     return as_float(
-        np.asarray(damper_friction, dtype=float)
-        + np.asarray(lubrication_friction, dtype=float)
-        + np.asarray(gearbox_friction, dtype=float)
+        as_float(damper_friction) + as_float(lubrication_friction) + as_float(gearbox_friction)
     )
 
 
@@ -77,8 +75,8 @@ def refer_damping_to_input(high_speed_rate: ArrayLike, gear_ratio: ArrayLike) ->
     >>> round(float(refer_damping_to_input(1.638e-4, 380)), 4)
     23.6527
     """
-    n = np.asarray(gear_ratio, dtype=float)
-    return as_float(np.asarray(high_speed_rate, dtype=float) * n * n)
+    n = as_float(gear_ratio)
+    return as_float(as_float(high_speed_rate) * n * n)
 
 
 def refer_friction_to_input(high_speed_friction: ArrayLike, gear_ratio: ArrayLike) -> FloatArray:
@@ -89,9 +87,7 @@ def refer_friction_to_input(high_speed_friction: ArrayLike, gear_ratio: ArrayLik
     high_speed_friction : FT_T, total friction at the high-speed shaft [N*m]
     gear_ratio : N, high-speed shaft turns per input shaft turn [-]
     """
-    return as_float(
-        np.asarray(high_speed_friction, dtype=float) * np.asarray(gear_ratio, dtype=float)
-    )
+    return as_float(as_float(high_speed_friction) * as_float(gear_ratio))
 
 
 def input_speed(torque: ArrayLike, friction: ArrayLike, damping_rate: ArrayLike) -> FloatArray:
@@ -106,8 +102,8 @@ def input_speed(torque: ArrayLike, friction: ArrayLike, damping_rate: ArrayLike)
     friction : FECD_T, Coulomb friction referred to the input [N*m]
     damping_rate : BECD_T, damping rate referred to the input [N*m*s/rad]
     """
-    excess = np.asarray(torque, dtype=float) - np.asarray(friction, dtype=float)
-    return as_float(np.maximum(excess, 0.0) / np.asarray(damping_rate, dtype=float))
+    excess = as_float(torque) - as_float(friction)
+    return as_float(np.maximum(excess, 0.0) / as_float(damping_rate))
 
 
 def dynamic_damping_rate(torque: ArrayLike, speed: ArrayLike) -> FloatArray:
@@ -121,8 +117,8 @@ def dynamic_damping_rate(torque: ArrayLike, speed: ArrayLike) -> FloatArray:
     torque : input torque T_I [N*m]
     speed : input speed omega_I at that torque [rad/s]
     """
-    t = np.asarray(torque, dtype=float)
-    w = np.asarray(speed, dtype=float)
+    t = as_float(torque)
+    w = as_float(speed)
     moving = w > 0.0
     safe_speed = np.where(moving, w, 1.0)
     return np.where(moving, t / safe_speed, np.inf)
@@ -138,4 +134,4 @@ def damper_torque(damping_rate: ArrayLike, speed: ArrayLike) -> FloatArray:
     damping_rate : BD_T, the high-speed damper's damping rate [N*m*s/rad]
     speed : high-speed shaft speed omega_d [rad/s]
     """
-    return as_float(np.asarray(damping_rate, dtype=float) * np.asarray(speed, dtype=float))
+    return as_float(as_float(damping_rate) * as_float(speed))

@@ -21,10 +21,7 @@ def linear_in_temperature(temperature: ArrayLike, slope: ArrayLike, at_0c: Array
     >>> round(float(linear_in_temperature(25.0, -0.0044, 0.58)), 6)  # FS_25, paper section 6
     0.47
     """
-    return as_float(
-        np.asarray(slope, dtype=float) * np.asarray(temperature, dtype=float)
-        + np.asarray(at_0c, dtype=float)
-    )
+    return as_float(as_float(slope) * as_float(temperature) + as_float(at_0c))
 
 
 def interpolate_table(
@@ -47,9 +44,9 @@ def interpolate_table(
     >>> float(interpolate_table(10.0, [0.0, 20.0], [1.0, 3.0]))
     2.0
     """
-    t = np.asarray(temperature, dtype=float)
+    t = as_float(temperature)
     return np.asarray(
-        np.interp(t, np.asarray(table_temperatures, float), np.asarray(table_values, float)),
+        np.interp(t, as_float(table_temperatures), as_float(table_values)),
         dtype=float,
     )
 
@@ -62,6 +59,6 @@ def outside_table(temperature: ArrayLike, table_temperatures: ArrayLike) -> Bool
     temperature : T [degC]
     table_temperatures : strictly increasing table temperatures [degC]
     """
-    t = np.asarray(temperature, dtype=float)
-    grid = np.asarray(table_temperatures, dtype=float)
+    t = as_float(temperature)
+    grid = as_float(table_temperatures)
     return np.asarray((t < grid[0]) | (t > grid[-1]))

@@ -26,11 +26,9 @@ def spring_torque_eq7(
     >>> round(float(spring_torque_eq7(1.57, 3.73, 1.58, 1.57)), 12)
     3.73
     """
-    ts = np.asarray(start_torque, dtype=float)
-    te = np.asarray(end_torque, dtype=float)
-    return as_float(
-        np.asarray(theta, dtype=float) / np.asarray(travel, dtype=float) * (ts - te) + te
-    )
+    ts = as_float(start_torque)
+    te = as_float(end_torque)
+    return as_float(as_float(theta) / as_float(travel) * (ts - te) + te)
 
 
 def spring_torque_linear(
@@ -45,8 +43,8 @@ def spring_torque_linear(
     end_torque : Te [N*m]
     travel : deployment angle [rad]
     """
-    trav = np.asarray(travel, dtype=float)
-    return spring_torque_eq7(trav - np.asarray(angle, dtype=float), start_torque, end_torque, trav)
+    trav = as_float(travel)
+    return spring_torque_eq7(trav - as_float(angle), start_torque, end_torque, trav)
 
 
 def spring_temperature_factor(
@@ -63,8 +61,8 @@ def spring_temperature_factor(
     coefficient : fractional change of spring torque per kelvin, k [1/K]
     reference_temperature : temperature at which the torques are given [degC]
     """
-    dt = np.asarray(temperature, dtype=float) - np.asarray(reference_temperature, dtype=float)
-    return as_float(1.0 + np.asarray(coefficient, dtype=float) * dt)
+    dt = as_float(temperature) - as_float(reference_temperature)
+    return as_float(1.0 + as_float(coefficient) * dt)
 
 
 def tabulated_torque(
@@ -83,9 +81,9 @@ def tabulated_torque(
     """
     return np.asarray(
         np.interp(
-            np.asarray(angle, dtype=float),
-            np.asarray(table_angles, dtype=float),
-            np.asarray(table_torques, dtype=float),
+            as_float(angle),
+            as_float(table_angles),
+            as_float(table_torques),
         ),
         dtype=float,
     )

@@ -38,10 +38,7 @@ def start_speed(
     friction : FECD_T + FS_T [N*m]
     damping_rate : BECD_T [N*m*s/rad]
     """
-    return as_float(
-        (np.asarray(start_torque, float) - np.asarray(friction, float))
-        / np.asarray(damping_rate, float)
-    )
+    return as_float((as_float(start_torque) - as_float(friction)) / as_float(damping_rate))
 
 
 def end_speed(end_torque: ArrayLike, friction: ArrayLike, damping_rate: ArrayLike) -> FloatArray:
@@ -64,7 +61,7 @@ def mean_speed(omega_s: ArrayLike, omega_e: ArrayLike) -> FloatArray:
     omega_s : start speed [rad/s]
     omega_e : end speed [rad/s]
     """
-    return as_float((np.asarray(omega_s, float) + np.asarray(omega_e, float)) / 2.0)
+    return as_float((as_float(omega_s) + as_float(omega_e)) / 2.0)
 
 
 def deployment_time(travel: ArrayLike, omega_mean: ArrayLike) -> FloatArray:
@@ -78,7 +75,7 @@ def deployment_time(travel: ArrayLike, omega_mean: ArrayLike) -> FloatArray:
     >>> round(float(deployment_time(1.57, 0.0785)), 6)
     20.0
     """
-    return as_float(np.asarray(travel, float) / np.asarray(omega_mean, float))
+    return as_float(as_float(travel) / as_float(omega_mean))
 
 
 def deceleration(omega_s: ArrayLike, omega_e: ArrayLike, delta_t: ArrayLike) -> FloatArray:
@@ -90,9 +87,7 @@ def deceleration(omega_s: ArrayLike, omega_e: ArrayLike, delta_t: ArrayLike) -> 
     omega_e : end speed [rad/s]
     delta_t : deployment time [s]
     """
-    return as_float(
-        (np.asarray(omega_e, float) - np.asarray(omega_s, float)) / np.asarray(delta_t, float)
-    )
+    return as_float((as_float(omega_e) - as_float(omega_s)) / as_float(delta_t))
 
 
 def position_eq13(
@@ -110,12 +105,8 @@ def position_eq13(
     omega_s : start speed [rad/s]
     alpha : acceleration from Eq. 12 [rad/s**2]
     """
-    t = np.asarray(time, float)
-    return as_float(
-        np.asarray(start_angle, float)
-        - np.asarray(omega_s, float) * t
-        - 0.5 * np.asarray(alpha, float) * t * t
-    )
+    t = as_float(time)
+    return as_float(as_float(start_angle) - as_float(omega_s) * t - 0.5 * as_float(alpha) * t * t)
 
 
 @dataclass(frozen=True)
@@ -171,7 +162,7 @@ class PaperMethod:
         speed = np.where(finite, speed, 0.0)
         return Trajectory(
             method=self.name,
-            time=np.asarray(times, dtype=float).reshape(-1),
+            time=as_float(times).reshape(-1),
             angle=np.asarray(angle),
             speed=np.asarray(speed),
         )
