@@ -27,6 +27,20 @@ def test_failed_write_keeps_the_earlier_file(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["result.json"]
 
 
+def test_written_file_has_ordinary_permissions(tmp_path: Path) -> None:
+    import os
+
+    umask = os.umask(0o022)
+    try:
+        path = atomic.write_text(tmp_path / "out.txt", "x")
+        plain = tmp_path / "plain.txt"
+        plain.write_text("x")
+    finally:
+        os.umask(umask)
+    # Same mode as a file written with open(): 0644 under umask 022, not mkstemp's 0600.
+    assert path.stat().st_mode & 0o777 == plain.stat().st_mode & 0o777 == 0o644
+
+
 def test_failed_plot_keeps_the_earlier_plot(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
