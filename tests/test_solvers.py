@@ -271,3 +271,57 @@ def test_problem_aligns_batch_axes() -> None:
     assert PAPER.solve(problem).deployment_time[0] == pytest.approx(10.0 / ((1.9 + 0.9) / 2))
     with pytest.raises(ValueError, match="breakpoints"):
         QuasiStaticProblem(np.array([0.0, 1.0]), np.array([1.0]), np.array(0.0), np.array(1.0))
+
+
+def test_tabulated_spring_over_several_temperatures() -> None:
+    # Regression: a spring table with a temperature coefficient, solved at three
+    # temperatures at once (1-D) and against samples (2-D), equals the scalar solutions.
+    base = paper_system()
+    spring = TabulatedSpring((0.0, 0.8, 1.57), (3.73, 2.6, 1.58), temperature_coefficient=-3e-4)
+    system = DeploymentSystem(base.ecd, Load(spring, 1.57, base.load.system_friction))
+    sweep = predict(system, TEMPS).solutions["exact"].deployment_time
+    for i, t in enumerate(TEMPS):
+        single = predict(system, t).solutions["exact"].deployment_time
+        assert sweep[i] == pytest.approx(float(single), rel=1e-14)
+    # Hand: torques scale by 1 - 3e-4 (T - 25); two segments of B L / logmean.
+    factor = 1.0 - 3e-4 * (-40.0 - 25.0)
+    friction = hand.fecd(-40.0) + hand.fs(-40.0)
+    nets = [3.73 * factor - friction, 2.6 * factor - friction, 1.58 * factor - friction]
+    lengths = [0.8, 0.77]
+    expected = sum(
+        hand.becd(-40.0) * length * math.log(a / b) / (a - b)
+        for length, a, b in zip(lengths, nets[:-1], nets[1:], strict=True)
+    )
+    assert sweep[0] == pytest.approx(expected, rel=1e-12)
+    travels = np.array([1.2, 1.57])
+    batch = DeploymentSystem(base.ecd, Load(spring, travels, base.load.system_friction))
+    grid = predict(batch, np.array(TEMPS)[:, None]).solutions["exact"].deployment_time
+    assert grid.shape == (3, 2)
+    assert grid[0, 1] == pytest.approx(sweep[0], rel=1e-14)
+
+
+def test_paper_peak_speed_sees_a_mid_travel_peak() -> None:
+    # A spring whose torque peaks mid-travel: both methods report the same physical
+    # peak speed, (5.0 - F) / B at the middle breakpoint, for the linear-range check.
+    base = paper_system()
+    spring = TabulatedSpring((0.0, 0.8, 1.57), (3.0, 5.0, 2.0))
+    system = DeploymentSystem(base.ecd, Load(spring, 1.57, base.load.system_friction))
+    prediction = predict(system, [25.0])
+    expected = (5.0 - hand.fecd(25.0) - hand.fs(25.0)) / hand.becd(25.0)
+    for solution in prediction.solutions.values():
+        assert solution.max_speed[0] == pytest.approx(expected, rel=1e-12)
+
+
+def test_paper_trajectory_follows_eq13() -> None:
+    prediction = predict(paper_system(), [25.0])
+    dt = hand.paper_time(25.0)
+    friction = hand.fecd(25.0) + hand.fs(25.0)
+    ws = (3.73 - friction) / hand.becd(25.0)
+    we = (1.58 - friction) / hand.becd(25.0)
+    t = np.array([0.0, dt / 3.0, dt, 2.0 * dt])
+    trajectory = prediction.trajectory("paper", t)
+    expected = ws * t[:3] + 0.5 * (we - ws) / dt * t[:3] ** 2  # phi = travel - theta (Eq. 13)
+    np.testing.assert_allclose(trajectory.angle[:3, 0], expected, rtol=1e-12)
+    assert trajectory.angle[3, 0] == pytest.approx(1.57)  # latched
+    assert trajectory.speed[1, 0] == pytest.approx(ws + (we - ws) / dt * dt / 3.0, rel=1e-12)
+    assert trajectory.speed[3, 0] == 0.0

@@ -327,7 +327,8 @@ class TabulatedSpring:
             temperature, self.temperature_coefficient, self.reference_temperature
         )
         trav = np.asarray(travel, dtype=float)
-        table = np.asarray(self.angles, dtype=float).reshape((-1,) + (1,) * trav.ndim)
+        batch_ndim = max(trav.ndim, factor.ndim)  # temperatures may add batch axes
+        table = np.asarray(self.angles, dtype=float).reshape((-1,) + (1,) * batch_ndim)
         clipped = np.minimum(table, trav)
         clipped[-1] = trav  # the last breakpoint is the latch, whatever the table's end
         torque = load.tabulated_torque(clipped, self.angles, self.torques)

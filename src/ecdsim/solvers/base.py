@@ -64,6 +64,17 @@ class QuasiStaticProblem:
         return np.asarray(self.torques - self.friction)
 
     @property
+    def peak_speed(self) -> FloatArray:
+        """Highest Eq. 5 speed over the breakpoints, ``max(T_i - F, 0) / BECD`` [rad/s].
+
+        The net torque is piecewise linear, so its maximum lies on a breakpoint. Both
+        methods report it, for the damper's linear-range check (a tabulated spring may
+        peak mid-travel, which the paper's Eq. 8-9 do not look at).
+        """
+        net = np.maximum(self.net_torques, 0.0)
+        return np.asarray(net.max(axis=0) / self.damping_rate, dtype=np.float64)
+
+    @property
     def batch_shape(self) -> tuple[int, ...]:
         """Broadcast shape of one result."""
         return tuple(self.friction.shape)

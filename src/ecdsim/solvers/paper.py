@@ -130,9 +130,9 @@ class PaperMethod:
             deployment_time=np.broadcast_to(delta_t, shape).astype(float),
             start_speed=np.broadcast_to(np.maximum(omega_s, 0.0), shape).astype(float),
             end_speed=np.broadcast_to(np.where(stalled, 0.0, omega_e), shape).astype(float),
-            max_speed=np.broadcast_to(np.maximum(np.maximum(omega_s, omega_e), 0.0), shape).astype(
-                float
-            ),
+            # The linear-range check is physical, not the method's: the peak speed is taken
+            # over every breakpoint (a tabulated spring may peak mid-travel), as in exact.
+            max_speed=problem.peak_speed,
             stalled=np.broadcast_to(stalled, shape).copy(),
             stall_angle=np.broadcast_to(stall_angle, shape).astype(float),
         )
@@ -149,17 +149,14 @@ class PaperMethod:
         omega_s = solution.start_speed
         stalled = solution.stalled
         target = np.where(stalled, np.nan_to_num(solution.stall_angle), problem.travel)
-        # Time to the target at the mean of start and final speed (Eq. 10-11 logic).
         final = np.where(stalled, 0.0, solution.end_speed)
-        mean = 0.5 * (omega_s + final)
-        moving = mean > 0.0
-        duration = np.where(moving, target / np.where(moving, mean, 1.0), np.inf)
-        finite = np.isfinite(duration) & (duration > 0.0)
-        alpha = np.where(finite, (final - omega_s) / np.where(finite, duration, 1.0), 0.0)
-        tc = np.minimum(t, np.where(finite, duration, 0.0))
-        angle = target - position_eq13(tc, target, omega_s, alpha)
-        speed = np.where(t < duration, omega_s + alpha * tc, 0.0)
-        speed = np.where(finite, speed, 0.0)
+        omega_bar = mean_speed(omega_s, final)  # Eq. 10
+        moving = omega_bar > 0.0
+        duration = np.where(moving, deployment_time(target, np.where(moving, omega_bar, 1.0)), 0.0)
+        alpha = deceleration(omega_s, final, np.where(moving, duration, 1.0))  # Eq. 12
+        tc = np.minimum(t, duration)
+        angle = target - position_eq13(tc, target, omega_s, np.where(moving, alpha, 0.0))  # Eq. 13
+        speed = np.where(moving & (t < duration), omega_s + alpha * tc, 0.0)
         return Trajectory(
             method=self.name,
             time=as_float(times).reshape(-1),
