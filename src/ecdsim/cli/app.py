@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Annotated, NoReturn
 import typer
 
 from ecdsim._version import __version__
+from ecdsim.cli.fit import fit_app
 
 if TYPE_CHECKING:
     from ecdsim.config import Config
@@ -31,6 +32,7 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+app.add_typer(fit_app, name="fit", help="Fit BECD(T) and FECD(T) to bench data (paper section 7).")
 
 
 def _version_callback(value: bool) -> None:

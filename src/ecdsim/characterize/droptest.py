@@ -1,0 +1,695 @@
+"""Drop-test reduction (paper section 7, Figure 7): masses on a flywheel turn the damper.
+
+A mass m hangs from a string wound on a flywheel of radius r on the ECD's input shaft;
+released from rest, it turns the shaft through an angle theta in a time t. At steady
+speed the damper's torque balances the weight's::
+
+    torque = m * g * r - F_rig                          (F_rig: the rig's own friction)
+    speed  = theta / t                                   (steady state, the paper's reading)
+
+and the points of one temperature lie on the line ``torque = FECD + BECD * speed``
+(Eq. 5). Released from rest, the shaft first accelerates. With the total inertia
+``J = J_rig + m r**2`` (the falling mass acts as ``m r**2`` at the shaft), constant
+torque against linear damping and Coulomb friction gives (derivation in
+``docs/characterize.md``)::
+
+    J dw/dt = torque - FECD - BECD * w
+    w(t)     = w_ss * (1 - exp(-t / tau)),   tau = J / BECD,  w_ss = (torque - FECD) / BECD
+    theta(t) = w_ss * (t - lag),             lag = tau * (1 - exp(-t / tau))
+
+so the steady speed is ``theta / (t - lag)``, not ``theta / t``. Because ``lag`` depends
+on BECD, the line and the correction are fitted together by non-linear least squares:
+the model torque of a point is ``FECD + BECD * theta / (t - lag(BECD))``. The fit starts
+from the plain line of the steady-state speeds and reports each point's speed correction.
+The inertia used is the ``rig_inertia_kg_m2`` column plus ``m r**2``; the damper's own
+rotor inertia (reflected: J_rotor * N**2) is unknown before the test and belongs in that
+column when known. Without the column no correction is made (the paper's steady-state
+reading), and a warning says how large the falling mass alone would make it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim._version import __version__
+from ecdsim.characterize.csvdata import (
+    INERTIA,
+    LENGTH,
+    MASS,
+    TIME,
+    Column,
+    Table,
+    above_absolute_zero,
+    non_negative,
+    positive,
+    read_table,
+    temperature_groups,
+)
+from ecdsim.characterize.findings import FitWarning
+from ecdsim.characterize.linefit import (
+    LineFit,
+    LineFitError,
+    check_line_data,
+    fit_line,
+    summarise_line,
+)
+from ecdsim.characterize.stats import Estimate, finite_or_none
+from ecdsim.characterize.templaws import MISFIT_LEVEL, TemperatureLaws, fit_temperature_laws
+from ecdsim.config.units import ANGLE, TEMPERATURE, TORQUE
+
+STANDARD_GRAVITY = 9.80665  # m/s**2, the conventional value (3rd CGPM, 1901)
+# A start-up correction above this fraction of a speed makes the result lean on the
+# inertia being right: say so.
+LARGE_CORRECTION = 0.05
+# Below this the falling mass's own start-up transient is not worth a warning.
+NOTABLE_CORRECTION = 0.01
+
+DROP_TEST_COLUMNS = (
+    Column("temperature", TEMPERATURE, "temperature_C", check=above_absolute_zero),
+    Column("mass", MASS, "mass_kg", check=positive("kg")),
+    Column("radius", LENGTH, "radius_m", check=positive("m")),
+    Column("angle", ANGLE, "angle_rad", check=positive("rad")),
+    Column("time", TIME, "time_s", check=positive("s")),
+    Column("rig_friction", TORQUE, "rig_friction_Nm", required=False, check=non_negative("N*m")),
+    Column(
+        "rig_inertia",
+        INERTIA,
+        "rig_inertia_kg_m2",
+        required=False,
+        check=non_negative("kg*m^2"),
+    ),
+)
+
+
+def drive_torque(
+    mass: ArrayLike,
+    radius: ArrayLike,
+    rig_friction: ArrayLike = 0.0,
+    gravity: float = STANDARD_GRAVITY,
+) -> FloatArray:
+    """Torque a falling mass applies to the damper (paper section 7): ``m g r - F_rig``.
+
+    Parameters
+    ----------
+    mass : the falling mass m [kg]
+    radius : flywheel (string) radius r [m]
+    rig_friction : the rig's own Coulomb friction F_rig [N*m]
+    gravity : acceleration of gravity g [m/s**2]
+
+    >>> round(float(drive_torque(2.0, 0.05, 0.01)), 12)  # 2 * 9.80665 * 0.05 - 0.01
+    0.970665
+    """
+    return as_float(
+        np.asarray(mass, dtype=float) * gravity * np.asarray(radius, dtype=float)
+        - np.asarray(rig_friction, dtype=float)
+    )
+
+
+def falling_mass_inertia(mass: ArrayLike, radius: ArrayLike) -> FloatArray:
+    """Inertia of the falling mass seen at the shaft: ``m r**2`` (start-up, section 1 of
+    docs/characterize.md).
+
+    Parameters
+    ----------
+    mass : the falling mass m [kg]
+    radius : flywheel (string) radius r [m]
+    """
+    r = np.asarray(radius, dtype=float)
+    return as_float(np.asarray(mass, dtype=float) * r * r)
+
+
+def steady_speed(angle: ArrayLike, time: ArrayLike) -> FloatArray:
+    """The paper's steady-state speed reading: ``theta / t``.
+
+    Parameters
+    ----------
+    angle : angle turned theta [rad]
+    time : time taken t [s]
+    """
+    return as_float(np.asarray(angle, dtype=float) / np.asarray(time, dtype=float))
+
+
+def _time_constant(damping_rate: ArrayLike, inertia: ArrayLike) -> FloatArray:
+    return as_float(np.asarray(inertia, dtype=float) / np.asarray(damping_rate, dtype=float))
+
+
+def transient_lag(time: ArrayLike, damping_rate: ArrayLike, inertia: ArrayLike) -> FloatArray:
+    """Time lost to the start-up transient: ``lag = tau (1 - exp(-t / tau))``, tau = J / B.
+
+    From ``J dw/dt = T - FECD - BECD w`` (Eq. 5 with inertia; docs/characterize.md
+    section 1).
+
+    A shaft released from rest under constant torque reaches ``theta = w_ss (t - lag)``;
+    lag = 0 for J = 0 (steady state from the start).
+
+    Parameters
+    ----------
+    time : time since release t [s]
+    damping_rate : BECD [N*m*s/rad], > 0
+    inertia : total inertia at the shaft J [kg*m**2]
+
+    >>> round(float(transient_lag(10.0, 2.0, 4.0)), 12)  # tau = 2 s: 2 * (1 - e**-5)
+    1.986524106002
+    """
+    t = np.asarray(time, dtype=float)
+    tau = _time_constant(damping_rate, inertia)
+    moving = tau > 0.0
+    safe_tau = np.where(moving, tau, 1.0)
+    return as_float(np.where(moving, -safe_tau * np.expm1(-t / safe_tau), 0.0))
+
+
+def _lag_derivative(time: FloatArray, damping_rate: float, inertia: FloatArray) -> FloatArray:
+    """``d lag / d BECD = -(J / B**2) * ((1 - e**-x) - x e**-x)``, x = t B / J."""
+    tau = _time_constant(damping_rate, inertia)
+    moving = tau > 0.0
+    x = time / np.where(moving, tau, 1.0)
+    bracket = -np.expm1(-x) - x * np.exp(-x)
+    return as_float(np.where(moving, -(inertia / damping_rate**2) * bracket, 0.0))
+
+
+def startup_angle(
+    time: ArrayLike, steady: ArrayLike, damping_rate: ArrayLike, inertia: ArrayLike
+) -> FloatArray:
+    """Angle turned after release from rest: ``theta(t) = w_ss (t - lag)`` (Eq. 5 with
+    inertia, integrated; docs/characterize.md section 1).
+
+    Parameters
+    ----------
+    time : time since release t [s]
+    steady : steady speed w_ss = (torque - FECD) / BECD [rad/s]
+    damping_rate : BECD [N*m*s/rad]
+    inertia : total inertia at the shaft J [kg*m**2]
+    """
+    t = np.asarray(time, dtype=float)
+    lag = transient_lag(t, damping_rate, inertia)
+    return as_float(np.asarray(steady, dtype=float) * (t - lag))
+
+
+def corrected_speed(
+    angle: ArrayLike, time: ArrayLike, damping_rate: ArrayLike, inertia: ArrayLike
+) -> FloatArray:
+    """Steady speed from a drop released from rest: ``theta / (t - lag)`` (the paper's
+    section 7 reading, corrected for the start-up transient).
+
+    Parameters
+    ----------
+    angle : angle turned theta [rad]
+    time : time taken t [s]
+    damping_rate : BECD [N*m*s/rad], > 0
+    inertia : total inertia at the shaft J [kg*m**2]
+    """
+    t = np.asarray(time, dtype=float)
+    return as_float(np.asarray(angle, dtype=float) / (t - transient_lag(t, damping_rate, inertia)))
+
+
+@dataclass(frozen=True)
+class TemperatureFit:
+    """The torque-speed line of one test temperature.
+
+    Attributes
+    ----------
+    temperature : T [degC]
+    rows : file row of each point
+    torque : drive torque of each point [N*m]
+    speed : steady-state reading theta / t of each point [rad/s]
+    corrected : steady speed after the start-up correction [rad/s] (= speed without it)
+    inertia : total inertia used for each point [kg*m**2] (0: no correction)
+    line : the fitted line and its statistics
+    """
+
+    temperature: float
+    rows: np.ndarray[Any, np.dtype[np.int64]]
+    torque: FloatArray
+    speed: FloatArray
+    corrected: FloatArray
+    inertia: FloatArray
+    line: LineFit
+
+    @property
+    def correction(self) -> FloatArray:
+        """Relative speed correction of each point, ``corrected / speed - 1`` [-]."""
+        return as_float(self.corrected / self.speed - 1.0)
+
+    @property
+    def speed_noise_bias(self) -> float | None:
+        """How low BECD would be if all the scatter were speed (timing) error [-].
+
+        The line treats speeds as exact. If instead the torques are exact and the speeds
+        carry independent errors of variance ``sigma_w**2``, the residual variance is
+        about ``BECD**2 sigma_w**2`` and the fitted slope is low by the fraction
+        ``sigma_w**2 / var(speed)`` (regression dilution; Draper and Smith, section
+        3.4). None without residual degrees of freedom; 0 for an exact fit.
+        """
+        stats = self.line.statistics
+        if stats.residual_std is None:
+            return None
+        if stats.exact:
+            return 0.0
+        sigma_w = stats.residual_std / self.line.slope.value
+        return float(sigma_w**2 / np.var(self.corrected))
+
+    @property
+    def corrected_for_inertia(self) -> bool:
+        """True where the start-up transient was corrected for."""
+        return bool(np.any(self.inertia > 0.0))
+
+    def to_dict(self) -> dict[str, Any]:
+        """One entry of the ``temperatures`` list of the JSON document."""
+        line = self.line
+        damping, friction = line.slope, line.intercept
+        curvature = line.curvature
+        points = []
+        for i, row in enumerate(self.rows):
+            points.append(
+                {
+                    "row": int(row),
+                    "torque_Nm": float(self.torque[i]),
+                    "speed_rad_s": float(self.speed[i]),
+                    "corrected_speed_rad_s": float(self.corrected[i]),
+                    "relative_speed_correction": float(self.correction[i]),
+                    "inertia_kg_m2": float(self.inertia[i]),
+                    "residual_Nm": float(line.statistics.residuals[i]),
+                    "studentized_residual": finite_or_none(float(line.studentized[i])),
+                    "outlier": bool(line.outliers[i]),
+                }
+            )
+        return {
+            "temperature_C": self.temperature,
+            "n_points": line.n_points,
+            "damping_rate_Nms_per_rad": damping.value,
+            "damping_rate_se_Nms_per_rad": damping.standard_error,
+            "damping_rate_ci95": list(damping.ci95) if damping.ci95 else None,
+            "friction_Nm": friction.value,
+            "friction_se_Nm": friction.standard_error,
+            "friction_ci95": list(friction.ci95) if friction.ci95 else None,
+            "r_squared": line.r_squared,
+            "residual_std_Nm": line.statistics.residual_std,
+            "dof": line.statistics.dof,
+            "roll_off": bool(curvature.roll_off) if curvature else False,
+            "bending": bool(curvature.bending) if curvature else False,
+            "curvature_p_value": curvature.p_value if curvature else None,
+            "outlier_rows": [int(r) for r in self.rows[line.outliers]],
+            "speed_noise_bias": self.speed_noise_bias,
+            "inertia_correction": {
+                "applied": self.corrected_for_inertia,
+                "max_relative_speed_correction": float(np.max(np.abs(self.correction))),
+            },
+            "points": points,
+        }
+
+
+@dataclass(frozen=True)
+class FailedTemperature:
+    """A temperature whose points could not be fitted.
+
+    Attributes
+    ----------
+    temperature : T [degC]
+    rows : file rows of its points
+    reason : why
+    """
+
+    temperature: float
+    rows: tuple[int, ...]
+    reason: str
+
+    def message(self) -> str:
+        """One readable line."""
+        return f"{self.temperature:g} degC (rows {_row_list(self.rows)}): {self.reason}"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form."""
+        return {
+            "temperature_C": self.temperature,
+            "n_points": len(self.rows),
+            "rows": list(self.rows),
+            "error": self.reason,
+        }
+
+
+def _row_list(rows: tuple[int, ...] | list[int]) -> str:
+    return ", ".join(str(r) for r in rows)
+
+
+@dataclass(frozen=True)
+class DropTestResult:
+    """Everything a drop-test reduction found.
+
+    Attributes
+    ----------
+    table : the data read (usable rows, bad-row report, notes)
+    fits : one line per temperature that could be fitted, coldest first
+    failed : the temperatures that could not be fitted
+    laws : BECD(T) and FECD(T) laws; None with fewer than two fitted temperatures
+    reference_temperature : T_ref of the damping laws [degC]
+    gravity : g used [m/s**2]
+    warnings : flags raised (roll-off, outliers, start-up correction, ...)
+    """
+
+    table: Table
+    fits: tuple[TemperatureFit, ...]
+    failed: tuple[FailedTemperature, ...]
+    laws: TemperatureLaws | None
+    reference_temperature: float
+    gravity: float
+    warnings: tuple[FitWarning, ...] = field(default=())
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document of ``ecdsim fit drop-test --json`` (docs/characterize.md)."""
+        return {
+            "ecdsim_version": __version__,
+            "kind": "drop_test",
+            "source": self.table.source,
+            "source_sha256": self.table.sha256,
+            "gravity_m_per_s2": self.gravity,
+            "reference_temperature_C": self.reference_temperature,
+            "temperatures": [fit.to_dict() for fit in self.fits],
+            "failed_temperatures": [f.to_dict() for f in self.failed],
+            "temperature_laws": self.laws.to_dict() if self.laws else None,
+            "bad_rows": [b.to_dict() for b in self.table.bad_rows],
+            "excluded_rows": self.table.excluded_rows,
+            "warnings": [w.to_dict() for w in self.warnings],
+        }
+
+
+def fit_temperature(
+    temperature: float,
+    rows: ArrayLike,
+    torque: ArrayLike,
+    angle: ArrayLike,
+    time: ArrayLike,
+    inertia: ArrayLike,
+) -> TemperatureFit:
+    """Fit the torque-speed line of one temperature, correcting the start-up if J > 0.
+
+    Raises :class:`~ecdsim.characterize.linefit.LineFitError` where the points cannot
+    define a line or the fitted damping rate is not positive.
+
+    Parameters
+    ----------
+    temperature : T [degC]
+    rows : file row of each point
+    torque : drive torque of each point [N*m]
+    angle : angle turned theta [rad]
+    time : time taken t [s]
+    inertia : total inertia at the shaft per point J [kg*m**2]; zeros for no correction
+    """
+    y = as_float(torque)
+    theta = as_float(angle)
+    t = as_float(time)
+    j = np.broadcast_to(as_float(inertia), y.shape).astype(float)
+    speed = steady_speed(theta, t)
+    check_line_data(speed, y)
+    plain = fit_line(speed, y)
+    if plain.slope.value <= 0.0:
+        raise LineFitError(
+            f"the fitted damping rate {plain.slope.value:.4g} N*m*s/rad is not positive: "
+            "torque does not rise with speed"
+        )
+    row_array = np.asarray(rows, dtype=np.int64)
+    if not np.any(j > 0.0):
+        return TemperatureFit(temperature, row_array, y, speed, speed, j, plain)
+    friction, damping = _fit_with_startup(y, theta, t, j, plain)
+    corrected = corrected_speed(theta, t, damping, j)
+    # d torque_model / d B = w_c + B * w_c**2 / theta * d lag / d B
+    derivative = corrected + damping * corrected**2 / theta * _lag_derivative(t, damping, j)
+    design = np.column_stack([np.ones_like(y), derivative])
+    line = summarise_line(corrected, y, friction, damping, design)
+    return TemperatureFit(temperature, row_array, y, speed, corrected, j, line)
+
+
+def _fit_with_startup(
+    torque: FloatArray, angle: FloatArray, time: FloatArray, inertia: FloatArray, start: LineFit
+) -> tuple[float, float]:
+    """Least-squares (FECD, BECD) of ``torque = F + B * theta / (t - lag(B))``."""
+    from scipy.optimize import least_squares
+
+    def residual(p: FloatArray) -> FloatArray:
+        return as_float(torque - p[0] - p[1] * corrected_speed(angle, time, p[1], inertia))
+
+    def jacobian(p: FloatArray) -> FloatArray:
+        w = corrected_speed(angle, time, p[1], inertia)
+        dw = w + p[1] * w * w / angle * _lag_derivative(time, p[1], inertia)
+        return np.column_stack([-np.ones_like(w), -dw])
+
+    b0 = start.slope.value
+    scale = float(np.max(np.abs(torque)))
+    result = least_squares(
+        residual,
+        np.array([start.intercept.value, b0]),
+        jac=jacobian,
+        bounds=([-np.inf, 1e-9 * b0], [np.inf, np.inf]),
+        x_scale=np.array([scale, b0]),
+        method="trf",
+        xtol=1e-14,
+        ftol=1e-14,
+        gtol=1e-14,
+        max_nfev=200,
+    )
+    if not result.success:
+        raise LineFitError(f"the start-up-corrected fit did not converge ({result.message})")
+    return float(result.x[0]), float(result.x[1])
+
+
+def read_drop_test(path: str | Path, gravity: float = STANDARD_GRAVITY) -> Table:
+    """Read a drop-test CSV file; rows whose drive torque is not positive are excluded."""
+    table = read_table(path, DROP_TEST_COLUMNS)
+    torque = _drive_torques(table, gravity)
+    bad = torque <= 0.0
+    if np.any(bad):
+        key = "rig_friction" if table.has("rig_friction") else "mass"
+        reasons = [
+            f"gives a drive torque m*g*r - rig_friction = {value:.4g} N*m <= 0: the mass "
+            "cannot turn the damper"
+            for value in torque[bad]
+        ]
+        table = table.exclude(bad, key, reasons)
+        if table.rows.size == 0:
+            from ecdsim.config.errors import ConfigError
+
+            lines = [b.message() for b in table.bad_rows]
+            raise ConfigError([*lines, "no usable data row remains"], table.source)
+    return table
+
+
+def _drive_torques(table: Table, gravity: float) -> FloatArray:
+    v = table.values
+    rig = v["rig_friction"] if table.has("rig_friction") else 0.0
+    return drive_torque(v["mass"], v["radius"], rig, gravity)
+
+
+def fit_drop_test(
+    path: str | Path,
+    reference_temperature: float = 25.0,
+    gravity: float = STANDARD_GRAVITY,
+) -> DropTestResult:
+    """Read a drop-test CSV file and fit every temperature and the temperature laws.
+
+    Raises :class:`~ecdsim.config.ConfigError` for an unreadable file or one with no
+    usable row; a temperature that cannot be fitted is reported in ``failed``.
+
+    Parameters
+    ----------
+    path : the CSV file (columns in docs/characterize.md)
+    reference_temperature : T_ref of the damping laws [degC]
+    gravity : acceleration of gravity [m/s**2]
+    """
+    return reduce_drop_test(read_drop_test(path, gravity), reference_temperature, gravity)
+
+
+def reduce_drop_test(
+    table: Table, reference_temperature: float = 25.0, gravity: float = STANDARD_GRAVITY
+) -> DropTestResult:
+    """Fit every temperature of a drop-test table and the laws over temperature.
+
+    Parameters
+    ----------
+    table : drop-test data (from :func:`read_drop_test`)
+    reference_temperature : T_ref of the damping laws [degC]
+    gravity : acceleration of gravity [m/s**2]
+    """
+    v = table.values
+    torque = _drive_torques(table, gravity)
+    has_inertia = table.has("rig_inertia")
+    inertia = (
+        v["rig_inertia"] + falling_mass_inertia(v["mass"], v["radius"])
+        if has_inertia
+        else np.zeros_like(torque)
+    )
+    fits: list[TemperatureFit] = []
+    failed: list[FailedTemperature] = []
+    warnings: list[FitWarning] = [FitWarning("ignored_column", note) for note in table.notes]
+    for temperature, members in temperature_groups(v["temperature"]):
+        rows = table.rows[members]
+        try:
+            fit = fit_temperature(
+                temperature,
+                rows,
+                torque[members],
+                v["angle"][members],
+                v["time"][members],
+                inertia[members],
+            )
+        except LineFitError as exc:
+            failed.append(FailedTemperature(temperature, tuple(int(r) for r in rows), str(exc)))
+            continue
+        fits.append(fit)
+        warnings.extend(_flags(fit))
+        if not has_inertia:
+            warnings.extend(_uncorrected_transient(fit, v, members))
+    laws = None
+    if len(fits) >= 2:
+        laws = fit_temperature_laws(
+            [f.temperature for f in fits],
+            [law_input(f.line.slope, f.line) for f in fits],
+            [law_input(f.line.intercept, f.line) for f in fits],
+            reference_temperature,
+        )
+        warnings.extend(law_warnings(laws))
+    elif len(fits) == 1:
+        warnings.append(
+            FitWarning(
+                "single_temperature",
+                "only one temperature could be fitted: no law over temperature",
+            )
+        )
+    return DropTestResult(
+        table=table,
+        fits=tuple(fits),
+        failed=tuple(failed),
+        laws=laws,
+        reference_temperature=reference_temperature,
+        gravity=gravity,
+        warnings=tuple(warnings),
+    )
+
+
+def law_input(estimate: Estimate, line: LineFit) -> Estimate:
+    """The estimate a law over temperature is fitted to.
+
+    Where the line is exact (noise-free data) its standard errors are float64 round-off,
+    not uncertainty: they are dropped so that the law is fitted unweighted.
+    """
+    if line.statistics.exact:
+        return Estimate(estimate.value, None, None)
+    return estimate
+
+
+def _flags(fit: TemperatureFit) -> list[FitWarning]:
+    """The warnings one temperature's line raises."""
+    t = fit.temperature
+    line = fit.line
+    out = []
+    if line.statistics.dof == 0:
+        out.append(
+            FitWarning(
+                "no_uncertainty",
+                f"{t:g} degC: two points define the line exactly; no uncertainty can be given",
+                t,
+            )
+        )
+    if line.curvature is not None and line.curvature.bending:
+        kind = "roll_off" if line.curvature.roll_off else "bending"
+        what = "bends down (roll-off)" if line.curvature.roll_off else "bends up"
+        out.append(
+            FitWarning(
+                kind,
+                f"{t:g} degC: the torque-speed line {what} "
+                f"(quadratic term p = {line.curvature.p_value:.2g}); "
+                "points beyond the linear range bias BECD",
+                t,
+            )
+        )
+    for row, p in zip(fit.rows[line.outliers], line.outlier_p[line.outliers], strict=True):
+        out.append(
+            FitWarning(
+                "outlier",
+                f"{t:g} degC: row {int(row)} is an outlier (Bonferroni p = {p:.2g}); "
+                "it is kept in the fit, check it",
+                t,
+            )
+        )
+    if line.intercept.value < 0.0:
+        out.append(
+            FitWarning(
+                "negative_friction",
+                f"{t:g} degC: the fitted friction {line.intercept.value:.4g} N*m is negative "
+                "(rig friction over-subtracted, or the line bends)",
+                t,
+            )
+        )
+    bias = fit.speed_noise_bias
+    se = line.slope.standard_error
+    if bias is not None and se is not None and bias * line.slope.value > 0.5 * se:
+        out.append(
+            FitWarning(
+                "speed_noise_bias",
+                f"{t:g} degC: if the scatter is timing error, BECD is low by about "
+                f"{100 * bias:.2g} %, not small against its standard error; spread the loads "
+                "wider or time longer drops",
+                t,
+            )
+        )
+    largest = float(np.max(np.abs(fit.correction)))
+    if largest > LARGE_CORRECTION:
+        out.append(
+            FitWarning(
+                "inertia_correction",
+                f"{t:g} degC: the start-up correction changes a speed by {100 * largest:.1f} %; "
+                "the result depends on the inertia given (include the damper's reflected "
+                "rotor inertia)",
+                t,
+            )
+        )
+    return out
+
+
+def _uncorrected_transient(
+    fit: TemperatureFit, values: dict[str, FloatArray], members: np.ndarray[Any, Any]
+) -> list[FitWarning]:
+    """Warn where the falling mass alone would change the speeds noticeably."""
+    mass_inertia = falling_mass_inertia(values["mass"][members], values["radius"][members])
+    t = values["time"][members]
+    lag = transient_lag(t, fit.line.slope.value, mass_inertia)
+    largest = float(np.max(lag / (t - lag)))
+    if largest <= NOTABLE_CORRECTION or not math.isfinite(largest):
+        return []
+    return [
+        FitWarning(
+            "inertia_not_given",
+            f"{fit.temperature:g} degC: no rig_inertia column, so the speeds are read as "
+            f"steady; the falling mass alone (m*r**2) would raise a speed by "
+            f"{100 * largest:.1f} %. Give rig_inertia_kg_m2 (0 if negligible) to correct",
+            fit.temperature,
+        )
+    ]
+
+
+def law_warnings(laws: TemperatureLaws) -> list[FitWarning]:
+    """Warnings about the laws over temperature (misfit, failures)."""
+    out = []
+    for name, fit in laws.damping.items():
+        if fit.p_value is not None and fit.p_value < MISFIT_LEVEL:
+            out.append(
+                FitWarning(
+                    "law_misfit",
+                    f"the {name} damping law misses the per-temperature values by more than "
+                    f"their errors (chi-square p = {fit.p_value:.2g}); its intervals are "
+                    "widened by the scatter",
+                )
+            )
+    for name, why in laws.damping_failures.items():
+        out.append(FitWarning("law_failed", f"the {name} damping law could not be fitted: {why}"))
+    if laws.friction_failure:
+        out.append(
+            FitWarning(
+                "law_failed", f"the friction line could not be fitted: {laws.friction_failure}"
+            )
+        )
+    return out

@@ -1,0 +1,479 @@
+"""Write fitted parameters as a configuration file (TOML) that ``ecdsim deploy`` reads.
+
+The fits give BECD(T) and FECD(T) at the ECD's input shaft, not the high-speed damper
+and gearbox separately. The file therefore describes a 1:1 "gearbox" with no losses of
+its own and puts everything in the damper (Eq. 1-4 with N = 1, BG = 0, FD = FG = 0)::
+
+    [damper]  damping_rate = B_ref              (BECD at reference_temperature)
+              damping_temperature_coefficient = c   (the fitted linear law)
+              coulomb_friction = 0
+              lubrication_friction = { slope, at_0C }   (the fitted FECD line)
+    [gearbox] ratio = 1, damping_fraction = 0, coulomb_friction = 0
+
+so that ``BECD(T) = B_ref * (1 + c (T - T_ref))`` and ``FECD(T) = slope * T + at_0C``
+exactly. The configuration format holds only the paper's linear damping law; where the
+resistivity law fits better the file says so in a comment. With one temperature no law
+can be fitted: c = 0 and the FECD slope is 0 (a warning says so).
+
+The ``[load]`` section is copied from a configuration the user gives (every key it set,
+generically, so keys added to the schema later are copied too); without one a clearly
+marked placeholder load is written (constant torque equal to the largest bench torque
+over a 90 deg travel) that must be edited before any deployment time means anything. A
+spring fit writes the whole configuration back with the fitted spring torques. Every file
+is validated with the configuration reader before it is written, and written atomically.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import UnionType
+from typing import Annotated, Any, Union, get_args, get_origin
+
+import numpy as np
+from pydantic import BaseModel
+
+from ecdsim._types import ArrayLike
+from ecdsim._version import __version__
+from ecdsim.atomic import write_text
+from ecdsim.characterize.findings import FitWarning
+from ecdsim.characterize.stats import Estimate
+from ecdsim.characterize.templaws import TemperatureLaws
+from ecdsim.config import ConfigError, parse_config
+from ecdsim.config.schema import ConfigSpec, LoadSpec
+from ecdsim.config.units import Kind
+
+PLACEHOLDER_TRAVEL = math.pi / 2.0  # rad
+
+
+class ExportError(ValueError):
+    """The fit cannot be written as a configuration; the message says why."""
+
+
+def toml_string(text: str) -> str:
+    r"""A TOML basic string (double-quoted, escaped).
+
+    >>> toml_string('say "hi"')
+    '"say \\"hi\\""'
+    """
+    out = []
+    for char in text:
+        code = ord(char)
+        if char == '"':
+            out.append('\\"')
+        elif char == "\\":
+            out.append("\\\\")
+        elif char == "\t":
+            out.append("\\t")
+        elif code < 0x20 or code == 0x7F:
+            out.append(f"\\u{code:04X}")
+        else:
+            out.append(char)
+    return '"' + "".join(out) + '"'
+
+
+def quantity(value: float, unit: str) -> str:
+    """A quantity as a TOML string, the number written exactly (``repr``) with its unit."""
+    number = repr(float(value))
+    return toml_string(f"{number} {unit}" if unit else number)
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One ``key = value`` line; ``value`` is TOML text, ``comment`` optional."""
+
+    key: str
+    value: str
+    comment: str | None = None
+
+
+def render_toml(header: Sequence[str], sections: Sequence[tuple[str, Sequence[Entry]]]) -> str:
+    """TOML text: ``# header`` lines, then each ``[section]`` with its entries."""
+    lines = [f"# {line}" if line else "#" for line in header]
+    for name, entries in sections:
+        if name.startswith("#"):
+            lines += ["", name]
+            continue
+        lines += ["", f"[{name}]"] if name else [""]
+        for entry in entries:
+            text = f"{entry.key} = {entry.value}"
+            lines.append(f"{text}   # {entry.comment}" if entry.comment else text)
+    return "\n".join(lines).lstrip("\n") + "\n"
+
+
+@dataclass(frozen=True)
+class FittedEcd:
+    """BECD(T) and FECD(T) in the form the configuration can hold.
+
+    Attributes
+    ----------
+    damping_rate : B_ref, BECD at the reference temperature [N*m*s/rad]
+    reference_temperature : T_ref [degC]
+    temperature_coefficient : c of the linear law [1/K]
+    friction_slope : FECD change per kelvin [N*m/K]
+    friction_at_0c : FECD at 0 degC [N*m]
+    temperatures : the test temperatures (the file's analysis temperatures) [degC]
+    comments : lines about the fit (intervals, law choice) for the file's header
+    warnings : findings to show the user
+    """
+
+    damping_rate: float
+    reference_temperature: float
+    temperature_coefficient: float
+    friction_slope: float
+    friction_at_0c: float
+    temperatures: tuple[float, ...]
+    comments: tuple[str, ...]
+    warnings: tuple[FitWarning, ...]
+
+    def damping_at(self, temperature: float) -> float:
+        """BECD(T) [N*m*s/rad] as the file states it."""
+        dt = temperature - self.reference_temperature
+        return self.damping_rate * (1.0 + self.temperature_coefficient * dt)
+
+    def friction_at(self, temperature: float) -> float:
+        """FECD(T) [N*m] as the file states it."""
+        return self.friction_slope * temperature + self.friction_at_0c
+
+
+def _ci(estimate: Estimate, unit: str) -> str:
+    if estimate.ci95 is None:
+        return f"{estimate.value:.6g} {unit} (no interval)"
+    low, high = estimate.ci95
+    return f"{estimate.value:.6g} {unit}, 95 % CI [{low:.6g}, {high:.6g}]"
+
+
+def fitted_ecd(
+    temperatures: Sequence[float],
+    damping: Sequence[Estimate],
+    friction: Sequence[Estimate],
+    laws: TemperatureLaws | None,
+) -> FittedEcd:
+    """The configuration's form of the fit: the linear law and the FECD line.
+
+    Parameters
+    ----------
+    temperatures : the fitted temperatures [degC]
+    damping : BECD at each [N*m*s/rad]
+    friction : FECD at each [N*m]
+    laws : the laws over temperature (None with a single temperature)
+    """
+    temps = tuple(float(t) for t in temperatures)
+    if not temps:
+        raise ExportError("no temperature could be fitted: nothing to write")
+    if laws is None:
+        if len(temps) != 1:
+            raise ExportError("several temperatures but no law over temperature")
+        b, f = damping[0], friction[0]
+        result = FittedEcd(
+            damping_rate=b.value,
+            reference_temperature=temps[0],
+            temperature_coefficient=0.0,
+            friction_slope=0.0,
+            friction_at_0c=f.value,
+            temperatures=temps,
+            comments=(
+                f"one temperature ({temps[0]:g} degC): BECD {_ci(b, 'N*m*s/rad')}",
+                f"FECD {_ci(f, 'N*m')}",
+                "no temperature law could be fitted: coefficient and friction slope are 0",
+            ),
+            warnings=(
+                FitWarning(
+                    "single_temperature_export",
+                    f"one temperature only: the file holds BECD and FECD at {temps[0]:g} degC "
+                    "with no temperature dependence; edit "
+                    "damper.damping_temperature_coefficient if you know it",
+                ),
+            ),
+        )
+    else:
+        linear = laws.damping.get("linear")
+        if linear is None:
+            why = laws.damping_failures.get("linear", "not fitted")
+            raise ExportError(f"the linear damping law could not be fitted ({why})")
+        if laws.friction is None:
+            raise ExportError(f"the friction line could not be fitted ({laws.friction_failure})")
+        b_ref, c = linear.parameters
+        at_0c, slope = laws.friction.parameters
+        comments = [
+            f"BECD(T) = B_ref * (1 + c * (T - {laws.reference_temperature:g} degC)), fitted "
+            f"over {', '.join(f'{t:g}' for t in temps)} degC:",
+            f"  B_ref = {_ci(b_ref, 'N*m*s/rad')}",
+            f"  c = {_ci(c, '1/K')}",
+            "FECD(T) = slope * T + at_0C:",
+            f"  slope = {_ci(slope, 'N*m/K')}",
+            f"  at_0C = {_ci(at_0c, 'N*m')}",
+            f"law comparison: {laws.comparison.statement}",
+        ]
+        warnings: list[FitWarning] = []
+        if laws.comparison.better == "resistivity":
+            comments.append(
+                "the resistivity law fits better, but this file format holds the linear law "
+                "only: BECD is written with the linear law"
+            )
+            warnings.append(
+                FitWarning(
+                    "law_not_exported",
+                    "the resistivity law fits better, but the configuration holds only the "
+                    "paper's linear law; the parameter file uses the linear law",
+                )
+            )
+        result = FittedEcd(
+            damping_rate=b_ref.value,
+            reference_temperature=laws.reference_temperature,
+            temperature_coefficient=c.value,
+            friction_slope=slope.value,
+            friction_at_0c=at_0c.value,
+            temperatures=temps,
+            comments=tuple(comments),
+            warnings=tuple(warnings),
+        )
+    if not result.damping_rate > 0.0:
+        raise ExportError(
+            f"the damping rate at the reference temperature is {result.damping_rate:.4g} "
+            "N*m*s/rad, not positive"
+        )
+    for t in temps:
+        if not result.damping_at(t) > 0.0:
+            raise ExportError(f"the linear law gives BECD <= 0 at {t:g} degC")
+    return result
+
+
+def ecd_sections(ecd: FittedEcd) -> list[tuple[str, list[Entry]]]:
+    """The ``[damper]`` and ``[gearbox]`` sections of a fitted ECD (N = 1, no losses)."""
+    damper = [
+        Entry(
+            "damping_rate",
+            quantity(ecd.damping_rate, "N*m*s/rad"),
+            "BECD at reference_temperature, at the input shaft",
+        ),
+        Entry("reference_temperature", quantity(ecd.reference_temperature, "degC")),
+        Entry(
+            "damping_temperature_coefficient",
+            quantity(ecd.temperature_coefficient, "/ K"),
+            "fitted linear law",
+        ),
+        Entry("coulomb_friction", quantity(0.0, "N*m"), "all friction is in the line below"),
+        Entry(
+            "lubrication_friction",
+            "{ slope = "
+            + quantity(ecd.friction_slope, "N*m/K")
+            + ", at_0C = "
+            + quantity(ecd.friction_at_0c, "N*m")
+            + " }",
+            "FECD(T) = slope * T + at_0C",
+        ),
+    ]
+    gearbox = [
+        Entry("ratio", "1", "BECD and FECD are already at the input shaft"),
+        Entry("damping_fraction", "0.0"),
+        Entry("coulomb_friction", quantity(0.0, "N*m")),
+    ]
+    return [("damper", damper), ("gearbox", gearbox)]
+
+
+def _kind(annotation: Any, metadata: Sequence[Any] = ()) -> Kind | None:
+    """The :class:`Kind` a (possibly Optional, Annotated) schema annotation carries."""
+    for item in (*metadata, *getattr(annotation, "__metadata__", ())):
+        if isinstance(item, Kind):
+            return item
+    for arg in get_args(annotation):
+        if arg is not type(None) and get_origin(annotation) in (Union, UnionType):
+            found = _kind(arg)
+            if found is not None:
+                return found
+    return None
+
+
+def _strip(annotation: Any) -> Any:
+    """The annotation without its Annotated and Optional wrappers."""
+    while True:
+        origin = get_origin(annotation)
+        if origin is Annotated:
+            annotation = get_args(annotation)[0]
+            continue
+        if origin in (Union, UnionType):
+            rest = [a for a in get_args(annotation) if a is not type(None)]
+            if len(rest) == 1:
+                annotation = rest[0]
+                continue
+        return annotation
+
+
+def _key(name: str) -> str:
+    return name if re.fullmatch(r"[A-Za-z0-9_-]+", name) else toml_string(name)
+
+
+def toml_value(value: Any, annotation: Any = None, metadata: Sequence[Any] = ()) -> str:
+    """A validated configuration value as TOML text, quantities with their SI unit.
+
+    The schema's annotation says which :class:`~ecdsim.config.units.Kind` a number is,
+    so that it is written back as a quantity string ("3.73 N*m") the reader accepts.
+    """
+    if isinstance(value, BaseModel):
+        return "{ " + ", ".join(f"{e.key} = {e.value}" for e in model_entries(value)) + " }"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return toml_string(value)
+    inner = _strip(annotation)
+    args = get_args(inner)
+    if isinstance(value, list | tuple):
+        if get_origin(inner) is tuple and args and args[-1] is not Ellipsis:
+            items = [toml_value(v, a) for v, a in zip(value, args, strict=False)]
+        else:
+            element = args[0] if args else None
+            items = [toml_value(v, element) for v in value]
+        return "[" + ", ".join(items) + "]"
+    if isinstance(value, dict):
+        element = args[1] if len(args) == 2 else None
+        pairs = (f"{_key(str(k))} = {toml_value(v, element)}" for k, v in value.items())
+        return "{ " + ", ".join(pairs) + " }"
+    if isinstance(value, int | float):
+        kind = _kind(annotation, metadata)
+        if kind is not None and kind.unit:
+            return quantity(float(value), kind.unit)
+        return repr(float(value))
+    raise ExportError(f"cannot write a value of type {type(value).__name__} as TOML")
+
+
+def model_entries(spec: BaseModel, **replace_values: Any) -> list[Entry]:
+    """``key = value`` entries of every field the configuration set (defaults stay out).
+
+    ``replace_values`` overrides values (and writes them even if they were not set).
+    """
+    entries = []
+    fields = type(spec).model_fields
+    for name, info in fields.items():
+        if name not in spec.model_fields_set and name not in replace_values:
+            continue
+        value = replace_values.get(name, getattr(spec, name))
+        if value is None:
+            continue
+        entries.append(Entry(name, toml_value(value, info.annotation, info.metadata)))
+    return entries
+
+
+def placeholder_load(torque: float) -> list[Entry]:
+    """A marked placeholder ``[load]``: constant ``torque`` [N*m] over a 90 deg travel."""
+    note = "PLACEHOLDER: edit"
+    return [
+        Entry("start_torque", quantity(torque, "N*m"), note),
+        Entry("end_torque", quantity(torque, "N*m"), note),
+        Entry("travel", quantity(PLACEHOLDER_TRAVEL, "rad"), note),
+    ]
+
+
+PLACEHOLDER_NOTICE = (
+    "# PLACEHOLDER LOAD: no --config was given, so this [load] is a constant torque equal\n"
+    "# to the largest bench torque over a 90 deg travel. Replace it with your mechanism's\n"
+    "# spring and travel before trusting any deployment time."
+)
+
+
+def _analysis(temperatures: Sequence[float]) -> list[Entry]:
+    temps = ", ".join(quantity(t, "degC") for t in temperatures)
+    return [Entry("temperatures", f"[{temps}]", "the test temperatures")]
+
+
+def fitted_parameter_text(
+    ecd: FittedEcd,
+    load: LoadSpec | None,
+    placeholder_torque: float,
+    title: str,
+    provenance: Sequence[str],
+) -> str:
+    """The parameter file of a damper fit (drop test or trace).
+
+    Parameters
+    ----------
+    ecd : the fitted BECD(T), FECD(T)
+    load : the load to copy; None for the placeholder load
+    placeholder_torque : torque of the placeholder load [N*m]
+    title : the file's title
+    provenance : header comment lines (tool, version, source file and hash)
+    """
+    header = [*provenance, "", *ecd.comments]
+    sections: list[tuple[str, Sequence[Entry]]] = [("", [Entry("title", toml_string(title))])]
+    sections += ecd_sections(ecd)
+    if load is None:
+        sections.append((PLACEHOLDER_NOTICE, []))
+        sections.append(("load", placeholder_load(placeholder_torque)))
+    else:
+        sections.append(("load", model_entries(load)))
+    sections.append(("analysis", _analysis(ecd.temperatures)))
+    return render_toml(header, sections)
+
+
+def spring_parameter_text(
+    spec: ConfigSpec,
+    start_torque: Estimate,
+    end_torque: Estimate,
+    temperatures: Sequence[float],
+    provenance: Sequence[str],
+) -> str:
+    """The parameter file of a spring fit: the configuration with the fitted torques.
+
+    Every section and key the configuration set is written back (in SI units); only
+    ``load.start_torque``, ``load.end_torque`` and ``analysis.temperatures`` change.
+
+    Parameters
+    ----------
+    spec : the configuration the spring was fitted with
+    start_torque : fitted Ts at the spring's reference temperature [N*m]
+    end_torque : fitted Te at the spring's reference temperature [N*m]
+    temperatures : the trace temperatures (the file's analysis temperatures) [degC]
+    provenance : header comment lines
+    """
+    header = [
+        *provenance,
+        "",
+        "spring torques fitted to the traces (at the spring's reference temperature):",
+        f"  start_torque = {_ci(start_torque, 'N*m')}",
+        f"  end_torque = {_ci(end_torque, 'N*m')}",
+        "everything else as in the configuration given",
+    ]
+    replaced: dict[str, dict[str, Any]] = {
+        "load": {"start_torque": start_torque.value, "end_torque": end_torque.value},
+        "analysis": {"temperatures": list(temperatures)},
+    }
+    top: list[Entry] = []
+    sections: list[tuple[str, Sequence[Entry]]] = []
+    for name, info in type(spec).model_fields.items():
+        value = getattr(spec, name)
+        if value is None or (name not in spec.model_fields_set and name not in replaced):
+            continue
+        if isinstance(value, BaseModel):
+            sections.append((name, model_entries(value, **replaced.get(name, {}))))
+        else:
+            top.append(Entry(name, toml_value(value, info.annotation, info.metadata)))
+    return render_toml(header, [("", top), *sections])
+
+
+def provenance(command: str, source: str, sha256: str) -> list[str]:
+    """Header lines naming the tool, its version and the data file."""
+    return [
+        f"Written by ecdsim {__version__}: {command}",
+        f"data: {Path(source).name} (sha256 {sha256})",
+    ]
+
+
+def write_parameter_file(path: str | Path, text: str) -> Path:
+    """Validate ``text`` with the configuration reader, then write it atomically.
+
+    Raises :class:`ExportError` if the configuration reader rejects it (which would be
+    a bug: the text is built from validated values).
+    """
+    try:
+        parse_config(text, str(path))
+    except ConfigError as exc:
+        raise ExportError(f"the parameter file would not be valid: {exc}") from None
+    return write_text(path, text)
+
+
+def largest_torque(torques: ArrayLike) -> float:
+    """The placeholder load's torque: the largest bench torque [N*m]."""
+    return float(np.max(np.asarray(torques, dtype=float)))

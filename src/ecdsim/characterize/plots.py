@@ -1,0 +1,227 @@
+"""Figures of a characterisation: each function returns a matplotlib Figure, never shows it.
+
+* :func:`plot_torque_speed`: torque against speed with the fitted line per temperature
+  (the paper's Figure 8), outliers ringed;
+* :func:`plot_parameters`: BECD and FECD against temperature with 95 % intervals and the
+  fitted laws with their 95 % confidence bands;
+* :func:`plot_line_residuals` and :func:`plot_trace_residuals`: residuals;
+* :func:`plot_traces`: recorded and fitted deployments.
+
+matplotlib is imported inside the functions (Agg canvas, no display needed).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ecdsim._types import ArrayLike
+from ecdsim.characterize.droptest import DropTestResult
+from ecdsim.characterize.stats import Estimate
+from ecdsim.characterize.templaws import TemperatureLaws
+from ecdsim.characterize.tracefit import TraceResult, model_angle
+from ecdsim.plotting import _colors, save_figure
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+_LAW_STYLES = {"linear": "-", "resistivity": "--"}
+
+
+def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def _finish(ax: Axes, title: str, xlabel: str, ylabel: str) -> None:
+    ax.set_title(title)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize="small")
+
+
+def plot_torque_speed(result: DropTestResult) -> Figure:
+    """Drive torque against (corrected) speed with each temperature's line (paper Fig. 8)."""
+    fig = _figure()
+    ax = fig.add_subplot()
+    colors = _colors(len(result.fits))
+    top = max((float(np.max(f.corrected)) for f in result.fits), default=1.0) * 1.1
+    speeds = np.linspace(0.0, top, 50)
+    for fit, color in zip(result.fits, colors, strict=True):
+        b, f = fit.line.slope, fit.line.intercept
+        ax.plot(fit.corrected, fit.torque, "o", color=color, markersize=4)
+        ax.plot(
+            speeds,
+            f.value + b.value * speeds,
+            color=color,
+            label=(
+                f"{fit.temperature:g} degC: BECD {b.value:.4g} N*m*s/rad, FECD {f.value:.3g} N*m"
+            ),
+        )
+        out = fit.line.outliers
+        if np.any(out):
+            ax.plot(
+                fit.corrected[out],
+                fit.torque[out],
+                "o",
+                markersize=11,
+                markerfacecolor="none",
+                markeredgecolor="black",
+                label=f"outlier ({fit.temperature:g} degC)",
+            )
+    ax.set_xlim(left=0.0)
+    ax.set_ylim(bottom=0.0)
+    _finish(ax, "Drop test: torque against speed", "speed [rad/s]", "drive torque [N*m]")
+    return fig
+
+
+def _error_bars(ax: Axes, temperatures: ArrayLike, values: Sequence[Estimate]) -> None:
+    t = np.asarray(temperatures, dtype=float)
+    y = np.array([v.value for v in values])
+    low = np.array([v.value - v.ci95[0] if v.ci95 else 0.0 for v in values])
+    high = np.array([v.ci95[1] - v.value if v.ci95 else 0.0 for v in values])
+    ax.errorbar(t, y, yerr=[low, high], fmt="o", color="black", capsize=3, label="per temperature")
+
+
+def plot_parameters(
+    temperatures: Sequence[float],
+    damping: Sequence[Estimate],
+    friction: Sequence[Estimate],
+    laws: TemperatureLaws | None,
+) -> Figure:
+    """BECD and FECD against temperature: 95 % intervals, laws and their 95 % bands.
+
+    Parameters
+    ----------
+    temperatures : the fitted temperatures [degC]
+    damping : BECD at each [N*m*s/rad]
+    friction : FECD at each [N*m]
+    laws : the laws over temperature, or None
+    """
+    fig = _figure(7.5, 7.0)
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    t = np.asarray(temperatures, dtype=float)
+    span = max(float(np.ptp(t)), 1.0)
+    grid = np.linspace(float(np.min(t)) - 0.1 * span, float(np.max(t)) + 0.1 * span, 100)
+    _error_bars(top, t, damping)
+    _error_bars(bottom, t, friction)
+    if laws is not None:
+        for name, fit in laws.damping.items():
+            line = top.plot(grid, fit(grid), _LAW_STYLES.get(name, ":"), label=f"{name} law")[0]
+            band = fit.band(grid)
+            if band is not None:
+                top.fill_between(grid, *band, color=line.get_color(), alpha=0.15)
+        if laws.friction is not None:
+            line = bottom.plot(grid, laws.friction(grid), "-", label="line")[0]
+            band = laws.friction.band(grid)
+            if band is not None:
+                bottom.fill_between(grid, *band, color=line.get_color(), alpha=0.15)
+    _finish(top, "Damping rate against temperature (95 % intervals)", "", "BECD [N*m*s/rad]")
+    _finish(bottom, "Friction against temperature", "temperature [degC]", "FECD [N*m]")
+    return fig
+
+
+def plot_line_residuals(result: DropTestResult) -> Figure:
+    """Residual torque of each drop-test point against its speed, per temperature."""
+    fig = _figure()
+    ax = fig.add_subplot()
+    for fit, color in zip(result.fits, _colors(len(result.fits)), strict=True):
+        ax.plot(
+            fit.corrected,
+            fit.line.statistics.residuals,
+            "o-",
+            color=color,
+            markersize=4,
+            label=f"{fit.temperature:g} degC",
+        )
+    ax.axhline(0.0, color="black", linewidth=0.8)
+    _finish(ax, "Drop test: residuals of the lines", "speed [rad/s]", "residual torque [N*m]")
+    return fig
+
+
+def plot_traces(result: TraceResult, n_points: int = 400) -> Figure:
+    """Recorded angle against time (dots) and the fitted exact solution (lines)."""
+    fig = _figure()
+    ax = fig.add_subplot()
+    curves = result.curves
+    for curve, color in zip(curves, _colors(len(curves)), strict=True):
+        trace = curve.trace
+        times = np.linspace(0.0, float(np.max(trace.time)), n_points)
+        ax.plot(trace.time, np.degrees(trace.angle), ".", color=color, markersize=3)
+        ax.plot(
+            times,
+            np.degrees(model_angle(curve.problem, times)),
+            color=color,
+            label=f"{trace.temperature:g} degC, fitted (exact solution)",
+        )
+    _finish(ax, "Recorded deployments and fits", "time since release [s]", "angle [deg]")
+    return fig
+
+
+def plot_trace_residuals(result: TraceResult) -> Figure:
+    """Recorded minus fitted angle against time, per trace."""
+    fig = _figure()
+    ax = fig.add_subplot()
+    curves = result.curves
+    for curve, color in zip(curves, _colors(len(curves)), strict=True):
+        ax.plot(
+            curve.trace.time,
+            np.degrees(curve.residuals),
+            ".-",
+            color=color,
+            markersize=3,
+            linewidth=0.6,
+            label=f"{curve.trace.temperature:g} degC",
+        )
+    ax.axhline(0.0, color="black", linewidth=0.8)
+    _finish(ax, "Trace fit residuals", "time since release [s]", "residual angle [deg]")
+    return fig
+
+
+def write_drop_test_plots(result: DropTestResult, folder: str | Path) -> list[Path]:
+    """Write the drop-test figures as PNG files into ``folder``; their paths."""
+    out = Path(folder)
+    fits = result.fits
+    return [
+        save_figure(plot_torque_speed(result), out / "torque_vs_speed_fit.png"),
+        save_figure(
+            plot_parameters(
+                [f.temperature for f in fits],
+                [f.line.slope for f in fits],
+                [f.line.intercept for f in fits],
+                result.laws,
+            ),
+            out / "parameters_vs_temperature.png",
+        ),
+        save_figure(plot_line_residuals(result), out / "drop_test_residuals.png"),
+    ]
+
+
+def write_trace_plots(result: TraceResult, folder: str | Path) -> list[Path]:
+    """Write the trace-fit figures as PNG files into ``folder``; their paths."""
+    out = Path(folder)
+    written = [
+        save_figure(plot_traces(result), out / "trace_fit.png"),
+        save_figure(plot_trace_residuals(result), out / "trace_residuals.png"),
+    ]
+    if result.fits:
+        fits = result.fits
+        written.append(
+            save_figure(
+                plot_parameters(
+                    [f.temperature for f in fits],
+                    [f.damping_rate for f in fits],
+                    [f.friction for f in fits],
+                    result.laws,
+                ),
+                out / "parameters_vs_temperature.png",
+            )
+        )
+    return written

@@ -1,0 +1,212 @@
+"""Least-squares statistics shared by every fit: covariance, standard errors, intervals.
+
+All fits in :mod:`ecdsim.characterize` are (possibly linearised) least-squares problems
+``observed = model(parameters) + noise`` with independent, equal-variance noise. At the
+solution, with the design matrix ``D = d model / d parameters`` (for a straight line
+``D = [1, x]``), the residuals ``e`` and ``dof = n - p``::
+
+    s**2       = sum(e**2) / dof                    (residual variance)
+    covariance = s**2 * (D^T D)^-1                  (exact for a line, Gauss-Newton else)
+    ci95       = value +- t(0.975, dof) * sqrt(diag(covariance))
+
+Reference: N. R. Draper and H. Smith, *Applied Regression Analysis*, 3rd ed., Wiley 1998,
+chapters 1-2 (line), 8 (residuals, leverage) and 24 (non-linear least squares).
+scipy is imported inside the functions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from statistics import NormalDist
+from typing import Any
+
+import numpy as np
+
+from ecdsim._types import FloatArray
+
+CONFIDENCE = 0.95
+# Singular values below this fraction of the largest mean the parameters cannot be told
+# apart by the data (the design matrix is rank deficient to float64 resolution).
+RANK_TOLERANCE = 1e-10
+# A residual standard deviation below this fraction of the observations' magnitude is
+# float64 round-off: the data lie exactly on the model, and tests that divide by the
+# residual scatter (outliers, curvature) have nothing to test.
+EXACT_FIT_RESOLUTION = 1e-11
+
+
+def t_quantile(dof: int, confidence: float = CONFIDENCE) -> float:
+    """Two-sided Student-t critical value: ``t`` with ``P(|T_dof| <= t) = confidence``.
+
+    >>> round(t_quantile(1), 4)
+    12.7062
+    """
+    from scipy import stats
+
+    return float(stats.t.ppf(0.5 + confidence / 2.0, dof))
+
+
+def normal_quantile(confidence: float = CONFIDENCE) -> float:
+    """Two-sided standard-normal critical value (1.95996... for 95 %).
+
+    >>> round(normal_quantile(), 5)
+    1.95996
+    """
+    return NormalDist().inv_cdf(0.5 + confidence / 2.0)
+
+
+def t_two_sided_p(statistic: float, dof: int) -> float:
+    """Two-sided p-value of a t statistic with ``dof`` degrees of freedom."""
+    from scipy import stats
+
+    return float(2.0 * stats.t.sf(abs(statistic), dof))
+
+
+def chi2_survival(value: float, dof: int) -> float:
+    """``P(chi2_dof > value)``: the p-value of a chi-square goodness-of-fit statistic."""
+    from scipy import stats
+
+    return float(stats.chi2.sf(value, dof))
+
+
+def finite_or_none(value: float) -> float | None:
+    """``value`` as a JSON-safe float, or None where it is NaN or infinite."""
+    return float(value) if math.isfinite(value) else None
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One fitted parameter with its uncertainty.
+
+    Attributes
+    ----------
+    value : the estimate [unit of the parameter]
+    standard_error : its standard error [same unit]; None where the data leave no
+        degrees of freedom to estimate it
+    ci95 : 95 % confidence interval (low, high) [same unit]; None with the standard error
+    """
+
+    value: float
+    standard_error: float | None
+    ci95: tuple[float, float] | None
+
+    def to_dict(self, key: str) -> dict[str, Any]:
+        """``{key: value, key_se: ..., key_ci95: [low, high] | None}`` for JSON."""
+        return {
+            key: self.value,
+            f"{key}_se": self.standard_error,
+            f"{key}_ci95": list(self.ci95) if self.ci95 is not None else None,
+        }
+
+
+def estimates(
+    values: FloatArray, covariance: FloatArray | None, quantile: float | None
+) -> tuple[Estimate, ...]:
+    """Estimates from parameter values, their covariance and a critical value.
+
+    ``covariance`` or ``quantile`` None gives estimates without uncertainty.
+    """
+    out = []
+    for i, value in enumerate(np.asarray(values, dtype=float)):
+        if covariance is None or quantile is None:
+            out.append(Estimate(float(value), None, None))
+            continue
+        v = float(value)
+        se = math.sqrt(max(float(covariance[i, i]), 0.0))
+        out.append(Estimate(v, se, (v - quantile * se, v + quantile * se)))
+    return tuple(out)
+
+
+@dataclass(frozen=True)
+class Linearised:
+    """The statistics of a least-squares fit, linearised at the solution.
+
+    Attributes
+    ----------
+    n_points : number of observations n
+    dof : degrees of freedom n - p
+    residuals : observed minus fitted [unit of the observations]
+    residual_variance : ``s**2 = sum(e**2) / dof`` [unit**2]; NaN where dof == 0
+    unscaled_covariance : ``(D^T D)^-1`` [parameter units**2 / observation unit**2]
+    covariance : ``s**2 (D^T D)^-1``; None where dof == 0 (no scatter to scale by)
+    leverage : diagonal of the hat matrix ``D (D^T D)^-1 D^T`` [-]
+    exact : True where the residuals are float64 round-off (the data lie on the model)
+    """
+
+    n_points: int
+    dof: int
+    residuals: FloatArray
+    residual_variance: float
+    unscaled_covariance: FloatArray
+    covariance: FloatArray | None
+    leverage: FloatArray
+    exact: bool
+
+    @property
+    def residual_std(self) -> float | None:
+        """``s`` [unit of the observations]; None where dof == 0."""
+        return math.sqrt(self.residual_variance) if self.dof > 0 else None
+
+    def studentized(self) -> FloatArray:
+        """Externally studentised residuals ``e_i / (s_(i) sqrt(1 - h_i))``.
+
+        ``s_(i)`` is the residual standard deviation with point i left out (Draper and
+        Smith, section 8.1); under the model each follows Student's t with dof - 1
+        degrees of freedom. NaN where it is not defined (dof < 2, leverage 1, or an
+        exact fit).
+        """
+        n_out = self.dof - 1
+        e = self.residuals
+        h = self.leverage
+        if n_out < 1 or self.exact:
+            return np.full(e.shape, np.nan)
+        free = h < 1.0 - 1e-12
+        one_minus_h = np.where(free, 1.0 - h, 1.0)
+        ssr = float(np.sum(e * e))
+        s_out_sq = np.maximum((ssr - e * e / one_minus_h) / n_out, 0.0)
+        defined = free & (s_out_sq > 0.0)
+        denominator = np.sqrt(np.where(defined, s_out_sq, 1.0) * one_minus_h)
+        return np.where(defined, e / denominator, np.nan)
+
+
+def linearised(design: FloatArray, residuals: FloatArray, observed: FloatArray) -> Linearised:
+    """Statistics of a least-squares fit from its design (Jacobian) matrix at the solution.
+
+    Parameters
+    ----------
+    design : ``d model / d parameters``, shape (n, p) [observation unit / parameter unit]
+    residuals : observed minus fitted, shape (n,) [observation unit]
+    observed : the observations, shape (n,), used only to judge round-off
+
+    Raises ``np.linalg.LinAlgError`` where the design is rank deficient: the data cannot
+    tell the parameters apart.
+    """
+    d = np.asarray(design, dtype=float)
+    e = np.asarray(residuals, dtype=float)
+    n, p = d.shape
+    # Scale the columns to unit length before the SVD so that parameters of very
+    # different size (N*m and N*m*s/rad) do not spoil the rank test.
+    norms = np.linalg.norm(d, axis=0)
+    if np.any(norms == 0.0):
+        raise np.linalg.LinAlgError("a parameter has no effect on the model")
+    u, s, vt = np.linalg.svd(d / norms, full_matrices=False)
+    if s[-1] <= RANK_TOLERANCE * s[0]:
+        raise np.linalg.LinAlgError("the parameters cannot be told apart by these data")
+    v_scaled = vt.T / s
+    unscaled = (v_scaled @ v_scaled.T) / np.outer(norms, norms)
+    leverage = np.sum(u * u, axis=1)
+    dof = n - p
+    ssr = float(np.sum(e * e))
+    variance = ssr / dof if dof > 0 else math.nan
+    scale = float(np.max(np.abs(observed))) if n else 0.0
+    exact = dof > 0 and math.sqrt(variance) <= EXACT_FIT_RESOLUTION * max(scale, 1e-300)
+    return Linearised(
+        n_points=n,
+        dof=dof,
+        residuals=e,
+        residual_variance=variance,
+        unscaled_covariance=unscaled,
+        covariance=variance * unscaled if dof > 0 else None,
+        leverage=leverage,
+        exact=exact,
+    )

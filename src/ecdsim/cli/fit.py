@@ -1,0 +1,523 @@
+"""``ecdsim fit``: characterise a damper from bench tests (paper section 7).
+
+A thin shell over :mod:`ecdsim.characterize`: parse the arguments, call one library
+function, render. Only typer is imported at start-up; the library, scipy, pint and
+matplotlib are imported inside the commands. User errors print one ``error:`` line per
+problem and exit with code 2; bad rows and flags print as ``warning:`` lines on stderr.
+Exit code 2 also where nothing could be fitted, or with ``--strict`` where any row was
+excluded or any temperature could not be fitted.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
+
+import typer
+
+if TYPE_CHECKING:
+    from ecdsim.characterize.droptest import DropTestResult, FailedTemperature
+    from ecdsim.characterize.findings import FitWarning
+    from ecdsim.characterize.stats import Estimate
+    from ecdsim.characterize.tracefit import TraceResult
+    from ecdsim.config import Config
+
+fit_app = typer.Typer(
+    help=(
+        "Fit the ECD's damping rate BECD(T) and friction FECD(T) to bench data "
+        "(paper section 7) and write them as a configuration file."
+    ),
+    rich_markup_mode="rich",
+    no_args_is_help=True,
+)
+
+DataArg = Annotated[
+    Path, typer.Argument(help="CSV file with unit-bearing headers (docs/characterize.md).")
+]
+JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON on stdout.")]
+PlotOpt = Annotated[
+    Path | None, typer.Option("--plot", help="Write PNG plots into this folder.", metavar="DIR")
+]
+OutputOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--output",
+        "-o",
+        help="Write the fitted parameters as a TOML configuration for `ecdsim deploy`.",
+        metavar="FILE",
+    ),
+]
+ReferenceOpt = Annotated[
+    float,
+    typer.Option(
+        "--reference-temperature",
+        help="Reference temperature T_ref of the damping laws, degC.",
+        metavar="DEGC",
+    ),
+]
+StrictOpt = Annotated[
+    bool,
+    typer.Option(
+        "--strict", help="Exit with code 2 if any row is excluded or any temperature fails."
+    ),
+]
+
+
+def _fail(problems: list[str]) -> NoReturn:
+    from ecdsim.cli.app import fail
+
+    fail(problems)
+
+
+def _fmt(value: float | None, digits: int = 4) -> str:
+    if value is None or not math.isfinite(value):
+        return "-"
+    return f"{value:.{digits}g}"
+
+
+def _ci(estimate: Estimate, digits: int = 4) -> str:
+    if estimate.ci95 is None:
+        return "-"
+    return f"[{estimate.ci95[0]:.{digits}g}, {estimate.ci95[1]:.{digits}g}]"
+
+
+def _check_reference(reference_temperature: float) -> None:
+    if not reference_temperature > -273.15 or not math.isfinite(reference_temperature):
+        _fail(
+            [
+                f"--reference-temperature {reference_temperature:g}: expected a temperature in "
+                "degC above absolute zero"
+            ]
+        )
+
+
+def _load_config(path: Path) -> Config:
+    from ecdsim.config import ConfigError, load_config
+
+    try:
+        return load_config(path)
+    except ConfigError as exc:
+        _fail([f"--config: {line}" for line in str(exc).splitlines()])
+
+
+def _report(
+    bad_rows: list[str], failed: tuple[FailedTemperature, ...], warnings: list[FitWarning]
+) -> None:
+    for line in bad_rows:
+        typer.echo(f"warning: {line}", err=True)
+    for item in failed:
+        typer.echo(f"error: not fitted: {item.message()}", err=True)
+    for warning in warnings:
+        typer.echo(f"warning: {warning.message}", err=True)
+
+
+def _strict(strict: bool, bad_rows: list[str], failed: tuple[FailedTemperature, ...]) -> None:
+    if strict and (bad_rows or failed):
+        _fail(
+            [
+                *bad_rows,
+                *(f"not fitted: {f.message()}" for f in failed),
+                "--strict: the data have problems (listed above)",
+            ]
+        )
+
+
+def _write_outputs(
+    text: str | None, output: Path | None, plot: Path | None, plotter: Any
+) -> tuple[str | None, list[str]]:
+    """Write the parameter file and the plots; their paths."""
+    from ecdsim.characterize.export import ExportError, write_parameter_file
+
+    written_file: str | None = None
+    if output is not None and text is not None:
+        try:
+            written_file = str(write_parameter_file(output, text))
+        except ExportError as exc:
+            _fail([f"-o {output}: {exc}"])
+        except OSError as exc:
+            _fail([f"-o {output}: cannot write ({exc.strerror or exc})"])
+    plots: list[str] = []
+    if plot is not None:
+        try:
+            plots = [str(p) for p in plotter(plot)]
+        except OSError as exc:
+            _fail([f"--plot {plot}: cannot write plots ({exc.strerror or exc})"])
+    return written_file, plots
+
+
+def _emit_json(document: dict[str, Any]) -> None:
+    import json
+
+    typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
+
+
+@fit_app.command(
+    "drop-test",
+    epilog=(
+        "Example: [bold]ecdsim fit drop-test examples/drop_test.csv --plot plots "
+        "-o fitted.toml[/bold]"
+    ),
+)
+def drop_test(
+    data: DataArg,
+    as_json: JsonOpt = False,
+    plot: PlotOpt = None,
+    output: OutputOpt = None,
+    config: Annotated[
+        Path | None,
+        typer.Option(
+            "--config",
+            help="Configuration whose \\[load] goes into the -o file (else a marked placeholder).",
+            metavar="FILE",
+        ),
+    ] = None,
+    reference_temperature: ReferenceOpt = 25.0,
+    strict: StrictOpt = False,
+) -> None:
+    """Fit BECD and FECD per temperature from drop tests, then laws over temperature."""
+    from ecdsim.characterize.droptest import fit_drop_test
+    from ecdsim.characterize.export import (
+        ExportError,
+        fitted_ecd,
+        fitted_parameter_text,
+        largest_torque,
+        provenance,
+    )
+    from ecdsim.config import ConfigError
+
+    _check_reference(reference_temperature)
+    loaded = _load_config(config) if config is not None else None
+    try:
+        result = fit_drop_test(data, reference_temperature)
+    except ConfigError as exc:
+        _fail(str(exc).splitlines())
+    bad_rows = [b.message() for b in result.table.bad_rows]
+    if not result.fits:
+        _fail(
+            [
+                *bad_rows,
+                *(f"not fitted: {f.message()}" for f in result.failed),
+                "no temperature could be fitted",
+            ]
+        )
+    _strict(strict, bad_rows, result.failed)
+    warnings = list(result.warnings)
+    text: str | None = None
+    if output is not None:
+        fits = result.fits
+        try:
+            ecd = fitted_ecd(
+                [f.temperature for f in fits],
+                [f.line.slope for f in fits],
+                [f.line.intercept for f in fits],
+                result.laws,
+            )
+        except ExportError as exc:
+            _fail([f"-o {output}: {exc}"])
+        warnings.extend(ecd.warnings)
+        if loaded is None:
+            from ecdsim.characterize.findings import FitWarning
+
+            warnings.append(
+                FitWarning(
+                    "placeholder_load",
+                    f"{output}: no --config given, so its [load] is a marked placeholder; "
+                    "edit it before trusting a deployment time",
+                )
+            )
+        text = fitted_parameter_text(
+            ecd,
+            loaded.spec.load if loaded else None,
+            largest_torque([t for f in fits for t in f.torque]),
+            f"ECD fitted from drop tests ({Path(data).name})",
+            provenance("ecdsim fit drop-test", result.table.source, result.table.sha256),
+        )
+
+    def plotter(folder: Path) -> list[Path]:
+        from ecdsim.characterize.plots import write_drop_test_plots
+
+        return write_drop_test_plots(result, folder)
+
+    written, plots = _write_outputs(text, output, plot, plotter)
+    if as_json:
+        document = result.to_dict()
+        document["warnings"] = [w.to_dict() for w in warnings]
+        document["parameter_file"] = written
+        document["plots"] = plots
+        _emit_json(document)
+    else:
+        _print_drop_test(result)
+    _report(bad_rows, result.failed, warnings)
+    for path in [*([written] if written else []), *plots]:
+        typer.echo(f"wrote {path}", err=as_json)
+
+
+def _print_drop_test(result: DropTestResult) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = Console(soft_wrap=False, width=max(120, Console().width))
+    table = Table(
+        title="Drop test: torque = FECD + BECD * speed (paper Eq. 5, Figure 8)",
+        title_justify="left",
+    )
+    headers = [
+        "T [degC]",
+        "n",
+        "BECD [N*m*s/rad]",
+        "95 % CI",
+        "FECD [N*m]",
+        "95 % CI",
+        "R^2",
+        "start-up corr. [%]",
+        "flags",
+    ]
+    for header in headers:
+        table.add_column(escape(header), justify="left" if header == "flags" else "right")
+    for fit in result.fits:
+        line = fit.line
+        flags = []
+        if line.curvature is not None and line.curvature.bending:
+            flags.append("roll-off" if line.curvature.roll_off else "bends up")
+        if line.outliers.any():
+            flags.append("outlier rows " + ", ".join(str(int(r)) for r in fit.rows[line.outliers]))
+        correction = float(abs(fit.correction).max()) * 100.0
+        table.add_row(
+            _fmt(fit.temperature),
+            str(line.n_points),
+            _fmt(line.slope.value),
+            _ci(line.slope),
+            _fmt(line.intercept.value),
+            _ci(line.intercept),
+            f"{line.r_squared:.5f}",
+            f"{correction:.2f}" if fit.corrected_for_inertia else "not corrected",
+            escape("; ".join(flags)) or "-",
+        )
+    console.print(table)
+    _print_laws(console, result.laws)
+    used, excluded = result.table.rows.size, len(result.table.excluded_rows)
+    console.print(
+        escape(f"{result.table.source}: {used} rows used, {excluded} excluded"), style="dim"
+    )
+
+
+def _print_laws(console: Any, laws: Any) -> None:
+    from rich.markup import escape
+    from rich.table import Table
+
+    if laws is None:
+        return
+    table = Table(
+        title=f"Laws over temperature (T_ref = {laws.reference_temperature:g} degC)",
+        title_justify="left",
+    )
+    for header in ("law", "parameter", "value", "95 % CI", "chi^2 / dof", "p"):
+        table.add_column(escape(header), justify="left" if header == "law" else "right")
+    fits = [(f"BECD {name}", fit) for name, fit in laws.damping.items()]
+    if laws.friction is not None:
+        fits.append(("FECD line", laws.friction))
+    for label, fit in fits:
+        for i, (key, estimate) in enumerate(zip(fit.law.keys, fit.parameters, strict=True)):
+            table.add_row(
+                escape(label if i == 0 else ""),
+                escape(key),
+                _fmt(estimate.value, 5),
+                _ci(estimate, 5),
+                (f"{fit.chi_square:.3g} / {fit.dof}" if i == 0 else ""),
+                (_fmt(fit.p_value, 3) if i == 0 else ""),
+            )
+    console.print(table)
+    console.print(escape(f"BECD laws: {laws.comparison.statement}"))
+    for name, why in laws.damping_failures.items():
+        console.print(escape(f"{name} law not fitted: {why}"))
+
+
+@fit_app.command(
+    "trace",
+    epilog=(
+        "Example: [bold]ecdsim fit trace examples/deployment_trace.csv "
+        "--config examples/paper_cc16.toml --plot plots[/bold]"
+    ),
+)
+def trace(
+    data: DataArg,
+    config: Annotated[
+        Path,
+        typer.Option(
+            "--config",
+            help="Configuration giving the spring and travel (and the ECD for --fit-spring).",
+            metavar="FILE",
+        ),
+    ],
+    as_json: JsonOpt = False,
+    plot: PlotOpt = None,
+    output: OutputOpt = None,
+    fit_spring: Annotated[
+        bool,
+        typer.Option(
+            "--fit-spring",
+            help=(
+                "Fit the spring's start and end torques instead, with BECD and friction "
+                "from --config (a trace cannot give both; docs/characterize.md)."
+            ),
+        ),
+    ] = False,
+    temperature: Annotated[
+        float | None,
+        typer.Option(
+            "--temperature",
+            "-T",
+            help="Temperature of a file without a temperature column, degC.",
+            metavar="DEGC",
+        ),
+    ] = None,
+    reference_temperature: ReferenceOpt = 25.0,
+    strict: StrictOpt = False,
+) -> None:
+    """Fit recorded deployments (angle against time) against the exact solution."""
+    from ecdsim.characterize.export import (
+        ExportError,
+        fitted_ecd,
+        fitted_parameter_text,
+        provenance,
+        spring_parameter_text,
+    )
+    from ecdsim.characterize.tracefit import fit_traces
+    from ecdsim.config import ConfigError
+
+    _check_reference(reference_temperature)
+    if temperature is not None and not (math.isfinite(temperature) and temperature > -273.15):
+        _fail([f"--temperature {temperature:g}: expected degC above absolute zero"])
+    loaded = _load_config(config)
+    try:
+        result = fit_traces(
+            data,
+            loaded,
+            "spring" if fit_spring else "damper",
+            temperature,
+            reference_temperature,
+        )
+    except ConfigError as exc:
+        _fail(str(exc).splitlines())
+    bad_rows = [b.message() for b in result.table.bad_rows]
+    if not result.fits and result.spring is None:
+        _fail(
+            [
+                *bad_rows,
+                *(f"not fitted: {f.message()}" for f in result.failed),
+                "no trace could be fitted",
+            ]
+        )
+    _strict(strict, bad_rows, result.failed)
+    warnings = list(result.warnings)
+    source = provenance("ecdsim fit trace", result.table.source, result.table.sha256)
+    text: str | None = None
+    if output is not None and result.spring is not None:
+        temps = [c.trace.temperature for c in result.spring.curves]
+        text = spring_parameter_text(
+            loaded.spec, result.spring.start_torque, result.spring.end_torque, temps, source
+        )
+    elif output is not None:
+        fits = result.fits
+        try:
+            ecd = fitted_ecd(
+                [f.temperature for f in fits],
+                [f.damping_rate for f in fits],
+                [f.friction for f in fits],
+                result.laws,
+            )
+        except ExportError as exc:
+            _fail([f"-o {output}: {exc}"])
+        warnings.extend(ecd.warnings)
+        text = fitted_parameter_text(
+            ecd, loaded.spec.load, 0.0, f"ECD fitted from deployment traces ({data.name})", source
+        )
+
+    def plotter(folder: Path) -> list[Path]:
+        from ecdsim.characterize.plots import write_trace_plots
+
+        return write_trace_plots(result, folder)
+
+    written, plots = _write_outputs(text, output, plot, plotter)
+    if as_json:
+        document = result.to_dict()
+        document["warnings"] = [w.to_dict() for w in warnings]
+        document["parameter_file"] = written
+        document["plots"] = plots
+        _emit_json(document)
+    else:
+        _print_traces(result)
+    _report(bad_rows, result.failed, warnings)
+    for path in [*([written] if written else []), *plots]:
+        typer.echo(f"wrote {path}", err=as_json)
+
+
+def _print_traces(result: TraceResult) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = Console(soft_wrap=False, width=max(120, Console().width))
+    if result.spring is not None:
+        spring = result.spring
+        table = Table(
+            title=(
+                "Spring torques fitted to the traces (at "
+                f"{spring.reference_temperature:g} degC; BECD and friction from the config)"
+            ),
+            title_justify="left",
+        )
+        for header in ("parameter", "value [N*m]", "95 % CI"):
+            table.add_column(escape(header), justify="right")
+        table.add_row("start_torque", _fmt(spring.start_torque.value, 5), _ci(spring.start_torque))
+        table.add_row("end_torque", _fmt(spring.end_torque.value, 5), _ci(spring.end_torque))
+        console.print(table)
+    else:
+        table = Table(
+            title="Trace fit: BECD and total friction against the exact solution",
+            title_justify="left",
+        )
+        headers = [
+            "T [degC]",
+            "n",
+            "BECD [N*m*s/rad]",
+            "95 % CI",
+            "F total [N*m]",
+            "95 % CI",
+            "FS [N*m]",
+            "FECD [N*m]",
+        ]
+        for header in headers:
+            table.add_column(escape(header), justify="right")
+        for fit in result.fits:
+            table.add_row(
+                _fmt(fit.temperature),
+                str(fit.statistics.n_points),
+                _fmt(fit.damping_rate.value),
+                _ci(fit.damping_rate),
+                _fmt(fit.total_friction.value),
+                _ci(fit.total_friction),
+                _fmt(fit.system_friction),
+                _fmt(fit.friction.value),
+            )
+        console.print(table)
+    residuals = Table(title="Residuals", title_justify="left")
+    for header in ("T [degC]", "rms [deg]", "R^2", "Durbin-Watson", "fitted time [s]"):
+        residuals.add_column(escape(header), justify="right")
+    for curve in result.curves:
+        e = curve.residuals
+        residuals.add_row(
+            _fmt(curve.trace.temperature),
+            _fmt(math.degrees(float((e * e).mean()) ** 0.5), 3),
+            f"{curve.r_squared:.6f}",
+            _fmt(curve.durbin_watson, 3),
+            _fmt(curve.deployment_time),
+        )
+    console.print(residuals)
+    _print_laws(console, result.laws)
+    used, excluded = result.table.rows.size, len(result.table.excluded_rows)
+    console.print(
+        escape(f"{result.table.source}: {used} rows used, {excluded} excluded"), style="dim"
+    )

@@ -1,0 +1,212 @@
+"""``ecdsim fit``: exit codes, JSON, warnings, plots, in process."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from ecdsim import __version__
+from ecdsim.characterize.droptest import fit_drop_test
+from ecdsim.characterize.plots import plot_parameters, plot_torque_speed
+from ecdsim.cli.app import USER_ERROR, app
+from tests.conftest import PAPER_CONFIG, ROOT
+from tests.test_characterize_synthetic import Truth, drop_csv, drop_points
+
+runner = CliRunner()
+EXAMPLE = ROOT / "examples" / "drop_test.csv"
+TRACE = ROOT / "examples" / "deployment_trace.csv"
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def good_rows() -> list[str]:
+    points = drop_points(Truth(), [-40.0, 25.0, 100.0], [2.0, 4.0, 6.0, 8.0])
+    return drop_csv(points, inertia_column=False).splitlines()
+
+
+def write(tmp_path: Path, lines: list[str]) -> Path:
+    path = tmp_path / "data.csv"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def test_fit_help_lists_both_commands() -> None:
+    result = runner.invoke(app, ["fit", "--help"])
+    assert result.exit_code == 0
+    assert "drop-test" in result.stdout
+    assert "trace" in result.stdout
+
+
+def test_the_example_drop_test_fits_with_tables_and_plots(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "--plot", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "BECD [N*m*s/rad]" in result.stdout
+    assert "Laws over temperature" in result.stdout
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == [
+        "drop_test_residuals.png",
+        "parameters_vs_temperature.png",
+        "torque_vs_speed_fit.png",
+    ]
+    for path in tmp_path.iterdir():
+        assert path.read_bytes()[:8] == PNG
+
+
+def test_json_output(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "--json"])
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert document["ecdsim_version"] == __version__
+    assert [e["temperature_C"] for e in document["temperatures"]] == [-40.0, 25.0, 100.0]
+    assert document["bad_rows"] == []
+    assert document["parameter_file"] is None
+    assert document["temperature_laws"]["comparison"]["better"] in {"linear", "resistivity", None}
+
+
+def test_bad_rows_are_reported_and_the_rest_fitted(tmp_path: Path) -> None:
+    lines = good_rows()
+    lines[2] = lines[2].rsplit(",", 2)[0] + ",-5.0,0.0"  # a negative time
+    lines.append(lines[3])  # a repeated row
+    path = write(tmp_path, lines)
+    result = runner.invoke(app, ["fit", "drop-test", str(path), "--json"])
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert [b["row"] for b in document["bad_rows"]] == [3, len(lines)]
+    assert document["excluded_rows"] == [3, len(lines)]
+    assert "warning: row 3, column 'time_s': '-5.0' must be > 0" in result.stderr
+    assert f"warning: row {len(lines)}: " in result.stderr
+    strict = runner.invoke(app, ["fit", "drop-test", str(path), "--strict"])
+    assert strict.exit_code == USER_ERROR
+    assert "error: --strict" in strict.stderr
+
+
+def test_nothing_usable_exits_2_with_every_bad_row(tmp_path: Path) -> None:
+    lines = ["temperature_C,mass_kg,radius_m,angle_rad,time_s", "25,2,0.05,3,abc", "25,,0.05,3,4"]
+    result = runner.invoke(app, ["fit", "drop-test", str(write(tmp_path, lines))])
+    assert result.exit_code == USER_ERROR
+    assert result.stderr.splitlines()[-3:] == [
+        f"error: {tmp_path / 'data.csv'}: row 2, column 'time_s': 'abc' is not a number; "
+        "row excluded",
+        f"error: {tmp_path / 'data.csv'}: row 3, column 'mass_kg': '' is empty; row excluded",
+        f"error: {tmp_path / 'data.csv'}: no usable data row remains",
+    ]
+    assert "Traceback" not in result.output
+
+
+def test_unknown_unit_exits_2_naming_the_column(tmp_path: Path) -> None:
+    lines = ["temperature_C,mass [lbz],radius_m,angle_rad,time_s", "25,2,0.05,3,4"]
+    result = runner.invoke(app, ["fit", "drop-test", str(write(tmp_path, lines))])
+    assert result.exit_code == USER_ERROR
+    assert "column 'mass [lbz]': unit 'lbz' is not a unit pint knows; expected a mass" in (
+        result.stderr
+    )
+
+
+def test_every_temperature_failing_exits_2(tmp_path: Path) -> None:
+    header = good_rows()[0]
+    lines = [header, "25,2.0,0.05,3.0,10.0,0.0", "60,4.0,0.05,3.0,5.0,0.0"]
+    result = runner.invoke(app, ["fit", "drop-test", str(write(tmp_path, lines))])
+    assert result.exit_code == USER_ERROR
+    assert "error: not fitted: 25 degC (rows 2): fewer than two distinct speeds" in result.stderr
+    assert "error: no temperature could be fitted" in result.stderr
+
+
+def test_one_temperature_failing_is_reported_and_the_rest_fitted(tmp_path: Path) -> None:
+    lines = [*good_rows(), "60,4.0,0.05,3.0,5.0,0.0"]
+    path = write(tmp_path, lines)
+    result = runner.invoke(app, ["fit", "drop-test", str(path), "--json"])
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert [f["temperature_C"] for f in document["failed_temperatures"]] == [60.0]
+    assert "error: not fitted: 60 degC" in result.stderr
+    assert runner.invoke(app, ["fit", "drop-test", str(path), "--strict"]).exit_code == 2
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["fit", "drop-test", "missing.csv"], "data file not found: missing.csv"),
+        (
+            ["fit", "drop-test", str(EXAMPLE), "--config", "missing.toml"],
+            "--config: config file not found",
+        ),
+        (
+            ["fit", "drop-test", str(EXAMPLE), "--reference-temperature", "-300"],
+            "--reference-temperature -300",
+        ),
+        (
+            ["fit", "trace", str(TRACE), "--config", str(PAPER_CONFIG), "-T", "-400"],
+            "--temperature -400",
+        ),
+    ],
+)
+def test_user_errors_exit_2(args: list[str], message: str) -> None:
+    result = runner.invoke(app, args)
+    assert result.exit_code == USER_ERROR
+    assert message in result.stderr
+    assert "Traceback" not in result.output
+
+
+def test_an_unwritable_parameter_file_exits_2(tmp_path: Path) -> None:
+    folder = tmp_path / "taken"
+    folder.mkdir()
+    result = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "-o", str(folder)])
+    assert result.exit_code == USER_ERROR
+    assert f"error: -o {folder}: cannot write" in result.stderr
+
+
+def test_trace_command(tmp_path: Path) -> None:
+    args = ["fit", "trace", str(TRACE), "--config", str(PAPER_CONFIG)]
+    result = runner.invoke(app, [*args, "--plot", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "Trace fit" in result.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "parameters_vs_temperature.png",
+        "trace_fit.png",
+        "trace_residuals.png",
+    ]
+    document = json.loads(runner.invoke(app, [*args, "--json", "--fit-spring"]).stdout)
+    assert document["mode"] == "spring"
+    assert (
+        document["spring"]["start_torque_ci95"][0]
+        < 3.73
+        < document["spring"]["start_torque_ci95"][1]
+    )
+    missing = runner.invoke(app, ["fit", "trace", str(TRACE)])
+    assert missing.exit_code == USER_ERROR  # --config is required
+
+
+def test_a_trace_that_cannot_be_fitted_exits_2(tmp_path: Path) -> None:
+    config = tmp_path / "table.toml"
+    config.write_text(
+        PAPER_CONFIG.read_text().replace(
+            'start_torque = "3.73 N*m"\nend_torque = "1.58 N*m"',
+            'spring_table = [["0 rad", "3.73 N*m"], ["1.57 rad", "1.58 N*m"]]',
+        )
+    )
+    args = ["fit", "trace", str(TRACE), "--config", str(config), "--fit-spring"]
+    result = runner.invoke(app, args)
+    assert result.exit_code == USER_ERROR
+    assert "needs a linear spring" in result.stderr
+
+
+def test_figures_have_a_line_and_points_per_temperature() -> None:
+    result = fit_drop_test(EXAMPLE)
+    figure = plot_torque_speed(result)
+    (axes,) = figure.axes
+    assert len(axes.lines) == 2 * len(result.fits)  # points and line per temperature
+    assert result.laws is not None
+    fits = result.fits
+    parameters = plot_parameters(
+        [f.temperature for f in fits],
+        [f.line.slope for f in fits],
+        [f.line.intercept for f in fits],
+        result.laws,
+    )
+    top, bottom = parameters.axes
+    laws = [line.get_label() for line in top.lines if str(line.get_label()).endswith(" law")]
+    assert laws == ["linear law", "resistivity law"]
+    assert len(top.collections) >= 2  # their confidence bands (plus the error bars)
+    assert [line.get_label() for line in bottom.lines if line.get_label() == "line"] == ["line"]
