@@ -1,0 +1,372 @@
+"""Nonlinear engaged segments (damping roll-off, self-heating), integrated numerically.
+
+In the forward frame of a segment (``x`` the displacement and ``u`` the speed in the
+direction of motion, friction folded into the drive ``a`` as in
+:mod:`ecdsim.dynamics.linear`), the state ``y = [x, u, T_d, E]`` obeys
+
+    x'   = u
+    J u' = a - k x - N (T_eddy(N u, T_d) + BG N u)
+    T_d' = (T_eddy(N u, T_d) N u - (T_d - T_ambient) / R) / C      (if heating is modelled)
+    E'   = N (T_eddy(N u, T_d) + BG N u) u                           (damper dissipation)
+
+(the eddy torque law from :mod:`ecdsim.dynamics.damping`, the heat balance from
+:mod:`ecdsim.physics.thermal`: only the eddy-current power heats the damper's conductor;
+gearbox damping and friction losses heat other parts). It is integrated, with the
+analytic Jacobian, either for the whole batch at once by the vectorised Rosenbrock method
+of :mod:`ecdsim.dynamics.rosenbrock` (``"RODAS4"``, the default) or case by case with
+scipy's ``solve_ivp`` (stiff methods ``"Radau"``, ``"BDF"`` or ``"LSODA"``), until the
+first event: the segment's length is reached, the speed falls to zero, the speed falls
+below ``1e-9`` of its scale while the static equilibrium lies ahead (asymptotic approach
+to rest, "creep"), the damper heats beyond its damping law's domain, or the time cap.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ecdsim._types import FloatArray
+from ecdsim.dynamics import linear
+from ecdsim.dynamics.damping import EddyLaw
+from ecdsim.physics import thermal as heat
+
+HORIZON = 4  # event kind: the integration horizon passed without an event
+DOMAIN = 5  # event kind: the damper temperature left the damping law's domain
+HORIZON_TIME = 1e9  # [s] integration horizon when there is no stop time
+CREEP_FRACTION = 1e-9  # speed, relative to its scale, taken as "at rest" while creeping
+BATCHED = "RODAS4"  # the vectorised integrator's name among the integrator choices
+
+
+@dataclass(frozen=True)
+class NonlinearSegments:
+    """Engaged segments to integrate; 1-D arrays over the segments (forward frame).
+
+    Attributes
+    ----------
+    inertia : J [kg*m^2]
+    stiffness : k, fall of the spring torque per radian [N*m/rad]
+    drive : a, spring torque minus friction at the start [N*m]
+    speed0 : u at the start [rad/s], >= 0
+    length : distance to the segment's end [rad]
+    cap : time available [s] (inf for none)
+    temperature0 : damper temperature at the start [degC]
+    ambient : ambient temperature [degC]
+    ratio : gear ratio N [-]
+    gearbox_damping : BG at the high-speed shaft [N*m*s/rad]
+    heat_capacity : C [J/K]
+    thermal_resistance : R [K/W] (inf: adiabatic)
+    linear_damping : BECD at ambient, to scale speeds [N*m*s/rad]
+    eddy : the eddy-current law, flattened over the whole batch
+    case : index of each segment's case in the batch (into ``eddy``)
+    thermal : whether the damper temperature evolves
+    """
+
+    inertia: FloatArray
+    stiffness: FloatArray
+    drive: FloatArray
+    speed0: FloatArray
+    length: FloatArray
+    cap: FloatArray
+    temperature0: FloatArray
+    ambient: FloatArray
+    ratio: FloatArray
+    gearbox_damping: FloatArray
+    heat_capacity: FloatArray
+    thermal_resistance: FloatArray
+    linear_damping: FloatArray
+    eddy: EddyLaw
+    case: NDArray[np.intp]
+    thermal: bool
+
+
+@dataclass(frozen=True)
+class NonlinearAdvance:
+    """Outcome per segment (see :class:`ecdsim.dynamics.linear.Advance`).
+
+    Attributes
+    ----------
+    kind : REACH, ZERO, CAP, REST (linear's codes), HORIZON or DOMAIN
+    duration : time spent [s]
+    x : displacement at the end [rad]
+    v : speed at the end [rad/s]
+    damper_work : damping dissipation over the segment [J]
+    temperature : damper temperature at the end [degC]
+    max_temperature : highest damper temperature in the segment [degC]
+    max_speed : highest speed in the segment [rad/s]
+    solutions : dense output ``t -> [x, u, T_d, E]`` per segment (None if not recorded)
+    """
+
+    kind: NDArray[np.int8]
+    duration: FloatArray
+    x: FloatArray
+    v: FloatArray
+    damper_work: FloatArray
+    temperature: FloatArray
+    max_temperature: FloatArray
+    max_speed: FloatArray
+    solutions: list[Callable[[FloatArray], FloatArray] | None]
+
+
+@dataclass(frozen=True)
+class _One:
+    kind: int
+    duration: float
+    x: float
+    v: float
+    work: float
+    temperature: float
+    max_temperature: float
+    max_speed: float
+    solution: Callable[[FloatArray], FloatArray] | None
+
+
+class _Event:
+    """A solve_ivp event function with its attributes."""
+
+    def __init__(
+        self, func: Callable[[float, FloatArray], float], terminal: bool, direction: float
+    ):
+        self.func = func
+        self.terminal = terminal
+        self.direction = direction
+
+    def __call__(self, t: float, y: FloatArray) -> float:
+        return self.func(t, y)
+
+
+@dataclass(frozen=True)
+class _Scales:
+    """Per-segment scales for tolerances, the first step and the creep threshold."""
+
+    atol: FloatArray  # (4, n): x, u, T_d, E
+    first_step: FloatArray
+    creep_speed: FloatArray
+    creeps: NDArray[np.bool_]
+
+
+def _scales(segs: NonlinearSegments, rtol: float) -> _Scales:
+    damping0 = np.maximum(segs.linear_damping, 1e-300)
+    speed = np.maximum.reduce(
+        [np.abs(segs.speed0), np.abs(segs.drive) / damping0, np.full(segs.drive.shape, 1e-300)]
+    )
+    length = np.maximum(segs.length, 1e-9)
+    energy = np.maximum.reduce(
+        [
+            np.abs(segs.drive) * segs.length,
+            0.5 * segs.inertia * segs.speed0**2,
+            np.full(segs.drive.shape, 1e-300),
+        ]
+    )
+    # The speed's absolute tolerance resolves the creep threshold (1e-9 of its scale).
+    atol = np.stack(
+        [
+            rtol * 1e-3 * length,
+            np.minimum(rtol * 1e-3, 1e-12) * speed,
+            np.full(length.shape, rtol * 1e-3),
+            rtol * 1e-3 * energy,
+        ]
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        equilibrium = np.where(segs.stiffness > 0.0, segs.drive / segs.stiffness, np.inf)
+    creeps = (equilibrium > 0.0) & (equilibrium <= segs.length)
+    first = 1e-3 * np.minimum(segs.inertia / damping0, length / speed)
+    return _Scales(atol, first, CREEP_FRACTION * speed, creeps)
+
+
+def _advance_batched(segs: NonlinearSegments, rtol: float, record: bool) -> NonlinearAdvance:
+    """All segments at once with the vectorised Rosenbrock integrator."""
+    from ecdsim.dynamics import rosenbrock
+
+    scales = _scales(segs, rtol)
+    model = rosenbrock.Model(
+        inertia=segs.inertia,
+        stiffness=segs.stiffness,
+        drive=segs.drive,
+        ratio=segs.ratio,
+        gearbox_damping=segs.gearbox_damping,
+        heat_capacity=segs.heat_capacity,
+        thermal_resistance=segs.thermal_resistance,
+        ambient=segs.ambient,
+        eddy=segs.eddy.take(segs.case),
+        heating=segs.thermal,
+    )
+    y0 = np.stack(
+        [np.zeros_like(segs.speed0), segs.speed0, segs.temperature0, np.zeros_like(segs.speed0)]
+    )
+    out = rosenbrock.integrate_batch(
+        model,
+        y0,
+        segs.length,
+        segs.cap,
+        HORIZON_TIME,
+        scales.creep_speed,
+        scales.creeps,
+        scales.atol,
+        rtol,
+        scales.first_step,
+        record,
+        HORIZON,
+        DOMAIN,
+    )
+    stopped = (out.kind == linear.ZERO) | (out.kind == linear.REST)
+    return NonlinearAdvance(
+        kind=out.kind,
+        duration=out.duration,
+        x=out.state[0],
+        v=np.where(stopped, 0.0, out.state[1]),
+        damper_work=out.state[3],
+        temperature=out.state[2],
+        max_temperature=np.maximum(out.max_temperature, out.state[2]),
+        max_speed=np.maximum(out.max_speed, segs.speed0),
+        solutions=list(out.trajectories),
+    )
+
+
+def _integrate_one(segs: NonlinearSegments, j: int, rtol: float, method: str, record: bool) -> _One:
+    from scipy.integrate import solve_ivp
+
+    law = segs.eddy.at(int(segs.case[j]))
+    n = float(segs.ratio[j])
+    bg = float(segs.gearbox_damping[j])
+    inertia = float(segs.inertia[j])
+    k = float(segs.stiffness[j])
+    a = float(segs.drive[j])
+    u0 = float(segs.speed0[j])
+    length = float(segs.length[j])
+    cap = float(segs.cap[j])
+    t_amb = float(segs.ambient[j])
+    capacity = float(segs.heat_capacity[j])
+    resistance = float(segs.thermal_resistance[j])
+    conduct = 0.0 if math.isinf(resistance) else 1.0 / resistance
+    heating = segs.thermal
+    temp0 = float(segs.temperature0[j])
+    if length <= 0.0:
+        return _One(linear.REACH, 0.0, 0.0, u0, 0.0, temp0, temp0, u0, None)
+    if cap <= 0.0:
+        return _One(linear.CAP, 0.0, 0.0, u0, 0.0, temp0, temp0, u0, None)
+
+    def forces(u: float, temp: float) -> tuple[float, float, float, float]:
+        shaft = n * u
+        eddy = float(law.torque(shaft, temp))
+        d_speed = float(law.speed_derivative(shaft, temp))
+        d_temp = float(law.temperature_derivative(shaft, temp))
+        return eddy, d_speed, d_temp, n * (eddy + bg * shaft)
+
+    def rhs(_t: float, y: FloatArray) -> FloatArray:
+        x, u, temp = float(y[0]), float(y[1]), float(y[2])
+        eddy, _, _, torque = forces(u, temp)
+        du = (a - k * x - torque) / inertia
+        dtemp = (
+            float(heat.temperature_rate(eddy * n * u, temp, t_amb, capacity, resistance))
+            if heating
+            else 0.0
+        )
+        return np.array([u, du, dtemp, torque * u])
+
+    def jac(_t: float, y: FloatArray) -> FloatArray:
+        u, temp = float(y[1]), float(y[2])
+        eddy, d_speed, d_temp, torque = forces(u, temp)
+        d_torque_du = n * n * (d_speed + bg)
+        d_torque_dtemp = n * d_temp
+        out = np.zeros((4, 4))
+        out[0, 1] = 1.0
+        out[1, 0] = -k / inertia
+        out[1, 1] = -d_torque_du / inertia
+        out[1, 2] = -d_torque_dtemp / inertia
+        if heating:
+            out[2, 1] = n * (d_speed * n * u + eddy) / capacity
+            out[2, 2] = (d_temp * n * u - conduct) / capacity
+        out[3, 1] = torque + d_torque_du * u
+        out[3, 2] = d_torque_dtemp * u
+        return out
+
+    scales = _scales(segs, rtol)
+    creep_speed = float(scales.creep_speed[j])
+    creeps = bool(scales.creeps[j])
+
+    events = [
+        _Event(lambda _t, y: float(y[0]) - length, True, 1.0),  # reach the length
+        _Event(lambda _t, y: float(y[1]), True, -1.0),  # zero speed
+        _Event(lambda t, y: float(rhs(t, y)[1]), False, -1.0),  # speed maxima
+        _Event(lambda t, y: float(rhs(t, y)[2]), False, -1.0),  # temperature maxima
+    ]
+    if creeps:
+        events.append(_Event(lambda _t, y: float(y[1]) - creep_speed, True, -1.0))
+    if heating:
+        events.append(_Event(lambda _t, y: float(law.domain_margin(float(y[2]))), True, -1.0))
+    atol = scales.atol[:, j]
+    t_end = cap if math.isfinite(cap) else HORIZON_TIME
+    sol = solve_ivp(
+        rhs,
+        (0.0, t_end),
+        np.array([0.0, u0, temp0, 0.0]),
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        jac=jac,
+        events=events,
+        dense_output=record,
+    )
+    y_end = sol.y[:, -1]
+    duration = float(sol.t[-1])
+    kind = HORIZON
+    if sol.status == 1:
+        domain_index = 5 if creeps else 4
+        outcomes: list[tuple[int, int]] = [(linear.REACH, 0), (linear.ZERO, 1), (linear.REST, 4)]
+        if heating:
+            outcomes.append((DOMAIN, domain_index))
+        for code, index in outcomes:
+            present = index < len(sol.t_events) and (code != linear.REST or creeps)
+            if present and len(sol.t_events[index]):
+                kind = code
+                duration = float(sol.t_events[index][0])
+                y_end = sol.y_events[index][0]
+                break
+    elif sol.status == 0 and math.isfinite(cap):
+        kind = linear.CAP
+    x_end = length if kind == linear.REACH else float(y_end[0])
+    v_end = 0.0 if kind in (linear.ZERO, linear.REST) else float(y_end[1])
+    peaks = [float(p[1]) for p in sol.y_events[2]]
+    max_speed = max([u0, v_end, *peaks, *np.asarray(sol.y[1], float).tolist()])
+    hot = [float(p[2]) for p in sol.y_events[3]]
+    max_temp = max([float(np.max(sol.y[2])), float(y_end[2]), *hot])
+    solution = sol.sol if record and sol.sol is not None else None
+    return _One(
+        kind,
+        duration,
+        x_end,
+        v_end,
+        float(y_end[3]),
+        float(y_end[2]),
+        max_temp,
+        max_speed,
+        solution,
+    )
+
+
+def advance_nonlinear(
+    segs: NonlinearSegments, rtol: float, method: str, record: bool
+) -> NonlinearAdvance:
+    """Integrate each segment to its first event.
+
+    ``method`` "RODAS4" advances all segments together (:mod:`ecdsim.dynamics.rosenbrock`);
+    "Radau", "BDF" or "LSODA" make one scipy ``solve_ivp`` call per segment.
+    """
+    if method == BATCHED:
+        return _advance_batched(segs, rtol, record)
+    results = [_integrate_one(segs, j, rtol, method, record) for j in range(segs.inertia.size)]
+    return NonlinearAdvance(
+        kind=np.array([r.kind for r in results], dtype=np.int8),
+        duration=np.array([r.duration for r in results]),
+        x=np.array([r.x for r in results]),
+        v=np.array([r.v for r in results]),
+        damper_work=np.array([r.work for r in results]),
+        temperature=np.array([r.temperature for r in results]),
+        max_temperature=np.array([r.max_temperature for r in results]),
+        max_speed=np.array([r.max_speed for r in results]),
+        solutions=[r.solution for r in results],
+    )

@@ -1,0 +1,226 @@
+"""The ``dynamic`` deployment method: the registry entry and its solution type.
+
+:class:`DynamicMethod` satisfies the :class:`~ecdsim.solvers.Solver` protocol. It needs a
+:class:`~ecdsim.dynamics.problem.DynamicProblem` (a quasi-static problem extended with
+inertia and the other dynamic parameters): :func:`ecdsim.deployment.predict` builds one
+when it is given ``dynamics=``. Its solution, :class:`DynamicSolution`, is a
+:class:`~ecdsim.solvers.DeploymentSolution` (same fields, same meaning, so reports and
+plots treat every method alike) that also carries the full :class:`DynamicResult`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, BoolArray, FloatArray
+from ecdsim.dynamics.damping import KlossEddy
+from ecdsim.dynamics.problem import DynamicProblem
+from ecdsim.dynamics.result import STATUSES, DynamicResult
+from ecdsim.dynamics.solver import solve_dynamic
+from ecdsim.physics import rolloff
+from ecdsim.solvers.base import DeploymentSolution, QuasiStaticProblem, Trajectory
+
+
+@dataclass(frozen=True, kw_only=True)
+class DynamicSolution(DeploymentSolution):
+    """The dynamic method's answer: the common fields plus the full result.
+
+    Common fields: ``deployment_time`` is the first arrival at the end of travel (inf if
+    never), ``start_speed`` the speed at release, ``end_speed`` the arrival speed (0 if
+    never), ``stalled`` True where the mechanism stops for good short of the end of
+    travel, ``stall_angle`` where.
+
+    Attributes
+    ----------
+    end_kinetic_energy : kinetic energy at arrival [J]
+    max_damper_temperature : [degC]
+    stuck : came to rest for good (also after arriving, e.g. after a rebound)
+    stuck_angle : where [rad]; NaN if not stuck
+    stuck_time : when [s]; inf for an asymptotic approach; NaN if not stuck
+    energy_balance_error : relative energy imbalance [-]
+    result : the full :class:`DynamicResult` (events, energy terms, time series)
+    problem : the problem solved (to recompute time series that were not recorded)
+    notes : noteworthy outcomes, (code, message, flat case index), for warnings
+    """
+
+    end_kinetic_energy: FloatArray
+    max_damper_temperature: FloatArray
+    stuck: BoolArray
+    stuck_angle: FloatArray
+    stuck_time: FloatArray
+    energy_balance_error: FloatArray
+    result: DynamicResult
+    problem: DynamicProblem
+    notes: tuple[tuple[str, str, int], ...] = ()
+
+    def trajectory(self, times: ArrayLike) -> Trajectory:
+        """Angle and speed at shared times [s]; shape (n_times, *batch_shape).
+
+        A large nonlinear batch is solved without recording its segments (memory); they
+        are then recomputed here, once, with recording.
+        """
+        t = np.asarray(times, dtype=float).reshape(-1)
+        result = self.result
+        if result.trajectory is None:
+            result = solve_dynamic(self.problem, record=True)
+        series = result.sample(t)
+        return Trajectory(method=self.method, time=t, angle=series.angle, speed=series.speed)
+
+    def case_fields(self, index: int) -> dict[str, Any]:
+        """The dynamic-only JSON fields of one case (flat index)."""
+        summary = self.result.case_summary(index)
+        keys = (
+            "end_kinetic_energy_J",
+            "max_damper_temperature_C",
+            "stuck",
+            "stuck_angle_rad",
+            "stuck_time_s",
+            "energy_balance_error",
+            "status",
+            "final_angle_rad",
+            "final_time_s",
+            "engagement_time_s",
+            "rebound_speed_rad_s",
+            "impacts",
+            "energy_J",
+        )
+        return {key: summary[key] for key in keys}
+
+    def findings(self) -> list[tuple[str, str, int]]:
+        """Noteworthy outcomes as (code, message, flat case index)."""
+        return list(self.notes)
+
+
+# Nonlinear batches larger than this are solved without recording their time series.
+RECORD_LIMIT = 2000
+
+
+@dataclass(frozen=True)
+class DynamicMethod:
+    """Full deployment dynamics: inertia, stick-slip, lost motion, end stop, roll-off, heat."""
+
+    name: str = "dynamic"
+    label: str = "dynamic (inertia, stiction, end stop)"
+
+    def solve(self, problem: QuasiStaticProblem) -> DynamicSolution:
+        """Solve every case; ``problem`` must be a :class:`DynamicProblem`."""
+        dynamic = _require_dynamic(problem)
+        size = int(np.prod(dynamic.batch_shape))
+        # Closed-form records are small; integrated ones hold every step of every case.
+        record = not dynamic.nonlinear or size <= RECORD_LIMIT
+        return solution_from_result(self.name, dynamic, solve_dynamic(dynamic, record=record))
+
+    def trajectory(self, problem: QuasiStaticProblem, times: ArrayLike) -> Trajectory:
+        """Angle and speed at the given times [s] for every case of the batch."""
+        return self.solve(problem).trajectory(times)
+
+
+def _require_dynamic(problem: QuasiStaticProblem) -> DynamicProblem:
+    if not isinstance(problem, DynamicProblem):
+        raise ValueError(
+            "the dynamic method needs inertia and the other dynamic parameters: pass "
+            "dynamics=DynamicParameters(...) to ecdsim.deployment.predict, or build the "
+            "problem with ecdsim.dynamics.dynamic_problem"
+        )
+    return problem
+
+
+def solution_from_result(
+    name: str, problem: DynamicProblem, result: DynamicResult
+) -> DynamicSolution:
+    """Wrap a :class:`DynamicResult` as the common :class:`DeploymentSolution` fields."""
+    shape = result.batch_shape
+    arrived = result.arrived
+    stalled = result.stuck & ~arrived
+    return DynamicSolution(
+        method=name,
+        deployment_time=result.deployment_time,
+        start_speed=np.broadcast_to(problem.initial_speed, shape).astype(float),
+        end_speed=result.arrival_speed,
+        max_speed=result.max_speed,
+        stalled=np.asarray(stalled),
+        stall_angle=np.where(stalled, result.stuck_angle, np.nan),
+        end_kinetic_energy=result.arrival_kinetic_energy,
+        max_damper_temperature=result.max_damper_temperature,
+        stuck=result.stuck,
+        stuck_angle=result.stuck_angle,
+        stuck_time=result.stuck_time,
+        energy_balance_error=result.energy_balance_error,
+        result=result,
+        problem=problem,
+        notes=tuple(_findings(problem, result)),
+    )
+
+
+def _findings(problem: DynamicProblem, result: DynamicResult) -> list[tuple[str, str, int]]:
+    """Outcomes a user must hear about, as (code, message, flat case index)."""
+    out: list[tuple[str, str, int]] = []
+    status = np.ravel(result.status)
+    final_time = np.ravel(result.final_time)
+    final_angle = np.ravel(result.final_angle)
+    for i in np.flatnonzero(status == STATUSES.index("stop_time")):
+        out.append(
+            (
+                "stop_time",
+                f"the end of travel was not reached by the stop time ({final_time[i]:.4g} s; "
+                f"angle {final_angle[i]:.4g} rad)",
+                int(i),
+            )
+        )
+    for code in ("event_limit", "horizon", "domain"):
+        for i in np.flatnonzero(status == STATUSES.index(code)):
+            out.append(
+                (
+                    code,
+                    f"the dynamic run was cut short ({code.replace('_', ' ')}) at "
+                    f"{final_time[i]:.4g} s; its result is incomplete",
+                    int(i),
+                )
+            )
+    error = np.ravel(result.energy_balance_error)
+    for i in np.flatnonzero(np.abs(error) > 1e-6):
+        out.append(
+            (
+                "energy_balance",
+                f"the energy balance closes only to {error[i]:.2g} (relative); tighten rtol",
+                int(i),
+            )
+        )
+    eddy = problem.eddy
+    if isinstance(eddy, KlossEddy):
+        shape = result.batch_shape
+        n = np.broadcast_to(problem.gear_ratio, shape)
+        ambient = np.broadcast_to(problem.ambient_temperature, shape)
+        peak = eddy.peak_speed(ambient)
+        slope = rolloff.kloss_speed_derivative(0.0, eddy.peak_torque, peak)
+        kloss_becd = np.ravel(n * n * (slope + problem.gearbox_damping_rate))
+        eq1_becd = np.ravel(np.broadcast_to(problem.damping_rate, shape))
+        mismatch = kloss_becd / eq1_becd - 1.0
+        for i in np.flatnonzero(np.abs(mismatch) > 0.01):
+            out.append(
+                (
+                    "rolloff_temperature_law",
+                    f"at low speed the roll-off law gives BECD {kloss_becd[i]:.4g} N*m*s/rad, "
+                    f"{100 * mismatch[i]:+.1f} % from Eq. 1's {eq1_becd[i]:.4g}: with roll-off "
+                    "the damper's temperature law is resistivity_coefficient's, not Eq. 1's",
+                    int(i),
+                )
+            )
+        shaft = np.ravel(result.max_speed * n)
+        beyond = shaft > np.ravel(peak)
+        for i in np.flatnonzero(beyond):
+            out.append(
+                (
+                    "rolloff_beyond_peak",
+                    f"the damper reached {shaft[i]:.4g} rad/s, beyond its peak-torque speed "
+                    f"{float(np.ravel(peak)[i]):.4g} rad/s, where its torque falls with speed",
+                    int(i),
+                )
+            )
+    return out
+
+
+DYNAMIC = DynamicMethod()

@@ -1,0 +1,228 @@
+"""The dynamic deployment problem: the quasi-static problem plus inertia, stiction and more.
+
+:class:`DynamicProblem` *is a* :class:`~ecdsim.solvers.QuasiStaticProblem` (same spring
+breakpoints, total friction and damping rate, so the ``paper`` and ``exact`` methods
+solve its quasi-static limit unchanged) with the extra per-case arrays the ``dynamic``
+method needs. :func:`dynamic_problem` builds it from a system, its ECD state and a
+:class:`~ecdsim.dynamics.params.DynamicParameters`, calling the same model objects and
+physics functions as the quasi-static path.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ecdsim._types import FloatArray
+from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
+from ecdsim.dynamics.params import DynamicParameters
+from ecdsim.model import DeploymentSystem, EcdState
+from ecdsim.physics import mechanics, rolloff
+from ecdsim.solvers.base import QuasiStaticProblem
+
+# Per-case array fields of DynamicProblem (broadcast to the batch shape together).
+_CASE_FIELDS = (
+    "load_inertia",
+    "damper_inertia",
+    "ecd_friction",
+    "system_friction",
+    "static_friction_factor",
+    "restitution",
+    "lost_motion",
+    "initial_angle",
+    "initial_speed",
+    "ambient_temperature",
+    "gear_ratio",
+    "gearbox_damping_rate",
+    "heat_capacity",
+    "thermal_resistance",
+)
+
+
+class DynamicDomainError(ValueError):
+    """A dynamic parameter outside its domain; ``key`` names the config field."""
+
+    def __init__(self, key: str, message: str) -> None:
+        super().__init__(f"{key}: {message}")
+        self.key = key
+        self.message = message
+
+
+@dataclass(frozen=True, kw_only=True)
+class DynamicProblem(QuasiStaticProblem):
+    """The full deployment dynamics at the input (slow) shaft, for a batch of cases.
+
+    Engaged: ``(J_L + J_D) phi'' = T_spring(phi) - sign(phi') (FECD + FS) - M_d``, with
+    ``M_d = N * (T_eddy(N phi', T_d) + BG * N * phi')`` the ECD damping torque (equal to
+    ``BECD_T * phi'`` for the linear law at ambient temperature). During the lost motion
+    the load moves alone: ``J_L phi'' = T_spring(phi) - sign(phi') FS``.
+
+    Attributes (beyond those of QuasiStaticProblem; all broadcast to the batch shape)
+    ----------
+    load_inertia : J_L [kg*m^2]
+    damper_inertia : J_D, damper rotor and gearbox reflected to the input [kg*m^2]
+    ecd_friction : FECD_T (Eq. 4) [N*m]
+    system_friction : FS_T [N*m]
+    static_friction_factor : breakaway over kinetic friction [-]
+    restitution : end-stop coefficient of restitution [-]
+    lost_motion : gear lost motion at the input shaft [rad]
+    initial_angle : deployed angle at release [rad]
+    initial_speed : load speed at release [rad/s]
+    ambient_temperature : the case's temperature T, and the damper's at release [degC]
+    gear_ratio : N [-]
+    gearbox_damping_rate : BG at the high-speed shaft [N*m*s/rad]
+    heat_capacity : damper heat capacity [J/K]; inf when self-heating is not modelled
+    thermal_resistance : damper to ambient [K/W]; inf for adiabatic
+    eddy : the damper's eddy-current law (linear Eq. 1 or roll-off)
+    thermal : True when self-heating is modelled
+    stop_time : end of the simulated interval [s]
+    rtol : relative tolerance of the integrator for nonlinear segments [-]
+    integrator : integrator for nonlinear segments ("RODAS4" batched, or a solve_ivp method)
+    max_events : event limit per run
+    """
+
+    load_inertia: FloatArray
+    damper_inertia: FloatArray
+    ecd_friction: FloatArray
+    system_friction: FloatArray
+    static_friction_factor: FloatArray
+    restitution: FloatArray
+    lost_motion: FloatArray
+    initial_angle: FloatArray
+    initial_speed: FloatArray
+    ambient_temperature: FloatArray
+    gear_ratio: FloatArray
+    gearbox_damping_rate: FloatArray
+    heat_capacity: FloatArray
+    thermal_resistance: FloatArray
+    eddy: EddyLaw
+    thermal: bool = False
+    stop_time: float = math.inf
+    rtol: float = 1e-8
+    integrator: str = "RODAS4"
+    max_events: int = 10_000
+
+    def __post_init__(self) -> None:
+        own = {name: np.asarray(getattr(self, name), dtype=float) for name in _CASE_FIELDS}
+        angles = np.asarray(self.angles, dtype=float)
+        batch = np.broadcast_shapes(
+            angles.shape[1:],
+            np.shape(self.torques)[1:],
+            np.shape(self.friction),
+            np.shape(self.damping_rate),
+            *(value.shape for value in own.values()),
+        )
+        # Widen the quasi-static fields to the joint batch first, then let the base class
+        # align the breakpoint arrays with them.
+        object.__setattr__(
+            self, "friction", np.broadcast_to(np.asarray(self.friction, float), batch)
+        )
+        object.__setattr__(
+            self, "damping_rate", np.broadcast_to(np.asarray(self.damping_rate, float), batch)
+        )
+        super().__post_init__()
+        for name, value in own.items():
+            object.__setattr__(self, name, np.broadcast_to(value, batch))
+
+    @property
+    def nonlinear(self) -> bool:
+        """True when engaged segments need numerical integration."""
+        return self.thermal or self.eddy.name != "linear"
+
+    @property
+    def total_inertia(self) -> FloatArray:
+        """J_L + J_D [kg*m^2]."""
+        return np.asarray(self.load_inertia + self.damper_inertia)
+
+
+def dynamic_problem(
+    system: DeploymentSystem,
+    ecd: EcdState,
+    temperatures: FloatArray,
+    base: QuasiStaticProblem,
+    system_friction: FloatArray,
+    params: DynamicParameters,
+) -> DynamicProblem:
+    """The dynamic problem of ``system`` at ``temperatures`` [degC].
+
+    ``ecd``, ``base`` and ``system_friction`` are the quasi-static quantities that
+    :func:`ecdsim.deployment.build_problem` made for the same temperatures; they are
+    reused, never recomputed. Raises ValueError where a parameter leaves its domain (the
+    message names the field).
+    """
+    damper = system.ecd.damper
+    gearbox = system.ecd.gearbox
+    n = ecd.gear_ratio
+    reflected = mechanics.reflect_inertia_to_input(
+        np.asarray(params.rotor_inertia, float) + np.asarray(params.gearbox_inertia, float), n
+    )
+    eddy: EddyLaw
+    if params.rolloff is None:
+        eddy = LinearEddy(
+            damper.damping_rate,
+            damper.reference_temperature,
+            damper.damping_temperature_coefficient,
+        )
+    else:
+        peak_torque = rolloff.peak_torque_from_damping(
+            damper.damping_rate, params.rolloff.peak_speed
+        )
+        eddy = KlossEddy(
+            peak_torque,
+            params.rolloff.peak_speed,
+            params.rolloff.resistivity_coefficient,
+            damper.reference_temperature,
+        )
+        peak = rolloff.peak_speed_at(
+            temperatures,
+            params.rolloff.peak_speed,
+            params.rolloff.resistivity_coefficient,
+            damper.reference_temperature,
+        )
+        if np.any(peak <= 0.0):
+            raise DynamicDomainError(
+                "damper.rolloff.resistivity_coefficient",
+                "the peak speed omega_peak(T) is <= 0 at an analysis temperature; the "
+                "resistivity law does not reach that far",
+            )
+    travel = np.asarray(base.travel)
+    start = np.asarray(params.initial_angle, dtype=float)
+    if np.any(start < 0.0) or np.any(start >= travel):
+        raise DynamicDomainError(
+            "initial.angle",
+            f"must be >= 0 and below the travel ({float(np.min(travel)):.6g} rad), got "
+            f"{float(np.max(start)):.6g} rad",
+        )
+    thermal = params.thermal
+    return DynamicProblem(
+        angles=base.angles,
+        torques=base.torques,
+        friction=base.friction,
+        damping_rate=base.damping_rate,
+        load_inertia=np.asarray(params.load_inertia, dtype=float),
+        damper_inertia=reflected,
+        ecd_friction=np.asarray(ecd.ecd_friction, dtype=float),
+        system_friction=np.asarray(system_friction, dtype=float),
+        static_friction_factor=np.asarray(params.static_friction_factor, dtype=float),
+        restitution=np.asarray(params.restitution, dtype=float),
+        lost_motion=np.asarray(gearbox.lost_motion, dtype=float),
+        initial_angle=start,
+        initial_speed=np.asarray(params.initial_speed, dtype=float),
+        ambient_temperature=np.asarray(temperatures, dtype=float),
+        gear_ratio=np.asarray(n, dtype=float),
+        gearbox_damping_rate=np.asarray(ecd.gearbox_damping_rate, dtype=float),
+        heat_capacity=np.asarray(
+            math.inf if thermal is None else thermal.heat_capacity, dtype=float
+        ),
+        thermal_resistance=np.asarray(
+            math.inf if thermal is None else thermal.thermal_resistance, dtype=float
+        ),
+        eddy=eddy,
+        thermal=thermal is not None,
+        stop_time=params.stop_time,
+        rtol=params.rtol,
+        integrator=params.integrator,
+        max_events=params.max_events,
+    )

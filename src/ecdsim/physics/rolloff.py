@@ -1,0 +1,134 @@
+"""Eddy-current damping beyond the linear range: the Kloss-form torque-speed curve.
+
+The paper (section 2.1) notes that a high-speed magnetic damper is linear only up to a
+"maximum torque and speed point ... where the linearity will start to roll off", without
+giving the law. ecdsim uses the classical law of a solid-conductor eddy-current brake, the
+same form as Kloss's formula for an induction machine's torque against slip:
+
+    T_d = 2 * T_peak * x / (1 + x**2),      x = omega_d / omega_peak
+
+(Wouterse, J. H., "Critical torque and speed of eddy current brake with widely separated
+soft iron poles", IEE Proc. B 138(4), p. 153, 1991, doi:10.1049/ip-b.1991.0019). The
+torque rises
+linearly at low speed with slope ``2 * T_peak / omega_peak``, peaks at ``T_peak`` when
+``omega_d = omega_peak`` and falls as ``1/omega_d`` beyond.
+
+Temperature: the peak torque is set by the magnetic circuit and does not depend on the
+conductor's resistivity, while the peak speed is proportional to it (Wouterse 1991):
+``omega_peak(T) = omega_peak_ref * (1 + alpha * (T - T_ref))``. The low-speed slope,
+the damper's BD_T, therefore follows ``BD / (1 + alpha * (T - T_ref))``; for copper
+(alpha = 0.0039 / K) this matches the paper's 0.4 % per degC decrease (Eq. 1) to first
+order. ``T_peak`` is fixed by requiring the slope at the reference temperature to be the
+rated BD: ``T_peak = BD * omega_peak_ref / 2`` (:func:`peak_torque_from_damping`).
+
+All speeds and torques here are at the high-speed damper shaft.
+"""
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, FloatArray, as_float
+
+
+def peak_torque_from_damping(damping_rate: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
+    """Peak eddy-current torque whose Kloss curve has slope BD at zero speed.
+
+    ``T_peak = BD * omega_peak / 2``, from ``dT_d/domega_d (0) = 2 * T_peak / omega_peak``.
+
+    Parameters
+    ----------
+    damping_rate : BD, the damper's linear damping rate at the reference temperature
+        [N*m*s/rad]
+    peak_speed : omega_peak at the reference temperature [rad/s]
+
+    >>> round(float(peak_torque_from_damping(1.3e-4, 2000.0)), 12)
+    0.13
+    """
+    return as_float(np.asarray(damping_rate, dtype=float) * np.asarray(peak_speed, float) / 2.0)
+
+
+def peak_speed_at(
+    temperature: ArrayLike,
+    reference_peak_speed: ArrayLike,
+    resistivity_coefficient: ArrayLike,
+    reference_temperature: ArrayLike = 25.0,
+) -> FloatArray:
+    """Speed of peak eddy-current torque at conductor temperature T.
+
+    ``omega_peak(T) = omega_peak_ref * (1 + alpha * (T - T_ref))``: the peak speed is
+    proportional to the conductor's resistivity (Wouterse 1991), linear in temperature.
+
+    Parameters
+    ----------
+    temperature : conductor (damper) temperature T [degC]
+    reference_peak_speed : omega_peak at T_ref [rad/s]
+    resistivity_coefficient : alpha, fractional change of resistivity per kelvin [1/K]
+    reference_temperature : T_ref [degC]
+
+    >>> round(float(peak_speed_at(125.0, 2000.0, 0.0039)), 6)
+    2780.0
+    """
+    dt = np.asarray(temperature, dtype=float) - np.asarray(reference_temperature, dtype=float)
+    factor = 1.0 + np.asarray(resistivity_coefficient, dtype=float) * dt
+    return as_float(np.asarray(reference_peak_speed, dtype=float) * factor)
+
+
+def kloss_torque(speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
+    """Eddy-current torque against speed, Kloss form: ``2 T_peak x / (1 + x**2)``.
+
+    ``x = omega_d / omega_peak``. Odd in the speed: the torque opposes the motion's
+    direction when the sign convention ``damping torque = -T_d`` is used.
+
+    Parameters
+    ----------
+    speed : high-speed shaft speed omega_d [rad/s]
+    peak_torque : T_peak, the largest eddy-current torque [N*m]
+    peak_speed : omega_peak, the speed at which it occurs [rad/s], > 0
+
+    >>> float(kloss_torque(2000.0, 0.13, 2000.0))  # at the peak
+    0.13
+    """
+    x = np.asarray(speed, dtype=float) / np.asarray(peak_speed, dtype=float)
+    return as_float(2.0 * np.asarray(peak_torque, dtype=float) * x / (1.0 + x * x))
+
+
+def kloss_speed_derivative(
+    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
+) -> FloatArray:
+    """``dT_d / domega_d`` of the Kloss torque: ``(2 T_peak / omega_peak)(1 - x**2)/(1 + x**2)**2``.
+
+    The local damping rate of the damper; equal to BD at zero speed, zero at the peak and
+    negative beyond it.
+
+    Parameters
+    ----------
+    speed : high-speed shaft speed omega_d [rad/s]
+    peak_torque : T_peak [N*m]
+    peak_speed : omega_peak [rad/s], > 0
+    """
+    wp = np.asarray(peak_speed, dtype=float)
+    x = np.asarray(speed, dtype=float) / wp
+    x2 = x * x
+    slope = 2.0 * np.asarray(peak_torque, dtype=float) / wp
+    return as_float(slope * (1.0 - x2) / ((1.0 + x2) * (1.0 + x2)))
+
+
+def kloss_peak_speed_derivative(
+    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
+) -> FloatArray:
+    """``dT_d / domega_peak`` of the Kloss torque at fixed speed and peak torque.
+
+    ``-(2 T_peak x / omega_peak)(1 - x**2)/(1 + x**2)**2``; with ``domega_peak/dT =
+    omega_peak_ref * alpha`` it gives the torque's temperature sensitivity.
+
+    Parameters
+    ----------
+    speed : high-speed shaft speed omega_d [rad/s]
+    peak_torque : T_peak [N*m]
+    peak_speed : omega_peak [rad/s], > 0
+    """
+    wp = np.asarray(peak_speed, dtype=float)
+    x = np.asarray(speed, dtype=float) / wp
+    x2 = x * x
+    return as_float(
+        -2.0 * np.asarray(peak_torque, dtype=float) * x / wp * (1.0 - x2) / ((1.0 + x2) ** 2)
+    )
