@@ -1,0 +1,249 @@
+"""``ecdsim size`` and ``ecdsim compare-fluid``: thin shells over :mod:`ecdsim.sizing`.
+
+Only typer and the standard library are imported at start-up; the library is imported
+inside the commands. User errors print ``error: ...`` lines and exit with code 2
+(``ecdsim.cli.app.fail``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
+
+import typer
+
+if TYPE_CHECKING:
+    from ecdsim.config import Config
+
+ConfigArg = Annotated[
+    Path, typer.Argument(help="TOML configuration file (see docs/config.md, docs/sizing.md).")
+]
+JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON on stdout (docs/sizing.md).")]
+PlotOpt = Annotated[
+    Path | None, typer.Option("--plot", help="Write PNG plots into this folder.", metavar="DIR")
+]
+CatalogOpt = Annotated[
+    Path,
+    typer.Option(
+        "--catalog", help="Damper and gearbox catalogue, .toml or .csv (docs/sizing.md).",
+        metavar="FILE",
+    ),
+]  # fmt: skip
+DamperOpt = Annotated[
+    str | None,
+    typer.Option("--damper", help="Damper for the ratio intervals (default: best-ranked)."),
+]
+GearboxOpt = Annotated[
+    str | None,
+    typer.Option("--gearbox", help="Gearbox for the ratio intervals (default: best-ranked)."),
+]
+
+SIZE_EPILOG = (
+    "Example: [bold]ecdsim size examples/sizing.toml --catalog examples/catalogue.toml[/bold]"
+)
+FLUID_EPILOG = "Example: [bold]ecdsim compare-fluid examples/fluid.toml --plot plots[/bold]"
+
+
+def _fail(problems: list[str]) -> NoReturn:
+    from ecdsim.cli.app import fail
+
+    fail(problems)
+
+
+def _config(path: Path, section: str) -> Config:
+    from ecdsim.config import ConfigError, load_config
+
+    try:
+        config = load_config(path)
+    except ConfigError as exc:
+        _fail(str(exc).splitlines())
+    if getattr(config.spec, section) is None:
+        _fail([f"{path}: no [{section}] section; see docs/sizing.md"])
+    return config
+
+
+def _print(tables: list[tuple[str, list[str], list[list[str]]]], notes: list[str]) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    console = Console(soft_wrap=False, width=max(170, Console().width))
+    for title, headers, rows in tables:
+        table = Table(title=escape(title), title_justify="left")
+        for header in headers:
+            table.add_column(escape(header), no_wrap=True)
+        for row in rows:
+            table.add_row(*[escape(cell) for cell in row])
+        console.print(table)
+    for note in notes:
+        console.print(escape(note), style="dim")
+
+
+def _write_plots(plot: Path, make: Any) -> list[Path]:
+    try:
+        return list(make())
+    except OSError as exc:
+        _fail([f"--plot {plot}: cannot write plots ({exc.strerror or exc})"])
+
+
+def size(
+    config: ConfigArg,
+    catalog: CatalogOpt,
+    as_json: JsonOpt = False,
+    plot: PlotOpt = None,
+    damper: DamperOpt = None,
+    gearbox: GearboxOpt = None,
+) -> None:
+    """Rank catalogue dampers and gear ratios against the requirements; exact ratio ranges."""
+    import json
+
+    import numpy as np
+
+    from ecdsim.config import ConfigError
+    from ecdsim.deployment import ModelDomainError
+    from ecdsim.sizing import report
+    from ecdsim.sizing.catalogue import ILLUSTRATIVE, load_catalogue
+    from ecdsim.sizing.ratio import ratio_intervals
+    from ecdsim.sizing.requirements import Requirements
+    from ecdsim.sizing.search import deployment_time_curves, search
+
+    loaded = _config(config, "requirements")
+    assert loaded.spec.requirements is not None
+    try:
+        catalogue = load_catalogue(catalog)
+    except ConfigError as exc:
+        _fail(str(exc).splitlines())
+    requirements = Requirements.from_spec(loaded.spec.requirements)
+    load = loaded.system.load
+    try:
+        result = search(catalogue, load, requirements)
+    except ValueError as exc:
+        _fail([f"{catalog}: {exc}"])
+    valid = [c for c in result.candidates if c.error is None]
+    intervals = None
+    problems = []
+    chosen_damper = damper or (valid[0].candidate.damper.name if valid else None)
+    chosen_gearbox = gearbox or (valid[0].candidate.gearbox.name if valid else None)
+    try:
+        damper_entry = catalogue.damper(chosen_damper) if chosen_damper else None
+    except KeyError as exc:
+        problems.append(f"--damper: {exc.args[0]}")
+    try:
+        gearbox_entry = catalogue.gearbox(chosen_gearbox) if chosen_gearbox else None
+    except KeyError as exc:
+        problems.append(f"--gearbox: {exc.args[0]}")
+    if problems:
+        _fail(problems)
+    if damper_entry is not None and gearbox_entry is not None:
+        try:
+            intervals = ratio_intervals(damper_entry, gearbox_entry, load, requirements)
+        except ModelDomainError as exc:
+            _fail([f"{loaded.source}: {exc}"])
+    notes = []
+    if any(c.candidate.illustrative for c in result.candidates):
+        notes.append(f"* illustrative entries: {ILLUSTRATIVE}; never use them as vendor data")
+    if not requirements.margin.factors_applied:
+        notes.append(
+            "torque margin: no uncertainty factors applied (all 1); take the factors from the "
+            "standard your project applies (docs/sizing.md)"
+        )
+    written: list[Path] = []
+    if plot is not None:
+        from ecdsim.sizing.plots import write_sizing_plots
+
+        top = valid[:5]
+        temps = np.linspace(min(requirements.temperatures), max(requirements.temperatures), 57)
+        times = (
+            deployment_time_curves([c.candidate for c in top], load, temps)
+            if top
+            else np.zeros((0, temps.size))
+        )
+        written = _write_plots(
+            plot,
+            lambda: write_sizing_plots(plot, top, temps, times, requirements, intervals),
+        )
+    if as_json:
+        document = result.to_dict()
+        document["config"] = loaded.source
+        document["ratio_intervals"] = None if intervals is None else intervals.to_dict()
+        typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
+    else:
+        tables = [report.requirements_table(result), report.candidates_table(result)]
+        chosen = [
+            c
+            for c in valid
+            if c.candidate.damper.name == chosen_damper
+            and c.candidate.gearbox.name == chosen_gearbox
+        ]
+        if chosen:
+            tables.append(report.checks_table(chosen[0]))
+        if intervals is not None:
+            tables.append(report.intervals_table(intervals))
+        _print(tables, notes)
+    for c in result.candidates:
+        for warning in c.warnings:
+            typer.echo(f"warning: {c.candidate.label}: {warning}", err=True)
+    for path in written:
+        typer.echo(f"wrote {path}", err=as_json)
+
+
+def compare_fluid(config: ConfigArg, as_json: JsonOpt = False, plot: PlotOpt = None) -> None:
+    """Compare the ECD with a viscous fluid damper matched to it (fluid_damper section)."""
+    import json
+
+    import numpy as np
+
+    from ecdsim.deployment import ModelDomainError
+    from ecdsim.sizing import report
+    from ecdsim.sizing.fluid import compare_fluid as run
+
+    loaded = _config(config, "fluid_damper")
+    spec = loaded.spec.fluid_damper
+    assert spec is not None
+    temps = np.asarray(loaded.temperatures, dtype=float)
+    inertia = getattr(loaded.spec.load, "inertia", None)  # [load] inertia, if the schema has it
+    try:
+        comparison = run(loaded.system, spec, temps, inertia)
+        dense = (
+            run(loaded.system, spec, np.linspace(temps.min(), temps.max(), 57), inertia)
+            if plot is not None and temps.min() < temps.max()
+            else comparison
+        )
+    except (ModelDomainError, ValueError) as exc:
+        _fail([f"{loaded.source}: {exc}"])
+    written: list[Path] = []
+    if plot is not None:
+        from ecdsim.sizing.plots import write_fluid_plots
+
+        written = _write_plots(plot, lambda: write_fluid_plots(plot, dense))
+    warnings = [
+        f"warning: viscosity at {t:g} degC is extrapolated beyond the fitted points"
+        for t, out in zip(comparison.temperatures, comparison.extrapolated, strict=True)
+        if out
+    ]
+    for label, side in (("ECD", comparison.ecd), ("fluid damper", comparison.fluid)):
+        warnings += [
+            f"warning: the {label} stalls at {t:g} degC"
+            for t, stalled in zip(comparison.temperatures, side.stalled, strict=True)
+            if stalled
+        ]
+    if as_json:
+        document = comparison.to_dict()
+        document["config"] = loaded.source
+        typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
+    else:
+        notes = [
+            f"viscosity data: {spec.source}",
+            "the fluid time is the damped phase after the deadband; during the deadband the "
+            "load is undamped (docs/sizing.md)",
+        ]
+        if comparison.fluid.free_time is None:
+            notes.append(
+                "no load inertia given ([fluid_damper] load_inertia or [load] inertia): the "
+                "free time through the deadband is not computed"
+            )
+        _print([report.fluid_table(comparison)], notes)
+    for line in warnings:
+        typer.echo(line, err=True)
+    for path in written:
+        typer.echo(f"wrote {path}", err=as_json)

@@ -1,0 +1,152 @@
+"""Sizing figures: deployment time against temperature, margins against gear ratio, and the
+ECD against a fluid damper. Each function returns a matplotlib Figure and never shows it;
+matplotlib is imported lazily (see :mod:`ecdsim.plotting`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ecdsim._types import FloatArray
+from ecdsim.plotting import save_figure
+from ecdsim.sizing.fluid import FluidComparison
+from ecdsim.sizing.ratio import RatioIntervals
+from ecdsim.sizing.requirements import Requirements
+from ecdsim.sizing.search import CandidateResult
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+
+def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def _window(ax: Axes, requirements: Requirements) -> None:
+    for value, text in (
+        (requirements.min_deployment_time, "min"),
+        (requirements.max_deployment_time, "max"),
+    ):
+        if value is not None:
+            ax.axhline(value, color="0.3", linestyle=":", linewidth=1.0)
+            ax.annotate(
+                f"required {text} {value:g} s",
+                (0.01, value),
+                xycoords=("axes fraction", "data"),
+                fontsize="small",
+                va="bottom",
+            )
+
+
+def plot_candidate_times(
+    results: Sequence[CandidateResult],
+    temperatures: FloatArray,
+    times: FloatArray,
+    requirements: Requirements,
+) -> Figure:
+    """Deployment time against temperature for the given candidates, with the window.
+
+    ``times`` has shape (len(results), len(temperatures)) [s]; +inf (stall) is not drawn.
+    Illustrative (invented) catalogue entries are labelled so in the legend.
+    """
+    fig = _figure()
+    ax = fig.add_subplot()
+    for result, row in zip(results, np.atleast_2d(times), strict=True):
+        shown = np.where(np.isfinite(row), row, np.nan)
+        tag = " (illustrative, not vendor data)" if result.candidate.illustrative else ""
+        ax.plot(
+            temperatures, shown, marker=".", label=f"#{result.rank} {result.candidate.label}{tag}"
+        )
+    _window(ax, requirements)
+    ax.set_xlabel("temperature [degC]")
+    ax.set_ylabel("exact deployment time [s]")
+    ax.set_title("Deployment time over temperature, best-ranked candidates")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="x-small")
+    return fig
+
+
+def plot_ratio_margins(intervals: RatioIntervals) -> Figure:
+    """Each requirement's margin (worst over temperature) against gear ratio N.
+
+    Feasible intervals are shaded; their ends are exact roots (docs/sizing.md); the
+    gearbox's catalogued ratios are marked.
+    """
+    fig = _figure()
+    ax = fig.add_subplot()
+    for name, margins in intervals.grid_margins.items():
+        ax.plot(intervals.grid, np.clip(margins, -1.5, 1.5), label=name)
+    for interval in intervals.intervals:
+        ax.axvspan(interval.low, interval.high, color="tab:green", alpha=0.15)
+    for ratio, feasible in intervals.catalogue_ratios:
+        ax.axvline(ratio, color="tab:green" if feasible else "tab:red", linestyle="--")
+    ax.axhline(0.0, color="0.2", linewidth=0.8)
+    ax.set_xscale("log")
+    ax.set_xlabel("gear ratio N [-]")
+    ax.set_ylabel("margin (clipped to +-1.5) [-]")
+    ax.set_title(f"{intervals.damper} + {intervals.gearbox}: margins against ratio")
+    ax.grid(True, alpha=0.3, which="both")
+    ax.legend(fontsize="x-small")
+    return fig
+
+
+def plot_fluid_comparison(comparison: FluidComparison) -> Figure:
+    """Deployment time of the ECD and the matched fluid damper against temperature.
+
+    The fluid curve is the damped phase after its deadband (plus the free time through
+    the deadband when a load inertia is given); the lower panel shows both dampings.
+    """
+    fig = _figure(7.5, 6.4)
+    top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
+    t = comparison.temperatures
+    for label, side in (("ECD", comparison.ecd), (comparison.name, comparison.fluid)):
+        times = side.total_time if side.total_time is not None else side.damped_time
+        top.plot(t, np.where(np.isfinite(times), times, np.nan), marker=".", label=label)
+    top.axvline(comparison.match_temperature, color="0.4", linestyle=":")
+    top.set_ylabel("deployment time [s]")
+    top.set_title("ECD against a fluid damper matched at "
+                  f"{comparison.match_temperature:g} degC")  # fmt: skip
+    top.grid(True, alpha=0.3)
+    top.legend(fontsize="small")
+    bottom.plot(t, comparison.ecd_damping_rate, label="ECD: BECD_T [N*m*s/rad]")
+    bottom.plot(t, comparison.fluid_coefficient, label=f"fluid: c(T) (n = {comparison.exponent:g})")
+    bottom.set_yscale("log")
+    bottom.set_xlabel("temperature [degC]")
+    bottom.set_ylabel("damping")
+    bottom.grid(True, alpha=0.3, which="both")
+    bottom.legend(fontsize="small")
+    return fig
+
+
+def write_sizing_plots(
+    folder: str | Path,
+    results: Sequence[CandidateResult],
+    temperatures: FloatArray,
+    times: FloatArray,
+    requirements: Requirements,
+    intervals: RatioIntervals | None,
+) -> list[Path]:
+    """Write the sizing plots as PNG files into ``folder``; returns the paths."""
+    out = Path(folder)
+    written = [
+        save_figure(
+            plot_candidate_times(results, temperatures, times, requirements),
+            out / "sizing_time_vs_temperature.png",
+        )
+    ]
+    if intervals is not None:
+        written.append(save_figure(plot_ratio_margins(intervals), out / "ratio_margins.png"))
+    return written
+
+
+def write_fluid_plots(folder: str | Path, comparison: FluidComparison) -> list[Path]:
+    """Write the ECD-against-fluid plot as PNG into ``folder``; returns the paths."""
+    out = Path(folder)
+    return [save_figure(plot_fluid_comparison(comparison), out / "ecd_vs_fluid.png")]

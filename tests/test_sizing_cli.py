@@ -1,0 +1,145 @@
+"""``ecdsim size`` and ``ecdsim compare-fluid``: JSON structure, tables, plots, and exit
+code 2 with one-line errors for user mistakes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from ecdsim import __version__
+from ecdsim.cli.app import app
+from tests import hand
+from tests.conftest import PAPER_CONFIG, ROOT
+
+runner = CliRunner()
+SIZING = ROOT / "examples" / "sizing.toml"
+CATALOGUE = ROOT / "examples" / "catalogue.toml"
+FLUID = ROOT / "examples" / "fluid.toml"
+CC16 = ["--damper", "CDA Cc-16 damper", "--gearbox", "CDA Cc-16 gearbox"]
+
+
+def test_size_json_structure() -> None:
+    result = runner.invoke(app, ["size", str(SIZING), "--catalog", str(CATALOGUE), "--json", *CC16])
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert document["ecdsim_version"] == __version__
+    assert document["config"] == str(SIZING)
+    assert document["catalogue"] == str(CATALOGUE)
+    assert document["temperatures_C"] == [-40.0, 25.0, 100.0]
+    assert document["requirements"]["max_deployment_time_s"] == 60.0
+    assert document["requirements"]["torque_margin"]["factors_applied"] is False
+    candidates = document["candidates"]
+    assert [c["rank"] for c in candidates] == list(range(1, len(candidates) + 1))
+    (cc16,) = [c for c in candidates if c["gearbox"] == "CDA Cc-16 gearbox" and
+               c["damper"] == "CDA Cc-16 damper"]  # fmt: skip
+    times = [case["deployment_time_s"] for case in cc16["cases"]]
+    assert times == pytest.approx([hand.exact_time(t) for t in (-40.0, 25.0, 100.0)], rel=1e-12)
+    assert cc16["passed"] is True
+    for check in cc16["checks"].values():
+        assert set(check) == {"name", "label", "margin", "passed", "temperature_C", "value", "unit"}
+    intervals = document["ratio_intervals"]
+    assert intervals["damper"] == "CDA Cc-16 damper"
+    (interval,) = intervals["intervals"]
+    assert interval["low"] < 380.0 < interval["high"]
+    assert intervals["catalogue_ratios"] == [{"ratio": 380.0, "feasible": True}]
+
+
+def test_size_tables_and_plots(tmp_path: Path) -> None:
+    out = tmp_path / "plots"
+    result = runner.invoke(
+        app, ["size", str(SIZING), "--catalog", str(CATALOGUE), "--plot", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "Candidates, ranked" in result.stdout
+    assert "Gear ratios N meeting the requirements" in result.stdout
+    assert "illustrative, not vendor data" in result.stdout
+    assert "no uncertainty factors applied" in result.stdout
+    assert f"{hand.exact_time(-40.0):.4g}" in result.stdout  # Cc-16 at -40 degC: 48.13 s
+    for name in ("sizing_time_vs_temperature.png", "ratio_margins.png"):
+        assert (out / name).read_bytes().startswith(b"\x89PNG")
+
+
+def test_compare_fluid_json_and_plot(tmp_path: Path) -> None:
+    out = tmp_path / "plots"
+    result = runner.invoke(app, ["compare-fluid", str(FLUID), "--json", "--plot", str(out)])
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert document["config"] == str(FLUID)
+    assert document["fluid_damper"]["matched_coefficient"] == pytest.approx(
+        hand.becd(25.0), rel=1e-12
+    )
+    temps = [c["temperature_C"] for c in document["cases"]]
+    assert temps == [-40.0, 0.0, 25.0, 60.0, 100.0]
+    case = document["cases"][0]
+    assert set(case["ecd"]) == set(case["fluid"]) == {
+        "deadband_rad", "damped_time_s", "free_time_s", "engage_speed_rad_s",
+        "total_time_s", "end_speed_rad_s", "stalled",
+    }  # fmt: skip
+    assert case["ecd"]["damped_time_s"] == pytest.approx(hand.exact_time(-40.0), rel=1e-12)
+    assert (out / "ecd_vs_fluid.png").read_bytes().startswith(b"\x89PNG")
+    assert "wrote" in result.stderr
+
+
+def test_compare_fluid_table() -> None:
+    result = runner.invoke(app, ["compare-fluid", str(FLUID)])
+    assert result.exit_code == 0, result.output
+    assert "ECD against" in result.stdout
+    assert "viscosity data: illustrative, not vendor data" in result.stdout
+
+
+def user_error(args: list[str]) -> str:
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "Traceback" not in result.output
+    assert result.stdout == ""
+    return result.stderr
+
+
+def test_size_user_errors_exit_2(tmp_path: Path) -> None:
+    no_section = user_error(["size", str(PAPER_CONFIG), "--catalog", str(CATALOGUE)])
+    assert f"error: {PAPER_CONFIG}: no [requirements] section" in no_section
+    bad = tmp_path / "bad.toml"
+    bad.write_text(CATALOGUE.read_text().replace('"5e-4 N*m"', '"5e-4 N"', 1))
+    message = user_error(["size", str(SIZING), "--catalog", str(bad)])
+    assert f"error: {bad}: damper #2 'Demo damper S': coulomb_friction:" in message
+    missing = user_error(["size", str(SIZING), "--catalog", str(tmp_path / "none.csv")])
+    assert "catalogue file not found" in missing
+    unknown = user_error(
+        ["size", str(SIZING), "--catalog", str(CATALOGUE), "--damper", "Nope", "--gearbox", "X"]
+    )
+    assert "error: --damper: no damper 'Nope'" in unknown
+    assert "error: --gearbox: no gearbox 'X'" in unknown
+    config = tmp_path / "req.toml"
+    config.write_text(
+        SIZING.read_text().replace('max_end_speed = "0.1 rad/s"', "max_end_speed = 3")
+    )
+    units = user_error(["size", str(config), "--catalog", str(CATALOGUE)])
+    assert "requirements.max_end_speed: 3 has no unit" in units
+
+
+def test_compare_fluid_user_errors_exit_2(tmp_path: Path) -> None:
+    no_section = user_error(["compare-fluid", str(PAPER_CONFIG)])
+    assert "no [fluid_damper] section" in no_section
+    wide = tmp_path / "wide.toml"
+    wide.write_text(FLUID.read_text().replace('deadband = "15 deg"', 'deadband = "100 deg"'))
+    assert "not shorter than the travel" in user_error(["compare-fluid", str(wide)])
+    hot = tmp_path / "hot.toml"
+    hot.write_text(FLUID.read_text().replace('"100 degC"]', '"400 degC"]'))
+    assert "damping_temperature_coefficient" in user_error(["compare-fluid", str(hot)])
+
+
+def test_plot_to_unwritable_place_exits_2(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    message = user_error(["compare-fluid", str(FLUID), "--plot", str(blocker)])
+    assert "cannot write plots" in message
+
+
+@pytest.mark.parametrize("command", ["size", "compare-fluid"])
+def test_help_has_an_example(command: str) -> None:
+    result = runner.invoke(app, [command, "--help"])
+    assert result.exit_code == 0
+    assert "Example:" in result.stdout
