@@ -1,0 +1,154 @@
+"""Plots of a Monte Carlo study: histograms, CDF and tornado. Figures are returned, never shown.
+
+matplotlib is imported lazily; files are written atomically by
+:func:`ecdsim.plotting.save_figure`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ecdsim._types import FloatArray
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ecdsim.montecarlo.run import Plan
+
+CDF_POINTS = 2001
+
+
+def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height), layout="constrained")
+
+
+def _colors(n: int) -> list[tuple[float, float, float, float]]:
+    from matplotlib import colormaps
+
+    cmap = colormaps["turbo"]  # cold blue to hot red, every line readable on white
+    return [cmap(x) for x in np.linspace(0.1, 0.9, n)] if n > 1 else [cmap(0.1)]
+
+
+def plot_histogram(
+    samples: Mapping[float, FloatArray], quantity: str, title: str, bins: int = 60
+) -> Figure:
+    """Histogram of a quantity's finite samples at each temperature [degC].
+
+    The legend gives each temperature's share of non-finite (stalled) samples, which a
+    histogram cannot show.
+    """
+    fig = _figure()
+    ax = fig.add_subplot()
+    finite_all = [x[np.isfinite(x)] for x in samples.values()]
+    joined = np.concatenate(finite_all) if finite_all else np.zeros(0)
+    if joined.size:
+        low, high = float(joined.min()), float(joined.max())
+        edges = np.linspace(low, high if high > low else low + 1.0, bins + 1)
+        for color, (temperature, x), finite in zip(
+            _colors(len(samples)), samples.items(), finite_all, strict=True
+        ):
+            stalled = 1.0 - finite.size / x.size if x.size else 0.0
+            label = f"{temperature:g} degC" + (f" ({100 * stalled:.2g} % stall)" if stalled else "")
+            ax.hist(
+                finite, bins=edges.tolist(), histtype="step", color=color, label=label, density=True
+            )
+    ax.set_xlabel(quantity)
+    ax.set_ylabel("probability density [1/unit]")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    if samples:
+        ax.legend(fontsize="small")
+    return fig
+
+
+def plot_cdf(samples: Mapping[float, FloatArray], quantity: str, title: str) -> Figure:
+    """Empirical CDF at each temperature; stalled samples keep it below 1 (they never arrive)."""
+    fig = _figure()
+    ax = fig.add_subplot()
+    for color, (temperature, x) in zip(_colors(len(samples)), samples.items(), strict=True):
+        n = x.size
+        if n == 0:
+            continue
+        ranks = np.unique(np.linspace(0, n - 1, min(n, CDF_POINTS)).astype(np.int64))
+        ordered = np.partition(x, ranks)[ranks]
+        levels = (ranks + 1) / n
+        keep = np.isfinite(ordered)
+        ax.step(
+            ordered[keep], levels[keep], where="post", color=color, label=f"{temperature:g} degC"
+        )
+    for p in (0.01, 0.5, 0.99):
+        ax.axhline(p, color="grey", linewidth=0.6, linestyle=":")
+    ax.set_xlabel(quantity)
+    ax.set_ylabel("cumulative probability [-]")
+    ax.set_ylim(0.0, 1.0)
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    if samples:
+        ax.legend(fontsize="small")
+    return fig
+
+
+def plot_tornado(summary: Mapping[str, Any]) -> Figure:
+    """Standardised regression coefficients of the deployment time, per input and temperature."""
+    cases = summary["cases"]
+    keys = [t["key"] for t in summary["tolerances"]]
+    table = np.zeros((len(cases), len(keys)))
+    for i, case in enumerate(cases):
+        for row in case["sensitivity"]["inputs"]:
+            table[i, keys.index(row["key"])] = row["src"] if row["src"] is not None else 0.0
+    order = np.argsort(np.max(np.abs(table), axis=0)) if keys else np.zeros(0, dtype=int)
+    fig = _figure(7.5, max(3.0, 0.45 * len(keys) * max(1, len(cases)) ** 0.5 + 1.5))
+    ax = fig.add_subplot()
+    height = 0.8 / max(1, len(cases))
+    positions = np.arange(len(keys))
+    for i, (color, case) in enumerate(zip(_colors(len(cases)), cases, strict=True)):
+        r2 = case["sensitivity"]["r_squared"]
+        label = f"{case['temperature_C']:g} degC" + (f" (R^2 = {r2:.3f})" if r2 is not None else "")
+        ax.barh(
+            positions + (i - (len(cases) - 1) / 2) * height,
+            table[i, order],
+            height=height,
+            color=color,
+            label=label,
+        )
+    ax.set_yticks(positions, [keys[j] for j in order])
+    ax.axvline(0.0, color="black", linewidth=0.8)
+    ax.set_xlabel("standardised regression coefficient of deployment time [-]")
+    ax.set_title(f"{summary['system']}: sensitivity ({summary['method']} method)")
+    ax.grid(True, axis="x", alpha=0.3)
+    if cases:
+        ax.legend(fontsize="small")
+    return fig
+
+
+def write_plots(plan: Plan, out: Path, summary: Mapping[str, Any]) -> list[Path]:
+    """Write the study's plots as PNG files into ``out/plots``."""
+    from ecdsim.montecarlo.run import output_column
+    from ecdsim.montecarlo.store import ChunkReader
+    from ecdsim.plotting import save_figure
+
+    reader = ChunkReader(out, plan.chunks)
+    times = {t: reader.floats(output_column("deployment_time_s", t)) for t in plan.temperatures}
+    speeds = {}
+    for t in plan.temperatures:
+        stalled = np.asarray(reader.column(output_column("stalled", t)), dtype=bool)
+        speeds[t] = reader.floats(output_column("end_speed_rad_s", t))[~stalled]
+    name = f"{plan.system.name}: {plan.samples:,} samples, {plan.method} method"
+    folder = out / "plots"
+    return [
+        save_figure(
+            plot_histogram(times, "deployment time [s]", name), folder / "time_histogram.png"
+        ),
+        save_figure(plot_cdf(times, "deployment time [s]", name), folder / "time_cdf.png"),
+        save_figure(
+            plot_histogram(speeds, "end (latch) speed [rad/s]", name),
+            folder / "end_speed_histogram.png",
+        ),
+        save_figure(plot_tornado(summary), folder / "tornado.png"),
+    ]

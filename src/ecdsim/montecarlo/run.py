@@ -1,0 +1,706 @@
+"""Run a Monte Carlo study: chunks evaluated by the vectorised model, streamed to Parquet.
+
+A :class:`Plan` fixes everything that determines the numbers (the configuration and its
+hash, method, temperatures, sample count, chunk size, seed, sampling). Chunk k is
+evaluated by :func:`evaluate_chunk`, a pure function of (plan, k): uniform scores from
+:mod:`ecdsim.montecarlo.sampling`, values from the tolerances, one DeploymentSystem whose
+toleranced fields are arrays, and one call of :func:`ecdsim.deployment.predict` at every
+temperature at once. :func:`run` hands the chunks to an executor (in this process, or a
+dask.distributed cluster), writes each finished chunk atomically as its own Parquet file,
+and skips, on ``resume``, the chunks already on disk and valid. Because a chunk depends on
+nothing but (plan, k), the results are the same for any number of workers and after any
+number of interruptions.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime
+import logging
+import os
+import time
+from collections import Counter
+from collections.abc import Callable, Generator, Iterator, Sequence
+from dataclasses import dataclass, field
+from itertools import islice
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
+
+from ecdsim._version import __version__
+from ecdsim.montecarlo import apply, sampling, store
+from ecdsim.montecarlo.tolerances import ToleranceSet, resolve
+
+if TYPE_CHECKING:
+    from ecdsim.config import Config
+    from ecdsim.deployment import Prediction
+    from ecdsim.dynamics.params import DynamicParameters
+    from ecdsim.model import DeploymentSystem
+    from ecdsim.sizing.margin import MarginSettings
+
+# From this many samples, on a machine with at least LARGE_RUN_CPUS CPUs, a run with
+# neither --workers nor --scheduler uses an embedded LocalCluster with one worker per CPU
+# (docs/montecarlo.md). Below four CPUs the client and scheduler take too large a share:
+# on 2 CPUs, 2 workers ran 10 million samples at 0.75x to 1.04x the in-process speed.
+LARGE_RUN_SAMPLES = 2_000_000
+LARGE_RUN_CPUS = 4
+
+OUTPUTS = {
+    "deployment_time_s": "deployment_time",
+    "end_speed_rad_s": "end_speed",
+    "stalled": "stalled",
+}
+# With [requirements] in the config: the minimum torque margin over the travel
+# (ecdsim.sizing.margin, docs/sizing.md section 5), per sample and temperature.
+MARGIN = "min_torque_margin"
+
+
+def output_column(output: str, temperature: float) -> str:
+    """Column name of an output at a temperature [degC], e.g. ``deployment_time_s@-40.0C``."""
+    return f"{output}@{float(temperature)!r}C"
+
+
+class RunError(Exception):
+    """A study that cannot run as asked (user error); ``problems`` holds one line each."""
+
+    def __init__(self, problems: list[str]) -> None:
+        super().__init__("\n".join(problems))
+        self.problems = problems
+
+
+class RunInterrupted(Exception):
+    """The run was stopped (Ctrl-C); every finished chunk is on disk and resumable.
+
+    Attributes
+    ----------
+    out : the study's folder
+    chunks_done : chunks on disk
+    chunks_total : chunks in the study
+    """
+
+    def __init__(self, out: Path, chunks_done: int, chunks_total: int) -> None:
+        super().__init__(f"interrupted with {chunks_done} of {chunks_total} chunks on disk")
+        self.out = out
+        self.chunks_done = chunks_done
+        self.chunks_total = chunks_total
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Everything that determines a study's numbers.
+
+    Attributes
+    ----------
+    system : the nominal deployment system (from the config)
+    tolerances : the resolved tolerances and their correlation
+    temperatures : analysis temperatures [degC]
+    method : solver name (a key of ecdsim.solvers.SOLVERS)
+    samples : N, number of samples (parameter sets), each solved at every temperature
+    chunk_size : samples per chunk (the last chunk may hold fewer)
+    seed : the study's seed (>= 0)
+    sampling : "random", "lhs" or "sobol"
+    config_sha256 : hash of the configuration file's text
+    config_source : where the configuration came from
+    repeat_runs : runs of the repeatability study (the paper: 500)
+    repeat_within : the spread they are compared with [s] (the paper: 0.5 s)
+    dynamics : the dynamic parameters ([load] inertia ...), None if the config has none
+    margin : how to compute the torque margin ([requirements.torque_margin]); None if the
+        config has no [requirements] (no margin is computed then)
+    required_margin : the smallest allowed torque margin [-] ([requirements]), if given
+    """
+
+    system: DeploymentSystem
+    tolerances: ToleranceSet
+    temperatures: tuple[float, ...]
+    method: str
+    samples: int
+    chunk_size: int
+    seed: int
+    sampling: str
+    config_sha256: str
+    config_source: str
+    repeat_runs: int = 500
+    repeat_within: float = 0.5
+    dynamics: DynamicParameters | None = None
+    margin: MarginSettings | None = None
+    required_margin: float | None = None
+
+    @property
+    def outputs(self) -> tuple[str, ...]:
+        """The per-temperature outputs of each sample (column prefixes)."""
+        return (*OUTPUTS, MARGIN) if self.margin is not None else tuple(OUTPUTS)
+
+    @property
+    def parameters(self) -> apply.Parameters:
+        """The nominal model parameters."""
+        return apply.Parameters(self.system, self.dynamics)
+
+    def predict_options(self) -> dict[str, Any]:
+        """Keyword arguments of ecdsim.deployment.predict besides system and temperatures."""
+        options: dict[str, Any] = {"methods": (self.method,)}
+        if self.dynamics is not None:
+            options["dynamics"] = self.dynamics
+        return options
+
+    @property
+    def chunks(self) -> int:
+        """Number of chunks."""
+        return -(-self.samples // self.chunk_size)
+
+    def bounds(self, index: int) -> tuple[int, int]:
+        """First sample of chunk ``index`` and one past its last."""
+        start = index * self.chunk_size
+        return start, min(start + self.chunk_size, self.samples)
+
+    @property
+    def output_columns(self) -> tuple[str, ...]:
+        """The result columns, every output at every temperature."""
+        return tuple(output_column(o, t) for t in self.temperatures for o in self.outputs)
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """Every column of a chunk file, in order."""
+        return ("sample", *self.tolerances.keys, *self.output_columns)
+
+    def identity(self) -> dict[str, Any]:
+        """What must match for a resumed run to continue this one."""
+        return {
+            "ecdsim_version": __version__,
+            "config_sha256": self.config_sha256,
+            "method": self.method,
+            "temperatures_C": list(self.temperatures),
+            "samples": self.samples,
+            "chunk_size": self.chunk_size,
+            "seed": self.seed,
+            "sampling": self.sampling,
+        }
+
+    @property
+    def identity_sha256(self) -> str:
+        """Hash of the identity (stamped into every chunk file)."""
+        return store.identity_hash(self.identity())
+
+
+def build_plan(
+    config: Config,
+    samples: int,
+    method: str = "exact",
+    *,
+    seed: int | None = None,
+    sampling_method: str | None = None,
+    chunk_size: int | None = None,
+    temperatures: Sequence[float] | None = None,
+    out: Path | None = None,
+    resume: bool = False,
+) -> Plan:
+    """A plan from a configuration; arguments given here override its ``[tolerances]``.
+
+    Without a seed (here or in the config) a resumed run takes the manifest's seed and a
+    new run draws a fresh one (recorded in the manifest and the summary).
+    Raises :class:`ecdsim.config.ConfigError` or :class:`RunError` on bad input.
+    """
+    from ecdsim.config.tolerance_schema import DEFAULT_CHUNK_SIZE, SAMPLING_METHODS
+    from ecdsim.solvers import SOLVERS
+
+    tolerances = resolve(config)
+    spec = config.spec.tolerances
+    assert spec is not None  # resolve() guarantees it
+    problems = []
+    if samples < 1:
+        problems.append(f"--samples: {samples} must be >= 1")
+    if method not in SOLVERS:
+        problems.append(f"--method: {method!r} is not a method; expected one of {sorted(SOLVERS)}")
+    chosen_sampling = sampling_method or spec.sampling
+    if chosen_sampling not in SAMPLING_METHODS:
+        problems.append(
+            f"--sampling: {chosen_sampling!r} is not a sampling; expected one of "
+            f"{list(SAMPLING_METHODS)}"
+        )
+    size = chunk_size if chunk_size is not None else spec.chunk_size or DEFAULT_CHUNK_SIZE
+    if size < 1:
+        problems.append(f"--chunk-size: {size} must be >= 1")
+    elif chosen_sampling == "sobol" and size & (size - 1):
+        problems.append(f"--chunk-size: {size}: sobol sampling needs a power of two, e.g. 65536")
+    temps = tuple(float(t) for t in (temperatures or config.temperatures))
+    if len(set(temps)) != len(temps):
+        problems.append(f"temperatures repeat: {list(temps)} degC")
+    if seed is not None and seed < 0:
+        problems.append(f"--seed: {seed} must be >= 0")
+    if problems:
+        raise RunError(problems)
+    chosen_seed = seed if seed is not None else spec.seed
+    if chosen_seed is None and resume and out is not None:
+        manifest = _manifest_or_error(out)
+        if manifest is not None:
+            chosen_seed = int(manifest["identity"]["seed"])
+    if chosen_seed is None:
+        chosen_seed = sampling.new_seed()
+    return Plan(
+        system=config.system,
+        tolerances=tolerances,
+        temperatures=temps,
+        method=method,
+        samples=samples,
+        chunk_size=size,
+        seed=chosen_seed,
+        sampling=chosen_sampling,
+        config_sha256=config.sha256,
+        config_source=config.source,
+        repeat_runs=spec.repeatability.runs,
+        repeat_within=spec.repeatability.within,
+        dynamics=config.spec.dynamics(),
+        **_margin_settings(config),
+    )
+
+
+def _margin_settings(config: Config) -> dict[str, Any]:
+    """The torque-margin settings of the config's [requirements], if it has that section."""
+    requirements = config.spec.requirements
+    if requirements is None:
+        return {}
+    from ecdsim.sizing.requirements import Requirements
+
+    resolved = Requirements.from_spec(requirements)
+    return {"margin": resolved.margin, "required_margin": resolved.min_torque_margin}
+
+
+@dataclass(frozen=True)
+class ChunkResult:
+    """One evaluated chunk.
+
+    Attributes
+    ----------
+    index : chunk number
+    columns : the chunk file's columns (inputs in SI, outputs per temperature)
+    warnings : the model's warnings in this chunk: code, temperature, method, count, example
+    version : ecdsim version of the process that computed it
+    written : True if the worker already wrote the chunk file (columns then empty)
+    """
+
+    index: int
+    columns: dict[str, np.ndarray[Any, Any]]
+    warnings: list[dict[str, Any]]
+    version: str
+    written: bool = False
+
+
+def chunk_values(plan: Plan, index: int) -> np.ndarray[Any, np.dtype[np.float64]]:
+    """The toleranced quantities' values for chunk ``index``: shape (count, d) [SI]."""
+    start, stop = plan.bounds(index)
+    scores = sampling.uniforms(
+        plan.sampling, plan.seed, plan.tolerances.dimension, plan.chunk_size, index, stop - start
+    )
+    return plan.tolerances.values(scores)
+
+
+def outputs_of(plan: Plan, prediction: Prediction) -> dict[str, np.ndarray[Any, Any]]:
+    """Each per-temperature output of a prediction, broadcast to its batch shape.
+
+    Deployment time [s] (+inf where stalled), end speed [rad/s], the stall flag and, with
+    margin settings, the minimum torque margin over the travel [-].
+    """
+    solution = prediction.solutions[plan.method]
+    shape = prediction.problem.batch_shape
+    found = {
+        output: np.broadcast_to(getattr(solution, attribute), shape)
+        for output, attribute in OUTPUTS.items()
+    }
+    if plan.margin is not None:
+        from ecdsim.sizing.margin import margin_over_travel
+
+        problem = prediction.problem
+        lowest, _ = margin_over_travel(
+            problem.angles,
+            problem.torques,
+            problem.friction,
+            problem.damping_rate,
+            solution.stalled,
+            solution.stall_angle,
+            plan.margin,
+        ).minimum()
+        found[MARGIN] = np.broadcast_to(lowest, shape)
+    return found
+
+
+def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
+    """Sample chunk ``index`` and solve it at every temperature: a pure function of both."""
+    from ecdsim.deployment import predict
+
+    start, stop = plan.bounds(index)
+    values = chunk_values(plan, index)
+    keys = plan.tolerances.keys
+    varied = apply.apply(plan.parameters, {key: values[:, j] for j, key in enumerate(keys)})
+    temperatures = np.asarray(plan.temperatures, dtype=float)[:, np.newaxis]
+    options = plan.predict_options()
+    if varied.dynamics is not None:
+        options["dynamics"] = varied.dynamics
+    prediction = predict(varied.system, temperatures, **options)
+    shape = (len(plan.temperatures), stop - start)
+    columns: dict[str, np.ndarray[Any, Any]] = {"sample": np.arange(start, stop, dtype=np.int64)}
+    for j, key in enumerate(keys):
+        columns[key] = np.ascontiguousarray(values[:, j])
+    for output, array in outputs_of(plan, prediction).items():
+        full = np.broadcast_to(array, shape)
+        for i, temperature in enumerate(plan.temperatures):
+            columns[output_column(output, temperature)] = np.array(full[i])
+    counts: Counter[tuple[str, float | None, str | None]] = Counter()
+    examples: dict[tuple[str, float | None, str | None], str] = {}
+    for warning in prediction.warnings:
+        if warning.code == "stall":
+            continue  # counted exactly, per sample, from the stalled columns
+        where = (warning.code, warning.temperature_C, warning.method)
+        counts[where] += 1
+        examples.setdefault(where, warning.message)
+    warnings = [
+        {"code": c, "temperature_C": t, "method": m, "count": n, "example": examples[(c, t, m)]}
+        for (c, t, m), n in sorted(counts.items(), key=lambda item: repr(item[0]))
+    ]
+    ordered = {name: columns[name] for name in plan.columns}
+    return ChunkResult(index, ordered, warnings, __version__)
+
+
+def write_result(plan: Plan, out: Path, result: ChunkResult) -> Path:
+    """Write an evaluated chunk as its Parquet file, atomically, stamped with the plan."""
+    return store.write_chunk(
+        out, result.index, result.columns, plan.identity_sha256, {"warnings": result.warnings}
+    )
+
+
+def evaluate_and_write(plan: Plan, index: int, out: Path) -> ChunkResult:
+    """Evaluate chunk ``index`` and write its file here; return the result without columns.
+
+    The task a LocalCluster worker runs: the file system is the client's, so the worker
+    writes the file itself and only the small remainder travels back.
+    """
+    result = evaluate_chunk(plan, index)
+    write_result(plan, out, result)
+    return ChunkResult(index, {}, result.warnings, result.version, written=True)
+
+
+class Executor(Protocol):
+    """Evaluates chunks somewhere and yields them as they finish (in any order)."""
+
+    def results(
+        self, plan: Plan, indices: Sequence[int], out: Path
+    ) -> Generator[ChunkResult, None, None]:
+        """Evaluate the given chunks; yield each result once (written to ``out`` or not)."""
+        ...
+
+    def describe(self) -> str:
+        """One line for the console."""
+        ...
+
+
+@dataclass(frozen=True)
+class InProcess:
+    """Evaluate the chunks one after another in this process (vectorised within a chunk)."""
+
+    def results(
+        self, plan: Plan, indices: Sequence[int], out: Path
+    ) -> Generator[ChunkResult, None, None]:
+        """Evaluate each chunk in turn (:func:`run` writes them)."""
+        for index in indices:
+            yield evaluate_chunk(plan, index)
+
+    def describe(self) -> str:
+        """One line for the console."""
+        return "in process"
+
+
+@dataclass(frozen=True)
+class DaskExecutor:
+    """Evaluate chunks on dask.distributed: an embedded LocalCluster or a running scheduler.
+
+    The workers only compute; this process receives each finished chunk and writes it,
+    so a remote cluster needs no shared file system (only ecdsim, same version, installed
+    on its workers). At most ``window`` chunks are in flight, which bounds memory and
+    lets Ctrl-C stop the run quickly.
+
+    Attributes
+    ----------
+    workers : LocalCluster worker count (ignored with an address)
+    address : a running scheduler's address, e.g. "tcp://10.0.0.5:8786"; None for local
+    processes : LocalCluster workers as processes (True) or threads of this process
+    window : chunks in flight; default twice the worker count, at least 4
+    connect_timeout : how long to try to reach a scheduler, e.g. "20s"
+    """
+
+    workers: int = 1
+    address: str | None = None
+    processes: bool = True
+    window: int | None = None
+    connect_timeout: str = "20s"
+
+    def describe(self) -> str:
+        """One line for the console."""
+        if self.address:
+            return f"dask scheduler {self.address}"
+        kind = "processes" if self.processes else "threads"
+        return f"dask LocalCluster, {self.workers} worker {kind}"
+
+    @contextlib.contextmanager
+    def _client(self) -> Iterator[Any]:
+        distributed = store.require("distributed")
+        if self.address:
+            try:
+                client = distributed.Client(self.address, timeout=self.connect_timeout)
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise RunError(
+                    [f"--scheduler: cannot connect to {self.address!r} ({exc})"]
+                ) from None
+            try:
+                yield client
+            finally:
+                client.close()
+            return
+        dask = store.require("dask")
+        # dask starts worker processes with MALLOC_TRIM_THRESHOLD_=65536 (and leaves it in
+        # this process's environment, which later workers inherit). Setting it turns off
+        # glibc's adaptive mmap threshold, so every large NumPy temporary becomes a fresh
+        # mmap that page-faults on first touch: a 65 536-sample chunk took 2x as long in a
+        # worker as in this process (4x the page faults). A fixed mmap threshold of
+        # 128 MiB keeps the chunk's arrays on the reused heap whatever the trim setting;
+        # chunks bound the memory anyway.
+        environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}))
+        environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+        environ["MALLOC_MMAP_THRESHOLD_"] = 128 * 2**20
+        try:
+            with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
+                cluster = distributed.LocalCluster(
+                    n_workers=self.workers,
+                    threads_per_worker=1,
+                    processes=self.processes,
+                    # Port 0: any free port, so that a busy 8787 (another cluster's dashboard)
+                    # neither fails nor warns.
+                    dashboard_address=":0",
+                    silence_logs=logging.ERROR,
+                )
+        except Exception as exc:  # noqa: BLE001 - dask raises plain RuntimeError and others
+            raise RunError(
+                [f"--workers {self.workers}: cannot start a LocalCluster ({exc})"]
+            ) from None
+        try:
+            client = distributed.Client(cluster)
+            try:
+                if self.processes:
+                    # A terminal's Ctrl-C reaches the whole process group; only this
+                    # process should act on it (cancel, close the cluster, report).
+                    client.run(_ignore_interrupts)
+                yield client
+            finally:
+                client.close()
+        finally:
+            cluster.close()
+
+    def results(
+        self, plan: Plan, indices: Sequence[int], out: Path
+    ) -> Generator[ChunkResult, None, None]:
+        """Submit the chunks (a bounded window at a time) and yield them as they finish.
+
+        LocalCluster workers share this machine's file system and write their chunk
+        files themselves; a remote cluster's workers send the columns back for this
+        process to write (no shared file system needed).
+        """
+        distributed = store.require("distributed")
+        target = out.resolve()
+        with self._client() as client:
+            workers = max(1, len(client.scheduler_info().get("workers", {})))
+            window = self.window or max(4, 2 * workers)
+            [shared] = client.scatter([plan], broadcast=True, hash=False)
+
+            def submit(index: int) -> Any:
+                if self.address is None:
+                    return client.submit(evaluate_and_write, shared, index, target, pure=False)
+                return client.submit(evaluate_chunk, shared, index, pure=False)
+
+            pending = iter(indices)
+            running = distributed.as_completed([submit(k) for k in islice(pending, window)])
+            try:
+                for future in running:
+                    result: ChunkResult = future.result()
+                    following = next(pending, None)
+                    if following is not None:
+                        running.add(submit(following))
+                    yield result
+            finally:
+                for future in list(running.futures):
+                    future.cancel()
+
+
+def _ignore_interrupts() -> None:
+    """Make a LocalCluster worker process ignore SIGINT (run on each worker)."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def choose_executor(samples: int, workers: int | None, scheduler: str | None) -> Executor:
+    """The executor for ``--workers`` / ``--scheduler``; large runs default to a LocalCluster.
+
+    ``workers=0`` forces the in-process path. Without either option, runs of at least
+    LARGE_RUN_SAMPLES samples on a machine with at least LARGE_RUN_CPUS CPUs use a
+    LocalCluster with one worker per CPU when dask.distributed is installed, and the
+    in-process path otherwise.
+    """
+    if workers is not None and scheduler is not None:
+        raise RunError(["give either --workers or --scheduler, not both"])
+    if scheduler is not None:
+        return DaskExecutor(address=scheduler)
+    if workers is not None:
+        if workers < 0:
+            raise RunError([f"--workers: {workers} must be >= 0 (0: in this process)"])
+        return InProcess() if workers == 0 else DaskExecutor(workers=workers)
+    cpus = os.cpu_count() or 1
+    if samples >= LARGE_RUN_SAMPLES and cpus >= LARGE_RUN_CPUS:
+        try:
+            store.require("distributed")
+        except store.MissingDependency:
+            return InProcess()
+        return DaskExecutor(workers=cpus)
+    return InProcess()
+
+
+@dataclass(frozen=True)
+class RunReport:
+    """What a run did.
+
+    Attributes
+    ----------
+    out : the study's folder
+    chunks_total : chunks in the study
+    chunks_computed : chunks computed by this run
+    chunks_reused : valid chunks found on disk and kept (resume)
+    elapsed_s : wall time of this run [s]
+    executor : where the chunks were computed
+    notes : remarks for the console (stale files removed, nothing to resume, ...)
+    """
+
+    out: Path
+    chunks_total: int
+    chunks_computed: int
+    chunks_reused: int
+    elapsed_s: float
+    executor: str
+    notes: list[str] = field(default_factory=list)
+
+
+def _manifest_or_error(out: Path) -> dict[str, Any] | None:
+    try:
+        return store.read_manifest(out)
+    except ValueError as exc:
+        raise RunError([str(exc)]) from None
+
+
+def _prepare(plan: Plan, out: Path, resume: bool, notes: list[str]) -> bool:
+    """Check or write the manifest; True if this call created it."""
+    manifest = _manifest_or_error(out)
+    if manifest is not None and not resume:
+        raise RunError(
+            [
+                f"--out {out}: this folder already holds a Monte Carlo run; add --resume to "
+                "continue it, or choose another --out"
+            ]
+        )
+    if manifest is not None:
+        recorded = manifest.get("identity", {})
+        wanted = plan.identity()
+        differences = [
+            f"--resume: {out / store.MANIFEST} has {key} = {recorded.get(key)!r}, this run "
+            f"has {value!r}"
+            for key, value in wanted.items()
+            if recorded.get(key) != value
+        ]
+        if differences:
+            raise RunError(
+                [*differences, "a resumed run must repeat the original command and config"]
+            )
+        return False
+    if resume:
+        notes.append(f"nothing to resume in {out}: starting a new run")
+    store.write_manifest(
+        out,
+        plan.identity(),
+        {
+            "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+            "config_source": plan.config_source,
+            "chunks": plan.chunks,
+            "columns": list(plan.columns),
+            "tolerances": plan.tolerances.to_dict(),
+            "correlation": [list(row) for row in plan.tolerances.correlation],
+        },
+    )
+    return True
+
+
+def run(
+    plan: Plan,
+    out: Path,
+    executor: Executor | None = None,
+    *,
+    resume: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+) -> RunReport:
+    """Evaluate every chunk of the plan not yet on disk, writing each as it finishes.
+
+    ``progress(samples_done, samples_total)`` is called once at the start and after each
+    chunk. A KeyboardInterrupt stops the run and raises :class:`RunInterrupted`: the
+    finished chunks stay on disk, the manifest stays valid, and ``resume=True`` continues.
+    """
+    started = time.perf_counter()
+    chosen = executor or InProcess()
+    notes: list[str] = []
+    out = Path(out)
+    created = _prepare(plan, out, resume, notes)
+    removed = store.remove_partial_files(out)
+    if removed:
+        notes.append(f"removed {len(removed)} unfinished file(s) left by an interrupted run")
+    identity = plan.identity_sha256
+    done: list[int] = []
+    todo: list[int] = []
+    for k in range(plan.chunks):
+        start, stop = plan.bounds(k)
+        valid = resume and store.chunk_is_valid(out, k, identity, stop - start, plan.columns)
+        (done if valid else todo).append(k)
+    samples_done = sum(plan.bounds(k)[1] - plan.bounds(k)[0] for k in done)
+    if progress:
+        progress(samples_done, plan.samples)
+    computed = 0
+    try:
+        with contextlib.closing(chosen.results(plan, todo, out)) as results:
+            for result in results:
+                if result.version != __version__:
+                    raise RunError(
+                        [
+                            f"a worker runs ecdsim {result.version}, this process {__version__}; "
+                            "install the same version on every worker"
+                        ]
+                    )
+                if not result.written:
+                    write_result(plan, out, result)
+                computed += 1
+                start, stop = plan.bounds(result.index)
+                samples_done += stop - start
+                if progress:
+                    progress(samples_done, plan.samples)
+    except KeyboardInterrupt:
+        # ecdsim.atomic removes its temporary file when the write is interrupted, except
+        # in the instant between creating it and entering its try block: sweep up.
+        store.remove_partial_files(out)
+        on_disk = sum(store.chunk_path(out, k).exists() for k in range(plan.chunks))
+        raise RunInterrupted(out, on_disk, plan.chunks) from None
+    except Exception:
+        if created and computed == 0:
+            # Nothing was computed (no scheduler, a missing package, a bad first chunk):
+            # leave no half-started run behind, so that the same command can be repeated.
+            (out / store.MANIFEST).unlink(missing_ok=True)
+        raise
+    return RunReport(
+        out=out,
+        chunks_total=plan.chunks,
+        chunks_computed=computed,
+        chunks_reused=len(done),
+        elapsed_s=time.perf_counter() - started,
+        executor=chosen.describe(),
+        notes=notes,
+    )

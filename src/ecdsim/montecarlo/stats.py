@@ -1,0 +1,442 @@
+"""Statistics of a finished study, per temperature (definitions in docs/montecarlo.md).
+
+Stalled samples. A sample that stalls never reaches the end of travel: its deployment
+time is +inf, and it stays in every statistic that can hold it honestly.
+
+* Percentiles are order statistics over *all* N samples, stalled ones included (the
+  inverted empirical CDF: P_p is the ceil(p*N)-th smallest time). Where that rank falls
+  among the stalled samples the percentile is +inf ("does not arrive"; null in JSON).
+  No interpolation is done, so a percentile is never a blend of a time and +inf.
+* Each percentile has a distribution-free 95 % confidence interval: the order statistics
+  of ranks r and s taken from the binomial distribution of the number of samples below
+  the true percentile (null where the sample is too small to bound it).
+* The mean and standard deviation over all samples are infinite as soon as one sample
+  stalls: they are reported (null otherwise) together with the mean and standard
+  deviation over the samples that arrive, and the stall probability with its exact
+  (Clopper-Pearson) 95 % interval.
+* The end (latch) speed is summarised over the samples that arrive.
+
+Sensitivity of the deployment time to each toleranced quantity, on the samples that
+arrive at each temperature:
+
+* standardised regression coefficients (SRC): the least-squares fit
+  ``t = b0 + sum(b_i * x_i)`` scaled as ``SRC_i = b_i * std(x_i) / std(t)``, with the
+  fit's R^2. For a nearly linear response (R^2 near 1) and independent inputs,
+  SRC_i^2 is the share of the variance of t due to x_i and the SRCs rank the inputs.
+* first-order (Sobol) indices ``S_i = Var(E[t | x_i]) / Var(t)``, estimated from the
+  same samples whatever the design ("given data"): each input's probability range is
+  cut into M equal-probability bins by its own distribution function, and S_i is the
+  between-bin share of the variance, corrected for the noise of the bin means
+  (``(SS_between - (M - 1) * MS_within) / SS_total``). No special (Saltelli) design is
+  needed; with correlated inputs S_i includes the effect of the inputs correlated
+  with x_i, so the indices no longer add up to at most 1.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
+from ecdsim._version import __version__
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from ecdsim.montecarlo.run import Plan
+
+PERCENTILES: dict[str, float] = {"P1": 0.01, "P5": 0.05, "P50": 0.50, "P95": 0.95, "P99": 0.99}
+CONFIDENCE = 0.95
+MAX_BINS = 64
+REGRESSION_BLOCK = 1_000_000
+
+
+def _number(value: float) -> float | None:
+    """A float for JSON: None for inf or NaN."""
+    return float(value) if math.isfinite(value) else None
+
+
+def rank_of(n: int, probability: float) -> int:
+    """0-based rank of the ``probability`` percentile of n samples: ceil(p*n) - 1.
+
+    >>> rank_of(100, 0.05), rank_of(100, 0.5), rank_of(101, 0.5)
+    (4, 49, 50)
+    """
+    # Rounding the product guards ceil() against 0.29 * 100 = 28.999999999999996.
+    return min(max(math.ceil(round(probability * n, 9)) - 1, 0), n - 1)
+
+
+def confidence_ranks(n: int, probability: float) -> tuple[int | None, int | None]:
+    """0-based ranks (r, s) of a distribution-free 95 % interval of a percentile.
+
+    With B ~ Binomial(n, p) the number of samples below the true percentile,
+    ``P(x_(r) <= q_p <= x_(s)) = P(r <= B <= s - 1)`` (1-based ranks); r and s - 1 are
+    B's 2.5 % and 97.5 % quantiles. None where the rank falls outside the sample.
+    """
+    from scipy.stats import binom
+
+    tail = (1.0 - CONFIDENCE) / 2.0
+    low = int(binom.ppf(tail, n, probability))  # 1-based rank r
+    high = int(binom.ppf(1.0 - tail, n, probability)) + 1  # 1-based rank s
+    return (low - 1 if low >= 1 else None, high - 1 if high <= n else None)
+
+
+def percentiles(
+    values: ArrayLike, probabilities: Mapping[str, float] = PERCENTILES
+) -> dict[str, dict[str, float | None]]:
+    """Each percentile of the values (inf allowed) and its 95 % interval.
+
+    Returns {name: {"value": v, "low": lo, "high": hi}} with None for +inf (a percentile
+    in the stalled tail) and for interval ends the sample cannot bound.
+    """
+    x = as_float(values).reshape(-1)
+    n = x.size
+    if n == 0:
+        return {name: {"value": None, "low": None, "high": None} for name in probabilities}
+    ranks: dict[str, tuple[int, int | None, int | None]] = {}
+    for name, p in probabilities.items():
+        ranks[name] = (rank_of(n, p), *confidence_ranks(n, p))
+    needed = sorted({r for triple in ranks.values() for r in triple if r is not None})
+    ordered = np.partition(x, needed)
+
+    def at(rank: int | None) -> float | None:
+        return None if rank is None else _number(float(ordered[rank]))
+
+    return {
+        name: {"value": at(k), "low": at(lo), "high": at(hi)} for name, (k, lo, hi) in ranks.items()
+    }
+
+
+def proportion_interval(successes: int, trials: int) -> tuple[float, float]:
+    """Exact (Clopper-Pearson) 95 % interval of a proportion [-]."""
+    from scipy.stats import beta
+
+    tail = (1.0 - CONFIDENCE) / 2.0
+    low = 0.0 if successes == 0 else float(beta.ppf(tail, successes, trials - successes + 1))
+    high = (
+        1.0 if successes == trials else float(beta.ppf(1 - tail, successes + 1, trials - successes))
+    )
+    return low, high
+
+
+def describe(values: ArrayLike) -> dict[str, Any]:
+    """Percentiles over all values (inf allowed), moments over all and over finite ones."""
+    x = as_float(values).reshape(-1)
+    finite = x[np.isfinite(x)]
+    arriving = finite.size
+    all_finite = arriving == x.size
+
+    def moments(sample: FloatArray) -> tuple[float | None, float | None]:
+        mean = float(np.mean(sample)) if sample.size else None
+        std = float(np.std(sample, ddof=1)) if sample.size > 1 else None
+        return mean, std
+
+    mean, std = moments(finite)
+    return {
+        "samples": int(x.size),
+        "arriving": int(arriving),
+        "percentiles": percentiles(x),
+        "mean": mean if all_finite else None,
+        "std": std if all_finite else None,
+        "mean_arriving": mean,
+        "std_arriving": std,
+        "min": _number(float(np.min(x))) if x.size else None,
+        "max": _number(float(np.max(x))) if x.size else None,
+    }
+
+
+def stall(stalled: ArrayLike) -> dict[str, Any]:
+    """Stall count, probability and its exact 95 % interval."""
+    flags = np.asarray(stalled, dtype=bool).reshape(-1)
+    count = int(np.count_nonzero(flags))
+    low, high = proportion_interval(count, flags.size)
+    return {
+        "count": count,
+        "probability": count / flags.size if flags.size else None,
+        "interval95": [low, high],
+    }
+
+
+def _blocks(n: int) -> range:
+    return range(0, n, REGRESSION_BLOCK)
+
+
+def standardized_regression(
+    inputs: FloatArray, response: FloatArray, use: BoolArray | None = None
+) -> tuple[FloatArray | None, float | None]:
+    """SRCs of each input column and the fit's R^2 (least squares with an intercept).
+
+    ``inputs`` has shape (n, d), ``response`` shape (n,); ``use`` selects the samples
+    that enter the fit (all if None). None where the fit is not defined (fewer than
+    d + 2 samples, or a constant column or response).
+
+    The normal equations are accumulated over blocks of rows on centred data, so that a
+    study of millions of samples needs no (n, d) temporary.
+    """
+    x = np.asarray(inputs, dtype=float)
+    y = np.asarray(response, dtype=float)
+    n, d = x.shape
+    keep = np.ones(n, dtype=bool) if use is None else np.asarray(use, dtype=bool)
+    count = int(np.count_nonzero(keep))
+    if count < d + 2:
+        return None, None
+
+    def block(start: int) -> tuple[FloatArray, FloatArray]:
+        xb, yb = x[start : start + REGRESSION_BLOCK], y[start : start + REGRESSION_BLOCK]
+        if use is None:
+            return xb, yb
+        rows = keep[start : start + REGRESSION_BLOCK]
+        return xb[rows], yb[rows]
+
+    x_sum, y_sum = np.zeros(d), 0.0
+    for start in _blocks(n):
+        xb, yb = block(start)
+        x_sum += xb.sum(axis=0)
+        y_sum += float(yb.sum())
+    x_mean, y_mean = x_sum / count, y_sum / count
+    gram = np.zeros((d, d))
+    cross = np.zeros(d)
+    total = 0.0
+    for start in _blocks(n):
+        xb, yb = block(start)
+        dx = xb - x_mean
+        dy = yb - y_mean
+        gram += dx.T @ dx
+        cross += dx.T @ dy
+        total += float(dy @ dy)
+    x_std = np.sqrt(np.diag(gram))
+    if total <= 0.0 or np.any(x_std <= 0.0):
+        return None, None
+    y_std = math.sqrt(total)
+    correlation = gram / np.outer(x_std, x_std)
+    with_response = cross / (x_std * y_std)
+    coefficients = np.linalg.lstsq(correlation, with_response, rcond=None)[0]
+    r_squared = float(coefficients @ with_response)
+    return as_float(coefficients), r_squared
+
+
+def bin_count(n: int) -> int:
+    """Equal-probability bins for the first-order estimator: n^(1/3), 2 to MAX_BINS."""
+    return int(min(MAX_BINS, max(2, round(n ** (1.0 / 3.0)))))
+
+
+def bin_labels(scores: FloatArray, bins: int) -> np.ndarray[Any, np.dtype[np.uint8]]:
+    """Equal-probability bin of each uniform score: ``floor(score * bins)``, shape kept.
+
+    ``scores`` are the inputs' uniform scores (their own distribution function of the
+    value), so every bin holds the same probability of the input.
+    """
+    if not 1 <= bins <= 255:
+        raise ValueError(f"bins must be 1 to 255, got {bins}")
+    labels = np.minimum(np.asarray(scores, dtype=float) * bins, bins - 1)
+    return np.asarray(labels, dtype=np.uint8)
+
+
+def first_order_indices(
+    labels: np.ndarray[Any, Any],
+    response: FloatArray,
+    bins: int,
+    use: BoolArray | None = None,
+) -> FloatArray | None:
+    """Given-data first-order indices ``Var(E[t | x_i]) / Var(t)`` of each input column.
+
+    ``labels`` (n, d) are the inputs' equal-probability bins (:func:`bin_labels`);
+    ``use`` selects the samples (all if None). The between-bin sum of squares is corrected
+    for the noise of the bin means (an ANOVA ``epsilon^2``):
+    ``(SS_between - (M - 1) * SS_within / (n - M)) / SS_total``, with M the number of
+    non-empty bins. Small negative values mean "no effect within the estimator's noise".
+    None where the response is constant or too few samples.
+    """
+    y = np.asarray(response, dtype=float)
+    n, d = labels.shape
+    keep = np.ones(n, dtype=bool) if use is None else np.asarray(use, dtype=bool)
+    count = int(np.count_nonzero(keep))
+    if count <= 2 * bins:
+        return None
+    mean = float(np.mean(y, where=keep))
+    centred = np.where(keep, y - np.where(keep, mean, 0.0), 0.0)  # 0 for unused samples
+    total = float(centred @ centred)
+    if total <= 0.0:
+        return None
+    out = np.empty(d)
+    for j in range(d):
+        # Unused samples go to an extra bin, which is then dropped.
+        label = np.where(keep, labels[:, j], bins)
+        counts = np.bincount(label, minlength=bins + 1)[:bins]
+        sums = np.bincount(label, weights=centred, minlength=bins + 1)[:bins]
+        filled = counts > 0
+        between = float(np.sum(sums[filled] ** 2 / counts[filled]))
+        groups = int(np.count_nonzero(filled))
+        within = total - between
+        out[j] = (between - (groups - 1) * within / (count - groups)) / total
+    return out
+
+
+def sensitivity(
+    keys: Sequence[str],
+    values: FloatArray,
+    labels: np.ndarray[Any, Any],
+    bins: int,
+    times: FloatArray,
+) -> dict[str, Any]:
+    """SRCs, R^2 and first-order indices of the deployment time, on arriving samples.
+
+    ``values`` (n, d) are the inputs [SI], ``labels`` (n, d) their equal-probability bins
+    out of ``bins`` (:func:`bin_labels`), ``times`` the deployment times [s], inf where
+    stalled.
+    """
+    arriving = np.isfinite(times)
+    use = None if np.all(arriving) else arriving
+    coefficients, r_squared = standardized_regression(values, times, use)
+    first = first_order_indices(labels, times, bins, use)
+    rows: list[dict[str, Any]] = []
+    for j, key in enumerate(keys):
+        rows.append(
+            {
+                "key": key,
+                "src": None if coefficients is None else float(coefficients[j]),
+                "first_order": None if first is None else float(first[j]),
+            }
+        )
+    rows.sort(key=lambda r: -abs(r["src"] or 0.0))
+    return {
+        "samples": int(np.count_nonzero(arriving)),
+        "r_squared": r_squared,
+        "bins": bins,
+        "inputs": rows,
+    }
+
+
+def nominal(plan: Plan) -> dict[float, dict[str, Any]]:
+    """The nominal system's outputs at each temperature (the same code as every sample's)."""
+    from ecdsim.deployment import predict
+    from ecdsim.montecarlo.run import outputs_of
+
+    prediction = predict(plan.system, list(plan.temperatures), **plan.predict_options())
+    found = outputs_of(plan, prediction)
+    cases: dict[float, dict[str, Any]] = {}
+    for i, t in enumerate(plan.temperatures):
+        case: dict[str, Any] = {
+            "deployment_time_s": _number(float(found["deployment_time_s"][i])),
+            "end_speed_rad_s": float(found["end_speed_rad_s"][i]),
+            "stalled": bool(found["stalled"][i]),
+        }
+        if "min_torque_margin" in found:
+            case["min_torque_margin"] = _number(float(found["min_torque_margin"][i]))
+        cases[t] = case
+    return cases
+
+
+def margin(plan: Plan, margins: FloatArray) -> dict[str, Any]:
+    """The minimum torque margin's distribution, and how often it is below the required."""
+    found = describe(margins)
+    required = plan.required_margin
+    settings = plan.margin
+    assert settings is not None  # only called with margin settings
+    found["required"] = required
+    found["factors_applied"] = settings.factors_applied
+    found["damping_speed_rad_s"] = settings.damping_speed
+    if required is not None:
+        below = int(np.count_nonzero(margins < required))
+        low, high = proportion_interval(below, margins.size)
+        found["probability_below_required"] = below / margins.size
+        found["probability_below_required_interval95"] = [low, high]
+    return found
+
+
+def _notes(plan: Plan) -> list[str]:
+    settings = plan.margin
+    if settings is None:
+        return [
+            "torque margin: not computed; add a [requirements] section with "
+            "[requirements.torque_margin] (docs/sizing.md) for its distribution"
+        ]
+    if not settings.factors_applied and settings.damping_speed is None:
+        return [
+            "torque margin: no factors applied and damping at the deployment's own speed: "
+            "the margin is 0 wherever the mechanism moves, by quasi-static equilibrium "
+            "(docs/sizing.md section 5)"
+        ]
+    return []
+
+
+def _warnings(tags: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    merged: dict[tuple[str, Any, Any], dict[str, Any]] = {}
+    for tag in tags:
+        for w in tag.get("warnings", []):
+            key = (w["code"], w["temperature_C"], w["method"])
+            entry = merged.setdefault(
+                key,
+                {
+                    "code": w["code"],
+                    "temperature_C": w["temperature_C"],
+                    "method": w["method"],
+                    "records": 0,
+                    "chunks": 0,
+                    "example": w["example"],
+                },
+            )
+            entry["records"] += int(w["count"])
+            entry["chunks"] += 1
+    return sorted(merged.values(), key=lambda e: (e["code"], repr(e["temperature_C"])))
+
+
+def summarize(plan: Plan, out: Path) -> dict[str, Any]:
+    """The study's statistics per temperature, read from its chunk files (JSON-ready)."""
+    from ecdsim.montecarlo import repeatability
+    from ecdsim.montecarlo.run import output_column
+    from ecdsim.montecarlo.store import ChunkReader
+
+    reader = ChunkReader(out, plan.chunks)
+    data = reader.read(plan.columns)
+    if not np.array_equal(data["sample"], np.arange(plan.samples)):
+        raise ValueError(f"{out}: the chunk files do not hold samples 0..{plan.samples - 1}")
+    keys = plan.tolerances.keys
+    tolerances = plan.tolerances.tolerances
+    # (n, d) views of (d, n) arrays: every column stays contiguous, nothing is copied.
+    values = np.stack([np.asarray(data[k], dtype=float) for k in keys]).T
+    bins = bin_count(plan.samples)
+    labels = np.stack(
+        [bin_labels(t.scores(values[:, j]), bins) for j, t in enumerate(tolerances)]
+    ).T
+    reference = nominal(plan)
+    cases = []
+    for temperature in plan.temperatures:
+        times = np.asarray(data[output_column("deployment_time_s", temperature)], dtype=float)
+        stalled = np.asarray(data[output_column("stalled", temperature)], dtype=bool)
+        speeds = np.asarray(data[output_column("end_speed_rad_s", temperature)], dtype=float)
+        nominal_case = reference[temperature]
+        cases.append(
+            {
+                "temperature_C": temperature,
+                "nominal": nominal_case,
+                "deployment_time_s": describe(times),
+                "end_speed_rad_s": describe(speeds[~stalled]),
+                "stall": stall(stalled),
+                "sensitivity": sensitivity(keys, values, labels, bins, times),
+                "repeatability": repeatability.study(
+                    times, nominal_case["deployment_time_s"], plan.repeat_within, plan.repeat_runs
+                ),
+            }
+        )
+        if plan.margin is not None:
+            margins = np.asarray(data[output_column("min_torque_margin", temperature)], float)
+            cases[-1]["min_torque_margin"] = margin(plan, margins)
+    return {
+        "ecdsim_version": __version__,
+        "system": plan.system.name,
+        "method": plan.method,
+        "samples": plan.samples,
+        "seed": plan.seed,
+        "sampling": plan.sampling,
+        "chunk_size": plan.chunk_size,
+        "config_sha256": plan.config_sha256,
+        "tolerances": plan.tolerances.to_dict(),
+        "correlation": [list(row) for row in plan.tolerances.correlation],
+        "cases": cases,
+        "warnings": _warnings(reader.tags()),
+        "notes": _notes(plan),
+    }

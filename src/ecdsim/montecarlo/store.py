@@ -1,0 +1,210 @@
+"""A study's folder: its manifest, one Parquet file per chunk, and the summary.
+
+Layout (docs/montecarlo.md)::
+
+    OUT/manifest.json                  the study's identity, written once, atomically
+    OUT/chunks/chunk-000000.parquet    samples 0 .. c-1, written atomically when computed
+    OUT/chunks/chunk-000001.parquet    ...
+    OUT/summary.json                   the statistics, written at the end
+    OUT/plots/*.png
+
+Every chunk file carries, in its Parquet key-value metadata, the hash of the study's
+identity and its own index, so that a resumed run accepts only chunks of the same study.
+pyarrow is imported lazily: it is an optional dependency (``pip install ecdsim[montecarlo]``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ecdsim import atomic
+from ecdsim._types import FloatArray
+
+MANIFEST = "manifest.json"
+SUMMARY = "summary.json"
+CHUNKS = "chunks"
+FORMAT = "ecdsim-montecarlo/1"
+METADATA_KEY = b"ecdsim.montecarlo"
+
+
+class MissingDependency(RuntimeError):
+    """An optional package the Monte Carlo needs is not installed; the message says how."""
+
+
+def require(module: str) -> Any:
+    """Import an optional module, or raise MissingDependency naming the extra to install."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise MissingDependency(
+            f"the Monte Carlo needs {module.split('.')[0]}, which is not installed; "
+            "install it with: pip install 'ecdsim[montecarlo]'"
+        ) from None
+
+
+def identity_hash(identity: Mapping[str, Any]) -> str:
+    """SHA-256 of the study identity's canonical JSON."""
+    text = json.dumps(identity, sort_keys=True, allow_nan=False, separators=(",", ":"))
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def chunk_path(out: Path, index: int) -> Path:
+    """Where chunk ``index`` lives."""
+    return out / CHUNKS / f"chunk-{index:06d}.parquet"
+
+
+def read_manifest(out: Path) -> dict[str, Any] | None:
+    """The manifest of the study in ``out``, or None if there is none."""
+    path = out / MANIFEST
+    if not path.exists():
+        return None
+    try:
+        document: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{path}: not a readable manifest ({exc})") from None
+    if document.get("format") != FORMAT:
+        raise ValueError(f"{path}: not an ecdsim Monte Carlo manifest (format {FORMAT})")
+    return document
+
+
+def write_manifest(out: Path, identity: Mapping[str, Any], extra: Mapping[str, Any]) -> Path:
+    """Write the manifest atomically: the identity, its hash, and descriptive extras."""
+    document = {
+        "format": FORMAT,
+        "identity": dict(identity),
+        "identity_sha256": identity_hash(identity),
+        **extra,
+    }
+    text = json.dumps(document, indent=2, sort_keys=True, allow_nan=False) + "\n"
+    return atomic.write_text(out / MANIFEST, text)
+
+
+def remove_partial_files(out: Path) -> list[Path]:
+    """Delete temporary files a killed run left behind (atomic writes never finished)."""
+    stale = sorted((out / CHUNKS).glob(".chunk-*.tmp")) if (out / CHUNKS).is_dir() else []
+    stale += sorted(p for name in (MANIFEST, SUMMARY) for p in out.glob(f".{name}.*.tmp"))
+    for path in stale:
+        path.unlink(missing_ok=True)
+    return stale
+
+
+def write_chunk(
+    out: Path,
+    index: int,
+    columns: Mapping[str, np.ndarray[Any, Any]],
+    identity_sha256: str,
+    extra: Mapping[str, Any],
+) -> Path:
+    """Write one chunk's columns as Parquet, atomically, tagged with the study's identity."""
+    pa = require("pyarrow")
+    pq = require("pyarrow.parquet")
+    table = pa.table({name: pa.array(values) for name, values in columns.items()})
+    tag = json.dumps(
+        {"identity_sha256": identity_sha256, "chunk": index, **extra},
+        sort_keys=True,
+        allow_nan=False,
+    )
+    table = table.replace_schema_metadata({METADATA_KEY: tag.encode("utf-8")})
+    # Sampled floats do not repeat: dictionary encoding would cost 4x the write time for
+    # nothing.
+    return atomic.write_with(
+        chunk_path(out, index),
+        lambda stream: pq.write_table(table, stream, use_dictionary=False),
+    )
+
+
+def chunk_tag(path: Path) -> dict[str, Any] | None:
+    """The identity tag of a chunk file, or None if the file is absent or unreadable."""
+    pq = require("pyarrow.parquet")
+    if not path.exists():
+        return None
+    try:
+        metadata = pq.read_metadata(path)
+        raw = (metadata.metadata or {}).get(METADATA_KEY)
+        if raw is None:
+            return None
+        tag: dict[str, Any] = json.loads(raw.decode("utf-8"))
+        tag["_rows"] = metadata.num_rows
+        tag["_columns"] = list(metadata.schema.to_arrow_schema().names)
+    except Exception:  # noqa: BLE001 - any unreadable file is simply not a valid chunk
+        return None
+    return tag
+
+
+def chunk_is_valid(
+    out: Path, index: int, identity_sha256: str, rows: int, columns: Sequence[str]
+) -> bool:
+    """True if chunk ``index`` exists, is readable, and belongs to this study."""
+    tag = chunk_tag(chunk_path(out, index))
+    return bool(
+        tag is not None
+        and tag.get("identity_sha256") == identity_sha256
+        and tag.get("chunk") == index
+        and tag["_rows"] == rows
+        and tag["_columns"] == list(columns)
+    )
+
+
+@dataclass(frozen=True)
+class ChunkReader:
+    """Reads columns of a finished study, chunk by chunk, in sample order.
+
+    Attributes
+    ----------
+    out : the study's folder
+    chunks : number of chunks
+    """
+
+    out: Path
+    chunks: int
+
+    def column(self, name: str) -> np.ndarray[Any, Any]:
+        """One column over all samples, in sample order."""
+        pq = require("pyarrow.parquet")
+        parts = [
+            pq.read_table(chunk_path(self.out, k), columns=[name]).column(0).to_numpy()
+            for k in range(self.chunks)
+        ]
+        return np.concatenate(parts)
+
+    def read(self, names: Sequence[str]) -> dict[str, np.ndarray[Any, Any]]:
+        """Several columns over all samples, each chunk file opened once."""
+        pq = require("pyarrow.parquet")
+        parts: dict[str, list[np.ndarray[Any, Any]]] = {name: [] for name in names}
+        for k in range(self.chunks):
+            table = pq.read_table(chunk_path(self.out, k), columns=list(names))
+            for name in names:
+                parts[name].append(table.column(name).to_numpy())
+        return {name: np.concatenate(chunks) for name, chunks in parts.items()}
+
+    def floats(self, name: str) -> FloatArray:
+        """One float column over all samples."""
+        return np.asarray(self.column(name), dtype=float)
+
+    def to_pandas(self, columns: Sequence[str] | None = None) -> Any:
+        """The samples as a pandas DataFrame, one row per sample (all or some columns)."""
+        pa = require("pyarrow")
+        pq = require("pyarrow.parquet")
+        require("pandas")
+        names = None if columns is None else list(columns)
+        tables = [pq.read_table(chunk_path(self.out, k), columns=names) for k in range(self.chunks)]
+        return pa.concat_tables(tables).to_pandas()
+
+    def tags(self) -> list[dict[str, Any]]:
+        """Every chunk's metadata tag, in chunk order."""
+        found = []
+        for k in range(self.chunks):
+            tag = chunk_tag(chunk_path(self.out, k))
+            if tag is None:
+                raise ValueError(f"{chunk_path(self.out, k)}: missing or unreadable chunk")
+            found.append(tag)
+        return found

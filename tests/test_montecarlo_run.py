@@ -1,0 +1,442 @@
+"""Running studies: resume after SIGKILL and Ctrl-C, worker-count invariance, Dask, the CLI.
+
+"Identical" here means bit for bit: every chunk's table and the summary's JSON text.
+The Dask tests use a LocalCluster of worker *threads* (processes=False) where they only
+need to show that the scheduling does not change the numbers: a chunk is a pure function
+of (plan, chunk index), whichever worker runs it, and threads start in a fraction of the
+seconds that worker processes take. One CLI test runs real worker processes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+from typer.testing import CliRunner
+
+from ecdsim.cli.app import app
+from ecdsim.config import load_config
+from ecdsim.deployment import predict
+from ecdsim.montecarlo import (
+    DaskExecutor,
+    InProcess,
+    RunError,
+    build_plan,
+    choose_executor,
+    run,
+)
+from ecdsim.montecarlo import apply as apply_values
+from ecdsim.montecarlo.run import LARGE_RUN_SAMPLES, chunk_values, output_column
+from ecdsim.montecarlo.store import MANIFEST, SUMMARY, ChunkReader, chunk_path, read_manifest
+from ecdsim.solvers import SOLVERS
+from tests.test_montecarlo_config import PAPER_TEXT, write_config
+
+runner = CliRunner()
+
+QUANTITIES = "\n".join(
+    [
+        '"damper.damping_rate" = { distribution = "normal", three_sigma = "10 %" }',
+        '"load.end_torque" = { distribution = "normal", sigma = "3 %" }',
+        '"load.system_friction.at_0C" = { distribution = "uniform", plus_minus = "10 %" }',
+    ]
+)
+SETTINGS = 'seed = 99\nsampling = "lhs"'
+SAMPLES, CHUNK = 40_000, 200  # 200 chunks: a kill lands well inside the run
+CHUNKS = SAMPLES // CHUNK
+
+
+def study_args(config: Path, out: Path, *extra: str) -> list[str]:
+    return [
+        "montecarlo",
+        str(config),
+        "--samples",
+        str(SAMPLES),
+        "--chunk-size",
+        str(CHUNK),
+        "--out",
+        str(out),
+        "--no-plot",
+        "--no-progress",
+        *extra,
+    ]
+
+
+def chunk_files(out: Path) -> list[Path]:
+    return sorted((out / "chunks").glob("chunk-*.parquet")) if (out / "chunks").is_dir() else []
+
+
+def assert_identical_runs(first: Path, second: Path) -> None:
+    names = [p.name for p in chunk_files(first)]
+    assert names == [p.name for p in chunk_files(second)]
+    for name in names:
+        a = pq.read_table(first / "chunks" / name)
+        b = pq.read_table(second / "chunks" / name)
+        assert a.equals(b), name
+    assert (first / SUMMARY).read_text() == (second / SUMMARY).read_text()
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """A config and its uninterrupted reference run (in process)."""
+    folder = tmp_path_factory.mktemp("study")
+    config = write_config(folder, QUANTITIES, SETTINGS)
+    out = folder / "reference"
+    result = runner.invoke(app, study_args(config, out))
+    assert result.exit_code == 0, result.output
+    assert len(chunk_files(out)) == CHUNKS
+    return config, out
+
+
+def start_cli(args: list[str], cwd: Path) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "ecdsim", *args],
+        cwd=cwd,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def interrupt_after(process: subprocess.Popen[str], out: Path, chunks: int, sig: int) -> str:
+    """Send ``sig`` once ``chunks`` chunk files exist; return the process's stderr."""
+    deadline = time.monotonic() + 120.0
+    while len(chunk_files(out)) < chunks:
+        if process.poll() is not None:
+            pytest.fail(f"the run ended before it could be interrupted: {process.stderr}")
+        if time.monotonic() > deadline:
+            process.kill()
+            pytest.fail("the run wrote no chunks within two minutes")
+        time.sleep(0.002)
+    process.send_signal(sig)
+    _, stderr = process.communicate(timeout=60)
+    return stderr
+
+
+def test_resume_after_sigkill_is_identical_to_an_uninterrupted_run(
+    study: tuple[Path, Path], tmp_path: Path
+) -> None:
+    config, reference = study
+    out = tmp_path / "killed"
+    process = start_cli(study_args(config, out), tmp_path)
+    interrupt_after(process, out, 3, signal.SIGKILL)
+    assert process.returncode == -signal.SIGKILL
+    on_disk = len(chunk_files(out))
+    assert 3 <= on_disk < CHUNKS, "the kill must land in the middle of the run"
+    assert read_manifest(out) is not None
+    result = runner.invoke(app, study_args(config, out, "--resume"))
+    assert result.exit_code == 0, result.output
+    assert f"{CHUNKS - on_disk:,} chunk(s) computed, {on_disk:,} reused" in result.stderr
+    samples = ChunkReader(out, CHUNKS).column("sample")
+    np.testing.assert_array_equal(samples, np.arange(SAMPLES))  # none lost, none twice
+    assert_identical_runs(reference, out)
+
+
+def test_ctrl_c_stops_cleanly_and_prints_the_resume_command(
+    study: tuple[Path, Path], tmp_path: Path
+) -> None:
+    config, reference = study
+    out = tmp_path / "interrupted"
+    process = start_cli(study_args(config, out), tmp_path)
+    stderr = interrupt_after(process, out, 2, signal.SIGINT)
+    assert process.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    assert "interrupted:" in stderr
+    assert not list((out / "chunks").glob(".*.tmp"))  # the chunk being written was dropped
+    assert read_manifest(out) is not None
+    on_disk = len(chunk_files(out))
+    assert 2 <= on_disk < CHUNKS
+    assert f"{on_disk:,} of {CHUNKS:,} chunks are on disk" in stderr
+    command = shlex.split(stderr.split("continue with:")[1].strip().splitlines()[0])
+    assert command[:2] == ["ecdsim", "montecarlo"]
+    assert command[-1] == "--resume"
+    result = runner.invoke(app, [*command[1:], "--no-progress", "--no-plot"])
+    assert result.exit_code == 0, result.output
+    assert_identical_runs(reference, out)
+
+
+def test_ctrl_c_in_a_terminal_stops_a_dask_run_cleanly(
+    study: tuple[Path, Path], tmp_path: Path
+) -> None:
+    # A terminal's Ctrl-C reaches the whole process group, worker processes included.
+    config, reference = study
+    out = tmp_path / "dask"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "ecdsim", *study_args(config, out, "--workers", "2")],
+        cwd=tmp_path,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own process group, as under a terminal
+    )
+    deadline = time.monotonic() + 120.0
+    while len(chunk_files(out)) < 3:
+        if process.poll() is not None:
+            pytest.fail(f"the run ended before it could be interrupted: {process.stderr}")
+        if time.monotonic() > deadline:
+            process.kill()
+            pytest.fail("the run wrote no chunks within two minutes")
+        time.sleep(0.002)
+    os.killpg(process.pid, signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr
+    assert "Traceback" not in stderr  # the workers leave Ctrl-C to the client
+    assert "interrupted:" in stderr
+    assert 3 <= len(chunk_files(out)) < CHUNKS
+    # Resume in this process: the worker count is not part of the study's identity.
+    result = runner.invoke(app, study_args(config, out, "--resume"))
+    assert result.exit_code == 0, result.output
+    assert_identical_runs(reference, out)
+
+
+def test_resume_recomputes_a_damaged_chunk_and_drops_partial_files(
+    study: tuple[Path, Path], tmp_path: Path
+) -> None:
+    config, reference = study
+    out = tmp_path / "damaged"
+    result = runner.invoke(app, study_args(config, out))
+    assert result.exit_code == 0, result.output
+    path = chunk_path(out, 7)
+    path.write_bytes(path.read_bytes()[:100])  # a truncated file (not ecdsim's doing)
+    chunk_path(out, 8).unlink()
+    (out / "chunks" / ".chunk-000009.parquet.x1.tmp").write_bytes(b"partial")
+    result = runner.invoke(app, study_args(config, out, "--resume"))
+    assert result.exit_code == 0, result.output
+    assert "2 chunk(s) computed" in result.stderr
+    assert "removed 1 unfinished file(s)" in result.stderr
+    assert_identical_runs(reference, out)
+
+
+def test_an_existing_run_needs_resume_and_a_matching_command(
+    study: tuple[Path, Path], tmp_path: Path
+) -> None:
+    config, reference = study
+    result = runner.invoke(app, study_args(config, reference))
+    assert result.exit_code == 2
+    assert "already holds a Monte Carlo run; add --resume" in result.stderr
+    result = runner.invoke(app, study_args(config, reference, "--resume", "--seed", "100"))
+    assert result.exit_code == 2
+    assert f"error: --resume: {reference / MANIFEST} has seed = 99, this run has 100" in (
+        result.stderr
+    )
+    assert "Traceback" not in result.output
+
+
+def run_with(executor: Any, config: Path, out: Path) -> ChunkReader:
+    plan = build_plan(load_config(config), 3_000, chunk_size=256)
+    run(plan, out, executor)
+    return ChunkReader(out, plan.chunks)
+
+
+def test_results_do_not_depend_on_the_worker_count(tmp_path: Path) -> None:
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    readers = {
+        "in process": run_with(InProcess(), config, tmp_path / "a"),
+        "1 worker": run_with(DaskExecutor(1, processes=False), config, tmp_path / "b"),
+        "2 workers": run_with(DaskExecutor(2, processes=False, window=3), config, tmp_path / "c"),
+    }
+    plan = build_plan(load_config(config), 3_000, chunk_size=256)
+    for name in plan.columns:
+        reference = readers["in process"].column(name)
+        for label, reader in readers.items():
+            np.testing.assert_array_equal(reader.column(name), reference, err_msg=label)
+
+
+def test_cli_workers_and_scheduler_give_the_in_process_numbers(tmp_path: Path) -> None:
+    import distributed  # a test dependency (the montecarlo extra): never skipped
+
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    args = ["--samples", "2000", "--chunk-size", "500", "--no-plot", "--json"]
+    base = runner.invoke(app, ["montecarlo", str(config), "--out", str(tmp_path / "a"), *args])
+    assert base.exit_code == 0, base.output
+    # Real worker processes, as a user gets them from --workers.
+    workers = runner.invoke(
+        app,
+        ["montecarlo", str(config), "--out", str(tmp_path / "b"), "--workers", "2", *args],
+    )
+    assert workers.exit_code == 0, workers.output
+    assert "dask LocalCluster, 2 worker processes" in workers.stderr
+    with distributed.LocalCluster(  # type: ignore[no-untyped-call]
+        n_workers=1, processes=False, threads_per_worker=1, dashboard_address=":0"
+    ) as cluster:
+        remote = runner.invoke(
+            app,
+            [
+                "montecarlo",
+                str(config),
+                "--out",
+                str(tmp_path / "c"),
+                "--scheduler",
+                cluster.scheduler_address,
+                *args,
+            ],
+        )
+    assert remote.exit_code == 0, remote.output
+    assert json.loads(base.stdout) == json.loads(workers.stdout) == json.loads(remote.stdout)
+    assert_identical_runs(tmp_path / "a", tmp_path / "b")
+    assert_identical_runs(tmp_path / "a", tmp_path / "c")
+
+
+def test_an_unreachable_scheduler_is_a_clear_error_and_leaves_no_run(tmp_path: Path) -> None:
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    plan = build_plan(load_config(config), 100)
+    executor = DaskExecutor(address="tcp://127.0.0.1:1", connect_timeout="1s")
+    with pytest.raises(RunError, match="--scheduler: cannot connect to 'tcp://127.0.0.1:1'"):
+        run(plan, tmp_path / "out", executor)
+    assert not (tmp_path / "out" / MANIFEST).exists()  # the same command can be repeated
+
+
+def test_executor_choice(monkeypatch: pytest.MonkeyPatch) -> None:
+    assert isinstance(choose_executor(10, None, None), InProcess)
+    assert isinstance(choose_executor(10**8, 0, None), InProcess)
+    assert choose_executor(10, 3, None) == DaskExecutor(workers=3)
+    assert choose_executor(10, None, "tcp://h:8786") == DaskExecutor(address="tcp://h:8786")
+    monkeypatch.setattr(os, "cpu_count", lambda: 4)
+    assert choose_executor(LARGE_RUN_SAMPLES, None, None) == DaskExecutor(workers=4)
+    assert isinstance(choose_executor(LARGE_RUN_SAMPLES - 1, None, None), InProcess)
+    monkeypatch.setattr(os, "cpu_count", lambda: 3)
+    assert isinstance(choose_executor(LARGE_RUN_SAMPLES, None, None), InProcess)
+    with pytest.raises(RunError, match="either --workers or --scheduler"):
+        choose_executor(10, 2, "tcp://h:8786")
+    with pytest.raises(RunError, match="must be >= 0"):
+        choose_executor(10, -1, None)
+
+
+def test_cli_both_workers_and_scheduler_exit_2(tmp_path: Path) -> None:
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    result = runner.invoke(
+        app,
+        ["montecarlo", str(config), "-n", "10", "--workers", "2", "--scheduler", "tcp://h:1"],
+    )
+    assert result.exit_code == 2
+    assert result.stderr.strip() == "error: give either --workers or --scheduler, not both"
+
+
+def test_cli_json_summary_progress_and_plots(tmp_path: Path) -> None:
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    out = tmp_path / "out"
+    result = runner.invoke(
+        app,
+        [
+            "montecarlo",
+            str(config),
+            "-n",
+            "3000",
+            "--chunk-size",
+            "1000",
+            "--out",
+            str(out),
+            "--json",
+            "-T",
+            "25",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert document == json.loads((out / SUMMARY).read_text())
+    assert document["samples"] == 3000
+    assert document["seed"] == 99
+    assert [c["temperature_C"] for c in document["cases"]] == [25.0]
+    case = document["cases"][0]
+    assert set(case["deployment_time_s"]["percentiles"]) == {"P1", "P5", "P50", "P95", "P99"}
+    assert {"end_speed_rad_s", "stall", "sensitivity", "repeatability"} <= set(case)
+    assert [r["key"] for r in case["sensitivity"]["inputs"]] != []
+    assert "samples/s" in result.stderr  # the progress bar's rate column
+    assert "ETA" in result.stderr
+    for name in ("time_histogram", "time_cdf", "end_speed_histogram", "tornado"):
+        assert (out / "plots" / f"{name}.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cli_table_output(tmp_path: Path) -> None:
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    out = tmp_path / "out"
+    result = runner.invoke(
+        app, ["montecarlo", str(config), "-n", "2000", "--out", str(out), "--no-plot"]
+    )
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / SUMMARY).read_text())
+    p50 = summary["cases"][0]["deployment_time_s"]["percentiles"]["P50"]["value"]
+    assert f"{p50:.4g}" in result.stdout
+    for title in ("Deployment time [s]", "End (latch) speed", "Sensitivity", "Repeatability"):
+        assert title in result.stdout
+
+
+def test_dynamic_method(tmp_path: Path) -> None:
+    # Never skipped. While the dynamic method (issue 3) is not registered, --method dynamic
+    # must be a clear user error; once it is, the Monte Carlo must reproduce, sample for
+    # sample, what predict() gives for the same parameters with that method, including a
+    # tolerance on a parameter only the dynamic method has (the load's inertia).
+    base = PAPER_TEXT.replace('travel = "1.57 rad"', 'travel = "1.57 rad"\ninertia = "5 kg*m^2"')
+    assert base != PAPER_TEXT
+    quantities = QUANTITIES + '\n"load.inertia" = { distribution = "uniform", plus_minus = "20 %" }'
+    if "dynamic" not in SOLVERS:
+        quantities = QUANTITIES  # without the dynamic method there is no [load] inertia
+        base = PAPER_TEXT
+    config = write_config(tmp_path, quantities, SETTINGS, base=base)
+    out = tmp_path / "out"
+    args = ["montecarlo", str(config), "-n", "64", "--chunk-size", "32", "--out", str(out)]
+    result = runner.invoke(app, [*args, "--method", "dynamic", "--no-plot", "--no-progress"])
+    if "dynamic" not in SOLVERS:
+        assert result.exit_code == 2
+        assert result.stderr.strip().startswith(
+            "error: --method: 'dynamic' is not a method; expected one of"
+        )
+        assert not out.exists()
+        return
+    assert result.exit_code == 0, result.output
+    plan = build_plan(load_config(config), 64, "dynamic", chunk_size=32)
+    reader = ChunkReader(out, plan.chunks)
+    assert "load.inertia" in plan.tolerances.keys
+    for index in (0, 1):
+        values = chunk_values(plan, index)
+        for row in (0, 31):
+            one = {key: values[row : row + 1, j] for j, key in enumerate(plan.tolerances.keys)}
+            varied = apply_values.apply(plan.parameters, one)
+            solution = predict(
+                varied.system, list(plan.temperatures), ["dynamic"], dynamics=varied.dynamics
+            ).solutions["dynamic"]
+            for i, temperature in enumerate(plan.temperatures):
+                column = reader.floats(output_column("deployment_time_s", temperature))
+                expected = float(np.ravel(solution.deployment_time)[i])
+                # Batch and single solves of the same equations: 1e-6 relative covers an
+                # integrator whose steps depend on the batch (issue 3's agreement goal).
+                assert column[index * 32 + row] == pytest.approx(expected, rel=1e-6)
+
+
+def test_a_drawn_seed_is_recorded_and_reused_by_resume(tmp_path: Path) -> None:
+    config = write_config(tmp_path, QUANTITIES, 'sampling = "random"')  # no seed
+    out = tmp_path / "out"
+    args = ["montecarlo", str(config), "-n", "600", "--chunk-size", "200", "--out", str(out)]
+    first = runner.invoke(app, [*args, "--resume", "--no-plot"])  # nothing to resume yet
+    assert first.exit_code == 0, first.output
+    assert f"note: nothing to resume in {out}: starting a new run" in first.stderr
+    manifest = read_manifest(out)
+    assert manifest is not None
+    seed = manifest["identity"]["seed"]
+    assert f"seed {seed}," in first.stderr
+    assert json.loads((out / SUMMARY).read_text())["seed"] == seed
+    chunk_path(out, 1).unlink()
+    again = runner.invoke(app, [*args, "--resume", "--no-plot"])
+    assert again.exit_code == 0, again.output
+    assert "1 chunk(s) computed, 2 reused" in again.stderr  # the same seed: chunks match
+
+
+def test_samples_read_back_as_a_dataframe(study: tuple[Path, Path]) -> None:
+    _, reference = study
+    reader = ChunkReader(reference, CHUNKS)
+    frame = reader.to_pandas(["sample", "load.end_torque", "deployment_time_s@25.0C"])
+    assert list(frame.columns) == ["sample", "load.end_torque", "deployment_time_s@25.0C"]
+    assert len(frame) == SAMPLES
+    np.testing.assert_array_equal(frame["sample"].to_numpy(), np.arange(SAMPLES))
+    np.testing.assert_array_equal(
+        frame["deployment_time_s@25.0C"].to_numpy(), reader.floats("deployment_time_s@25.0C")
+    )
