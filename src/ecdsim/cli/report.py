@@ -1,0 +1,100 @@
+"""``ecdsim report`` (one self-contained HTML file, optional PDF) and ``ecdsim app`` (explorer).
+
+Both reuse the ``deploy`` command's loading and prediction (``_load``, ``_predict`` in
+:mod:`ecdsim.cli.app`), imported lazily inside the commands, so the numbers are those of
+``ecdsim deploy --json``. FastAPI and uvicorn (the ``app`` extra) are imported only by
+``ecdsim app``. User errors print ``error: ...`` lines and exit with code 2.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+REPORT_EPILOG = "Example: [bold]ecdsim report examples/paper_cc16.toml -o report.html --pdf[/bold]"
+APP_EPILOG = (
+    "Example: [bold]ecdsim app examples/paper_cc16.toml[/bold], then open the printed URL "
+    "(docs/report.md)"
+)
+
+
+def report(
+    config: Annotated[Path, typer.Argument(help="TOML configuration file (see docs/config.md).")],
+    output: Annotated[
+        Path, typer.Option("--output", "-o", help="HTML file to write.", metavar="FILE.html")
+    ] = Path("report.html"),
+    pdf: Annotated[
+        bool,
+        typer.Option("--pdf", help="Also print it to FILE.pdf with headless Chromium."),
+    ] = False,
+    temperature: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--temperature",
+            "-T",
+            help="Analysis temperature, repeatable; overrides \\[analysis] (bare numbers: degC).",
+        ),
+    ] = None,
+    method: Annotated[
+        list[str] | None,
+        typer.Option("--method", "-m", help="Solver, repeatable; overrides \\[analysis]."),
+    ] = None,
+) -> None:
+    """Write a self-contained HTML report: inputs, components, deployment, plots, warnings."""
+    from ecdsim.cli.app import _load, _predict, _warn, fail
+    from ecdsim.report import write_report
+    from ecdsim.report.pdf import PdfUnavailable, html_to_pdf
+
+    loaded = _load(config, temperature, method)
+    prediction = _predict(loaded)
+    text = config.read_text(encoding="utf-8")
+    try:
+        written = write_report(loaded, prediction, text, output)
+    except OSError as exc:
+        fail([f"--output {output}: cannot write ({exc.strerror or exc})"])
+    _warn(prediction)
+    typer.echo(f"wrote {written}")
+    if pdf:
+        target = output.with_suffix(".pdf")
+        try:
+            html_to_pdf(written, target)
+        except PdfUnavailable as exc:
+            fail([str(exc)])
+        except OSError as exc:
+            fail([f"--pdf {target}: cannot write ({exc.strerror or exc})"])
+        typer.echo(f"wrote {target}")
+
+
+def explore(
+    config: Annotated[
+        Path | None,
+        typer.Argument(help="TOML configuration to start from (default: the paper example)."),
+    ] = None,
+    host: Annotated[
+        str, typer.Option("--host", help="Interface to bind; keep 127.0.0.1 (local only).")
+    ] = "127.0.0.1",
+    port: Annotated[int, typer.Option("--port", help="TCP port.")] = 8765,
+) -> None:
+    """Start the local explorer (web app + JSON API with OpenAPI docs at /docs)."""
+    from ecdsim.cli.app import _load, fail
+
+    try:
+        import uvicorn
+
+        from ecdsim.webapp.server import create_app
+    except ImportError as exc:
+        fail(
+            [
+                f"ecdsim app needs the optional 'app' extra (missing module {exc.name!r}); "
+                "install it with: pip install 'ecdsim[app]'"
+            ]
+        )
+    text = None
+    if config is not None:
+        _load(config, None, None)  # validate first: errors exit 2 like every command
+        text = config.read_text(encoding="utf-8")
+    application = create_app(text)
+    typer.echo(f"ecdsim explorer on http://{host}:{port}/ (Ctrl-C stops it)")
+    uvicorn.run(application, host=host, port=port, log_level="warning")

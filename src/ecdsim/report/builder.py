@@ -1,0 +1,399 @@
+"""Collect a report's data from library calls and render it as one self-contained HTML file.
+
+Every number comes from the calls the CLI makes: :func:`ecdsim.deployment.predict` (as
+``ecdsim deploy`` calls it), :meth:`~ecdsim.deployment.Prediction.to_dict` (the JSON of
+``ecdsim deploy --json``, embedded verbatim in the report), :mod:`ecdsim.plotting` for the
+figures and :func:`ecdsim.sizing.search.evaluate` for the torque margins. Nothing here
+computes physics; the tables only format and subtract numbers already in that JSON.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as dt
+import io
+import json
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from pydantic import BaseModel
+
+from ecdsim._version import __version__
+from ecdsim.atomic import write_text
+from ecdsim.config.units import Kind
+from ecdsim.deployment import Prediction, predict
+from ecdsim.solvers import SOLVERS
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ecdsim.config import Config
+
+DATA_ELEMENT_ID = "ecdsim-data"
+
+# (JSON key in "components"/case, column header, unit); the paper's symbols.
+COMPONENT_COLUMNS: tuple[tuple[str, str, str], ...] = (
+    ("components.damper_damping_rate_Nms_per_rad", "BD_T", "N*m*s/rad"),
+    ("components.gearbox_damping_rate_Nms_per_rad", "BG", "N*m*s/rad"),
+    ("components.damper_friction_Nm", "FD", "N*m"),
+    ("components.lubrication_friction_Nm", "FL_T", "N*m"),
+    ("components.gearbox_friction_Nm", "FG", "N*m"),
+    ("damping_rate_Nms_per_rad", "BECD", "N*m*s/rad"),
+    ("friction_Nm", "FECD", "N*m"),
+    ("system_friction_Nm", "FS", "N*m"),
+)
+
+METHOD_COLUMNS: tuple[tuple[str, str, str], ...] = (
+    ("deployment_time_s", "deployment time", "s"),
+    ("start_speed_rad_s", "start speed", "rad/s"),
+    ("end_speed_rad_s", "end speed", "rad/s"),
+    ("max_speed_rad_s", "max speed", "rad/s"),
+)
+
+
+def predict_config(config: Config) -> Prediction:
+    """Predict a loaded configuration exactly as ``ecdsim deploy`` does.
+
+    Raises :class:`~ecdsim.deployment.ModelDomainError` where the model has no meaning.
+    """
+    return predict(
+        config.system, config.temperatures, config.methods, dynamics=config.spec.dynamics()
+    )
+
+
+def lookup(case: dict[str, Any], key: str) -> Any:
+    """The value at a dotted key path of a case dictionary (``"exact.deployment_time_s"``)."""
+    value: Any = case
+    for part in key.split("."):
+        value = value[part]
+    return value
+
+
+def fmt(value: float | None, digits: int = 6) -> str:
+    """A number for a table cell: ``digits`` significant digits, "-" for None."""
+    if value is None:
+        return "-"
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return f"{value:.{digits}g}"
+
+
+def input_rows(spec: BaseModel, prefix: str = "") -> Iterator[tuple[str, str, str]]:
+    """(key, value, unit) for every field of the validated config, in SI units.
+
+    Units come from each field's :class:`~ecdsim.config.units.Kind`; sections without a
+    scalar quantity (tables, lists) are shown as they were validated.
+    """
+    for name, info in type(spec).model_fields.items():
+        value = getattr(spec, name)
+        key = f"{prefix}{name}"
+        if value is None:
+            continue
+        if isinstance(value, BaseModel):
+            yield from input_rows(value, f"{key}.")
+            continue
+        kinds = [m for m in info.metadata if isinstance(m, Kind)]
+        unit = (kinds[0].unit or "-") if kinds else _units_of(info.annotation)
+        if isinstance(value, float | int) and not isinstance(value, bool):
+            yield key, fmt(float(value)), unit
+        else:
+            yield key, _plain(value), _units_of(info.annotation)
+
+
+def _plain(value: Any) -> str:
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_plain(v) for v in value) + "]"
+    if isinstance(value, float):
+        return fmt(value)
+    return str(value)
+
+
+def _units_of(annotation: Any) -> str:
+    """Units of the items of a list or tuple field, e.g. "(degC, N*m)"; "-" if none."""
+    found: list[str] = []
+
+    def walk(node: Any) -> None:
+        for meta in getattr(node, "__metadata__", ()):
+            if isinstance(meta, Kind):
+                found.append(meta.unit or "-")
+                return
+        for arg in getattr(node, "__args__", ()):
+            walk(arg)
+
+    walk(annotation)
+    if not found:
+        return "-"
+    return found[0] if len(found) == 1 else "(" + ", ".join(found) + ")"
+
+
+def figure_data_uri(fig: Figure) -> str:
+    """A matplotlib figure as an inline ``data:image/png;base64,...`` URI."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
+
+
+def plot_speed(prediction: Prediction, n_points: int = 400) -> Figure:
+    """Input-shaft speed against time at each temperature, by each method."""
+    from matplotlib.figure import Figure
+
+    from ecdsim.plotting import _colors, _time_span
+
+    fig = Figure(figsize=(7.5, 4.8), layout="constrained")
+    ax = fig.add_subplot()
+    times = np.linspace(0.0, _time_span(prediction), n_points)
+    temps = np.ravel(prediction.temperatures)
+    colors = _colors(len(temps))
+    styles = {"exact": "-", "paper": "--"}
+    for name in prediction.solutions:
+        speed = prediction.trajectory(name, times).speed.reshape(len(times), -1)
+        for j, temp in enumerate(temps):
+            ax.plot(
+                times,
+                speed[:, j],
+                styles.get(name, ":"),
+                color=colors[j],
+                label=f"{temp:g} degC, {SOLVERS[name].label}",
+            )
+    ax.set_xlabel("time since release [s]")
+    ax.set_ylabel("input shaft speed [rad/s]")
+    ax.set_title(f"{prediction.system.name}: speed against time")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return fig
+
+
+def _figures(prediction: Prediction) -> list[dict[str, str]]:
+    from ecdsim.plotting import plot_deployment, plot_torque_speed
+
+    made = [
+        ("angle", "Deployed angle against time (paper Fig. 4-6)", plot_deployment(prediction)),
+        ("speed", "Input shaft speed against time", plot_speed(prediction)),
+        (
+            "torque_speed",
+            "ECD torque against speed at each temperature (paper Fig. 8)",
+            plot_torque_speed(prediction),
+        ),
+    ]
+    return [
+        {"id": key, "caption": caption, "src": figure_data_uri(fig)} for key, caption, fig in made
+    ]
+
+
+def _deployment_rows(document: dict[str, Any]) -> list[dict[str, Any]]:
+    """One row per (temperature, method): the method's numbers and its difference to exact."""
+    methods: list[str] = document["methods"]
+    reference = "exact" if "exact" in methods else methods[0]
+    rows = []
+    for i, case in enumerate(document["cases"]):
+        ref_time = case[reference]["deployment_time_s"]
+        for method in methods:
+            result = case[method]
+            time = result["deployment_time_s"]
+            if method == reference or time is None or ref_time is None:
+                diff = rel = None
+            else:
+                diff = time - ref_time
+                rel = diff / ref_time
+            cells = [
+                {"key": f"{method}.{key}", "text": fmt(result[key]), "unit": unit}
+                for key, _, unit in METHOD_COLUMNS
+            ]
+            rows.append(
+                {
+                    "case": i,
+                    "temperature": fmt(case["temperature_C"]),
+                    "method": method,
+                    "label": SOLVERS[method].label,
+                    "cells": cells,
+                    "difference": fmt(diff),
+                    "relative": "-" if rel is None else f"{100.0 * rel:+.3f}",
+                    "stall": (
+                        f"at {result['stall_angle_rad']:.4g} rad" if result["stalled"] else "no"
+                    ),
+                }
+            )
+    return rows
+
+
+def margin_section(config: Config) -> dict[str, Any] | None:
+    """Torque margins and requirement checks (``[requirements]``), or None without it.
+
+    The same :func:`ecdsim.sizing.search.evaluate` call as ``ecdsim size`` makes, for the
+    configured damper and gearbox as a single candidate.
+    """
+    spec = config.spec.requirements
+    if spec is None:
+        return None
+    from ecdsim.sizing.requirements import Requirements
+    from ecdsim.sizing.search import evaluate, stack_ecd
+
+    requirements = Requirements.from_spec(spec)
+    ecd = stack_ecd([config.system.ecd.damper], [config.system.ecd.gearbox])
+    evaluation = evaluate(ecd, config.system.load, requirements)
+    temps = [float(t) for t in evaluation.temperatures]
+    checks = []
+    for check in evaluation.checks:
+        values = [float(v) for v in np.ravel(check.values[0])]
+        margins = [float(m) for m in np.ravel(check.margins[0])]
+        checks.append(
+            {
+                "name": check.name,
+                "label": check.label,
+                "unit": check.unit,
+                "values": values,
+                "margins": margins,
+                "cells": [
+                    {"value": fmt(v), "margin": fmt(m, 4), "ok": m >= 0.0}
+                    for v, m in zip(values, margins, strict=True)
+                ],
+                "passed": all(m >= 0.0 for m in margins),
+            }
+        )
+    return {
+        "temperatures_C": temps,
+        "torque_margin": [float(v) for v in np.ravel(evaluation.torque_margin[0])],
+        "torque_margin_angle_rad": [float(v) for v in np.ravel(evaluation.torque_margin_angle[0])],
+        "factors_applied": requirements.margin.factors_applied,
+        "requirements": requirements.describe(),
+        "checks": checks,
+        "passed": bool(evaluation.passed()[0]),
+    }
+
+
+def _tolerance_text(spec: dict[str, Any]) -> str:
+    """One tolerance as an engineer writes it: "normal, 3 sigma = 10 %"."""
+    widths = (("sigma", "sigma = "), ("three_sigma", "3 sigma = "), ("plus_minus", "+-"))
+    parts = [f"{label}{spec[key]['text']}" for key, label in widths if spec.get(key) is not None]
+    return ", ".join([str(spec.get("distribution", "?")), *parts])
+
+
+# A report's study is a quick look (the P1/P99 of 4096 samples are good to a few %),
+# not a replacement for a full `ecdsim montecarlo` run; the report says so.
+REPORT_MC_SAMPLES = 4096
+REPORT_MC_SEED = 0  # used when [tolerances] gives no seed, so that a report is repeatable
+PERCENTILE_KEYS = ("P1", "P5", "P50", "P95", "P99")
+
+
+def montecarlo_section(config: Config, samples: int = REPORT_MC_SAMPLES) -> dict[str, Any] | None:
+    """A Monte Carlo summary for ``[tolerances]`` (exact method), or None without it.
+
+    The study runs in process through the same functions as ``ecdsim montecarlo``
+    (:func:`ecdsim.montecarlo.build_plan`, :func:`ecdsim.montecarlo.run`,
+    :func:`ecdsim.montecarlo.stats.summarize`), into a temporary folder.
+    """
+    import tempfile
+
+    if config.spec.tolerances is None:
+        return None
+    raw = config.spec.tolerances.model_dump(mode="json")
+    quantities = raw.get("quantities") or {}
+    section: dict[str, Any] = {
+        "command": f"ecdsim montecarlo {config.source} --samples 100000",
+        "quantities": [{"name": k, "spec": _tolerance_text(v)} for k, v in quantities.items()],
+        "samples": samples,
+        "rows": [],
+        "error": None,
+        "summary": None,
+    }
+    from ecdsim.montecarlo import InProcess, MissingDependency, RunError, build_plan, run
+    from ecdsim.montecarlo.stats import summarize
+
+    seed = None if config.spec.tolerances.seed is not None else REPORT_MC_SEED
+    try:
+        with tempfile.TemporaryDirectory(prefix="ecdsim-report-mc-") as folder:
+            out = Path(folder) / "study"
+            plan = build_plan(config, samples, "exact", seed=seed, out=out)
+            run(plan, out, InProcess())
+            summary = summarize(plan, out)
+    except (MissingDependency, RunError) as exc:
+        section["error"] = str(exc)
+        return section
+    section["summary"] = summary
+    section["seed"] = summary.get("seed")
+    for case in summary["cases"]:
+        time = case["deployment_time_s"]
+        inputs = sorted(case["sensitivity"]["inputs"], key=lambda item: -abs(item["src"] or 0.0))
+        section["rows"].append(
+            {
+                "temperature_C": case["temperature_C"],
+                "percentiles": [time["percentiles"][k]["value"] for k in PERCENTILE_KEYS],
+                "mean": time["mean"],
+                "std": time["std"],
+                "stall_probability": case["stall"]["probability"],
+                "drivers": ", ".join(f"{i['key']} ({i['src']:+.2f})" for i in inputs[:3]),
+            }
+        )
+    return section
+
+
+def build_context(config: Config, prediction: Prediction, config_text: str) -> dict[str, Any]:
+    """Everything the template shows, from the prediction and the config."""
+    document = prediction.to_dict()
+    provenance = {
+        "ecdsim_version": __version__,
+        "config_source": config.source,
+        "config_sha256": config.sha256,
+        "date": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
+    }
+    margins = margin_section(config)
+    montecarlo = montecarlo_section(config)
+    data = {
+        "prediction": document,
+        "provenance": provenance,
+        "margins": margins,
+        "montecarlo": montecarlo["summary"] if montecarlo else None,
+    }
+    components = [
+        {
+            "case": i,
+            "temperature": fmt(case["temperature_C"]),
+            "cells": [
+                {"key": key, "text": fmt(lookup(case, key))} for key, _, _ in COMPONENT_COLUMNS
+            ],
+        }
+        for i, case in enumerate(document["cases"])
+    ]
+    return {
+        "title": config.system.name,
+        "provenance": provenance,
+        "inputs": list(input_rows(config.spec)),
+        "config_text": config_text,
+        "component_columns": COMPONENT_COLUMNS,
+        "components": components,
+        "method_columns": METHOD_COLUMNS,
+        "deployment": _deployment_rows(document),
+        "methods": [(m, SOLVERS[m].label) for m in document["methods"]],
+        "figures": _figures(prediction),
+        "warnings": document["warnings"],
+        "margins": margins,
+        "montecarlo": montecarlo,
+        "percentile_keys": PERCENTILE_KEYS,
+        "data_id": DATA_ELEMENT_ID,
+        # "</" must not appear inside <script>; JSON allows "<\/".
+        "data_json": json.dumps(data, sort_keys=True, allow_nan=False).replace("</", "<\\/"),
+    }
+
+
+def render_html(config: Config, prediction: Prediction, config_text: str) -> str:
+    """The report as one self-contained HTML document (figures inline, no network)."""
+    import jinja2
+
+    env = jinja2.Environment(
+        loader=jinja2.PackageLoader("ecdsim.report", "templates"),
+        autoescape=True,
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )
+    env.globals["fmt"] = fmt
+    template = env.get_template("report.html.j2")
+    return template.render(**build_context(config, prediction, config_text))
+
+
+def write_report(config: Config, prediction: Prediction, config_text: str, path: Path) -> Path:
+    """Render the report and write it atomically to ``path``."""
+    return write_text(path, render_html(config, prediction, config_text))

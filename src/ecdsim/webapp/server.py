@@ -1,0 +1,284 @@
+"""The explorer: a FastAPI app serving a JSON API (OpenAPI at /openapi.json) and a static page.
+
+Every result comes from :func:`ecdsim.report.builder.predict_config`, which calls
+:func:`ecdsim.deployment.predict` exactly as ``ecdsim deploy`` does; the response's
+``prediction`` is :meth:`~ecdsim.deployment.Prediction.to_dict`, the JSON of
+``ecdsim deploy --json``. A request's config is the TOML file's content as JSON (quantities
+as unit strings); it is written as TOML and read by :func:`ecdsim.config.parse_config`,
+so that the web and the file go through one parser and the downloaded TOML is exactly
+what was computed. Invalid configs give 422 with one message per problem, naming the
+field. plotly.js is served from the installed ``plotly`` package (no CDN).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+import tomllib
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from fastapi import FastAPI, HTTPException, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
+from pydantic import BaseModel, ConfigDict, Field
+
+from ecdsim._version import __version__
+from ecdsim.config import Config, ConfigError, parse_config
+from ecdsim.deployment import ModelDomainError, Prediction, predict
+from ecdsim.report.builder import predict_config, render_html
+from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
+
+STATIC = Path(str(files("ecdsim.webapp") / "static"))
+EXAMPLE_CONFIG = files("ecdsim") / "data" / "paper_cc16.toml"
+MAX_TEMPERATURES = 50
+
+
+class ConfigBody(BaseModel):
+    """A configuration as JSON: the TOML file's tables and keys, quantities as unit strings."""
+
+    model_config = ConfigDict(
+        extra="forbid",
+        json_schema_extra={
+            "examples": [
+                {
+                    "config": {
+                        "damper": {"damping_rate": "1.3e-4 N*m*s/rad",
+                                   "coulomb_friction": "7.9e-4 N*m"},
+                        "gearbox": {"ratio": 380, "damping_fraction": 0.26,
+                                    "coulomb_friction": "4.5e-4 N*m"},
+                        "load": {"start_torque": "3.73 N*m", "end_torque": "1.58 N*m",
+                                 "travel": "1.57 rad"},
+                    }
+                }
+            ]
+        },
+    )  # fmt: skip
+
+    config: dict[str, Any] = Field(
+        description="The configuration: same tables and keys as the TOML file (docs/config.md)."
+    )
+
+
+class DeployBody(ConfigBody):
+    """A configuration plus how finely to sample the curves."""
+
+    time_points: int = Field(200, ge=2, le=2000, description="Samples of angle against time.")
+    sweep_points: int = Field(
+        25,
+        ge=0,
+        le=201,
+        description="Temperatures of the deployment-time curve, spread between the coldest "
+        "and the hottest configured temperature (0: none).",
+    )
+
+
+class TomlBody(BaseModel):
+    """A configuration as TOML text."""
+
+    model_config = ConfigDict(extra="forbid")
+    toml: str = Field(description="TOML text of a configuration (docs/config.md).")
+
+
+class ProblemDetail(BaseModel):
+    """Why a request was refused: one readable line per problem, each naming its field."""
+
+    errors: list[str]
+
+
+class DeployResponse(BaseModel):
+    """A prediction, the curves for plotting and the server-side compute time."""
+
+    prediction: dict[str, Any] = Field(description="Exactly `ecdsim deploy --json` (docs/json.md).")
+    trajectories: dict[str, Any] = Field(
+        description="time_s, and per method angle_rad / speed_rad_s as [temperature][time]."
+    )
+    sweep: dict[str, Any] = Field(
+        description="temperature_C and per method deployment_time_s (null where it stalls)."
+    )
+    toml: str = Field(description="The configuration as TOML (what /api/config.toml returns).")
+    compute_ms: float = Field(description="Server-side time of the computation [ms].")
+
+
+class ExampleResponse(BaseModel):
+    """The configuration the explorer starts from."""
+
+    config: dict[str, Any]
+    toml: str
+    source: str
+
+
+_ERRORS: dict[int | str, dict[str, Any]] = {422: {"model": ProblemDetail}}
+
+
+def _refuse(problems: list[str]) -> HTTPException:
+    return HTTPException(status_code=422, detail=problems)
+
+
+def load_body(raw: dict[str, Any]) -> tuple[Config, str]:
+    """The validated config and its TOML text; HTTP 422 with every problem if invalid."""
+    try:
+        text = to_toml(raw)
+    except UnrepresentableError as exc:
+        raise _refuse([f"config.{exc}"]) from None
+    try:
+        config = parse_config(text, "config")
+    except ConfigError as exc:
+        raise _refuse(str(exc).splitlines()) from None
+    if len(config.temperatures) > MAX_TEMPERATURES:
+        raise _refuse(
+            [f"analysis.temperatures: {len(config.temperatures)} given; at most {MAX_TEMPERATURES}"]
+        )
+    return config, text
+
+
+def _predict(config: Config) -> Prediction:
+    try:
+        return predict_config(config)
+    except ModelDomainError as exc:
+        raise _refuse([str(exc)]) from None
+
+
+def _finite_or_none(values: Any) -> list[float | None]:
+    return [float(v) if np.isfinite(v) else None for v in np.ravel(values)]
+
+
+def curves(
+    prediction: Prediction, config: Config, time_points: int, sweep_points: int
+) -> dict[str, Any]:
+    """Angle and speed against time, and deployment time against temperature (a sweep)."""
+    from ecdsim.plotting import _time_span
+
+    times = np.linspace(0.0, _time_span(prediction), time_points)
+    n_temps = prediction.temperatures.size
+    trajectories: dict[str, Any] = {"time_s": times.tolist(), "methods": {}}
+    for name in prediction.solutions:
+        trajectory = prediction.trajectory(name, times)
+        angle = np.asarray(trajectory.angle).reshape(time_points, n_temps)
+        speed = np.asarray(trajectory.speed).reshape(time_points, n_temps)
+        trajectories["methods"][name] = {
+            "angle_rad": [_finite_or_none(angle[:, j]) for j in range(n_temps)],
+            "speed_rad_s": [_finite_or_none(speed[:, j]) for j in range(n_temps)],
+        }
+    sweep: dict[str, Any] = {"temperature_C": [], "methods": {}}
+    if sweep_points > 0:
+        low, high = min(config.temperatures), max(config.temperatures)
+        temps = np.linspace(low, high, sweep_points) if high > low else np.array([low])
+        swept = predict(config.system, temps, config.methods, dynamics=config.spec.dynamics())
+        sweep["temperature_C"] = temps.tolist()
+        for name, solution in swept.solutions.items():
+            sweep["methods"][name] = {
+                "deployment_time_s": _finite_or_none(solution.deployment_time)
+            }
+    return {"trajectories": trajectories, "sweep": sweep}
+
+
+def create_app(config_text: str | None = None) -> FastAPI:
+    """The explorer app, starting from ``config_text`` (TOML) or the paper's example."""
+    start_text = config_text if config_text is not None else EXAMPLE_CONFIG.read_text("utf-8")
+    source = "your config" if config_text is not None else "paper example (section 6)"
+    example_text = EXAMPLE_CONFIG.read_text("utf-8")
+
+    app = FastAPI(
+        title="ecdsim explorer API",
+        version=__version__,
+        description=(
+            "Deployment predictions for eddy current dampers (docs/report.md). Configs are "
+            "JSON with the TOML file's keys and unit strings; invalid input gives 422 with "
+            "one message per problem."
+        ),
+    )
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
+        problems = []
+        for error in exc.errors():
+            where = ".".join(str(p) for p in error.get("loc", ()) if p != "body") or "body"
+            problems.append(f"{where}: {error.get('msg', 'invalid')}")
+        return JSONResponse(status_code=422, content={"errors": problems})
+
+    @app.exception_handler(HTTPException)
+    async def _refused(request: Request, exc: HTTPException) -> JSONResponse:
+        raw: Any = exc.detail
+        detail = raw if isinstance(raw, list) else [str(raw)]
+        return JSONResponse(status_code=exc.status_code, content={"errors": detail})
+
+    @app.get("/", response_class=HTMLResponse, include_in_schema=False)
+    def index() -> FileResponse:
+        return FileResponse(STATIC / "index.html", media_type="text/html")
+
+    @app.get("/static/app.js", include_in_schema=False)
+    def app_js() -> FileResponse:
+        return FileResponse(STATIC / "app.js", media_type="text/javascript")
+
+    @app.get("/static/plotly.min.js", include_in_schema=False)
+    def plotly_js() -> FileResponse:
+        import plotly
+
+        path = Path(plotly.__file__).parent / "package_data" / "plotly.min.js"
+        return FileResponse(path, media_type="text/javascript")
+
+    @app.get("/api/example", response_model=ExampleResponse)
+    def example(which: str = "start") -> dict[str, Any]:
+        """The configuration the explorer starts from, or (which=paper) the paper's example."""
+        if which not in {"start", "paper"}:
+            raise _refuse([f"which: {which!r} is not one of 'start', 'paper'"])
+        text = example_text if which == "paper" else start_text
+        return {
+            "config": tomllib.loads(text),
+            "toml": text,
+            "source": "paper example (section 6)" if which == "paper" else source,
+        }
+
+    @app.post("/api/deploy", response_model=DeployResponse, responses=_ERRORS)
+    def deploy(body: DeployBody) -> Response:
+        """Predict the deployment of a config, as `ecdsim deploy --json`, plus curves."""
+        config, text = load_body(body.config)
+        began = time.perf_counter()
+        prediction = _predict(config)
+        document = prediction.to_dict()
+        extra = curves(prediction, config, body.time_points, body.sweep_points)
+        elapsed = 1000.0 * (time.perf_counter() - began)
+        payload = {"prediction": document, **extra, "toml": text, "compute_ms": elapsed}
+        return Response(json.dumps(payload, allow_nan=False), media_type="application/json")
+
+    @app.post("/api/config/parse", response_model=ExampleResponse, responses=_ERRORS)
+    def parse(body: TomlBody) -> dict[str, Any]:
+        """Validate TOML text and return it as the JSON config the API takes."""
+        try:
+            raw = tomllib.loads(body.toml)
+        except tomllib.TOMLDecodeError as exc:
+            raise _refuse([f"toml: not valid TOML: {exc}"]) from None
+        load_body(raw)
+        return {"config": raw, "toml": body.toml, "source": "uploaded"}
+
+    @app.post(
+        "/api/config.toml",
+        response_class=Response,
+        responses={200: {"content": {"application/toml": {}}}, **_ERRORS},
+    )
+    def config_toml(body: ConfigBody) -> Response:
+        """The (edited) config as a TOML file to download."""
+        _, text = load_body(body.config)
+        return Response(
+            text,
+            media_type="application/toml",
+            headers={"Content-Disposition": 'attachment; filename="ecdsim-config.toml"'},
+        )
+
+    @app.post(
+        "/api/report",
+        response_class=HTMLResponse,
+        responses={200: {"content": {"text/html": {}}}, **_ERRORS},
+    )
+    def report(body: ConfigBody) -> Response:
+        """The self-contained HTML report of the config (as `ecdsim report`)."""
+        config, text = load_body(body.config)
+        html = render_html(config, _predict(config), text)
+        return HTMLResponse(
+            html, headers={"Content-Disposition": 'attachment; filename="ecdsim-report.html"'}
+        )
+
+    return app
