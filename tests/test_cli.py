@@ -85,7 +85,7 @@ def test_stall_warning_goes_to_stderr_and_json(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("replace", "fragment"),
     [
-        (("ratio = 380", "ratio = -380"), "gearbox.ratio: '-380' must be > 0"),
+        (("ratio = 380", "ratio = -380"), "gearbox.ratio: -380 must be > 0"),
         (('"1.57 rad"', '"1.57 N*m"'), "load.travel: '1.57 N*m' has the wrong dimension"),
         (("[gearbox]", "[gearbox]\nspeed = 3"), "gearbox.speed: unknown key"),
         (("title =", "title = = "), "not valid TOML"),

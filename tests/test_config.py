@@ -8,7 +8,15 @@ from pathlib import Path
 import pytest
 
 from ecdsim.config import ConfigError, load_config, parse_config
-from ecdsim.config.units import ANGLE, DAMPING, PER_KELVIN, TEMPERATURE, TORQUE, QuantityError
+from ecdsim.config.units import (
+    ANGLE,
+    DAMPING,
+    PER_KELVIN,
+    SPEED,
+    TEMPERATURE,
+    TORQUE,
+    QuantityError,
+)
 from tests import hand
 from tests.conftest import PAPER_CONFIG
 
@@ -50,6 +58,9 @@ def test_paper_config_gives_paper_constants() -> None:
         (TEMPERATURE, "25 degC", 25.0),
         (TEMPERATURE, "298.15 K", 25.0),
         (TEMPERATURE, "-40 degF", -40.0),
+        (TEMPERATURE, "233.15 K", -40.0),
+        (SPEED, "1800 rpm", 188.49555921538757),  # 1800 * 2 pi / 60
+        (SPEED, "30 turn/s", 188.49555921538757),
         (PER_KELVIN, "-0.004 / K", -0.004),
         (PER_KELVIN, "-0.004 / degC", -0.004),  # degC in a rate is a difference
         (PER_KELVIN, "-0.4 percent/K", -0.004),
@@ -75,6 +86,8 @@ def test_units_are_converted_to_si(kind: object, text: str, expected: float) -> 
         (TORQUE, True, "not a number"),
         (TORQUE, ["3 N*m"], "not a quantity"),
         (TEMPERATURE, "25", "has no unit"),
+        (SPEED, "30 Hz", "ambiguous"),  # pint would read 30 rad/s, not 2*pi*30
+        (ANGLE, "50 %", "ambiguous"),  # pint would read 0.5 rad
     ],
 )
 def test_bad_quantities(kind: object, value: object, fragment: str) -> None:
@@ -103,7 +116,7 @@ def test_bad_quantities(kind: object, value: object, fragment: str) -> None:
             "damper.damping_rate: '-1.3e-4 N*m*s/rad' must be > 0",
         ),
         # negative ratio
-        ("ratio", "ratio = -380", "gearbox.ratio: '-380' must be > 0"),
+        ("ratio", "ratio = -380", "gearbox.ratio: -380 must be > 0"),
         # zero travel
         ("travel", 'travel = "0 deg"', "load.travel: '0 deg' must be > 0; expected an angle"),
         # non-finite
@@ -226,3 +239,18 @@ def test_friction_table_config() -> None:
         'table = [["0 degC", "1 N*m"], ["1 degC", "1 N*m"]] }',
     )
     assert "not both" in problems_of(both)[0]
+
+
+def test_temperature_in_other_units_lands_exactly_on_degc() -> None:
+    # A friction table in degF must not make an analysis at -40 degC look extrapolated:
+    # -40 degF is -40 degC, though pint's conversion lands a few ulp away.
+    assert TEMPERATURE.parse("-40 degF") == pytest.approx(-40.0, abs=1e-12)
+    text = replace_line(
+        "system_friction",
+        'system_friction = { table = [["-40 degF", "0.756 N*m"], ["212 degF", "0.14 N*m"]] }',
+    )
+    from ecdsim.deployment import predict
+
+    config = parse_config(text)
+    prediction = predict(config.system, config.temperatures)
+    assert not [w for w in prediction.warnings if w.code == "table_extrapolation"]

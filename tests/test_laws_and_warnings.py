@@ -87,12 +87,14 @@ def test_negative_friction_is_flagged_not_hidden() -> None:
 
 
 def test_damping_law_out_of_domain_is_a_clear_error() -> None:
-    # 1 - 0.004 (T - 25) = 0 at T = 275 degC; with BG it stays positive until
-    # BD(1 - 0.004 dT) + 0.26 BD = 0, i.e. dT = 1.26/0.004 = 315 K -> T = 340 degC.
+    # BD_T = BD (1 - 0.004 (T - 25)) = 0 at T = 275 degC. The total BT_T = BD_T + 0.26 BD
+    # would stay positive up to 340 degC, but a negative BD_T is already outside the law.
     with pytest.raises(ModelDomainError, match="damping_temperature_coefficient"):
+        predict(paper_system(), [280.0])
+    with pytest.raises(ModelDomainError, match="BD_T"):
         predict(paper_system(), [345.0])
-    ok = predict(paper_system(), [335.0])
-    assert float(ok.ecd.ecd_damping_rate[0]) > 0.0
+    ok = predict(paper_system(), [270.0])
+    assert float(ok.ecd.damper_damping_rate[0]) > 0.0
 
 
 def test_spring_temperature_coefficient() -> None:

@@ -21,14 +21,15 @@ def atomic_path(target: str | Path) -> Iterator[Path]:
     final = Path(target)
     final.parent.mkdir(parents=True, exist_ok=True)
     handle, name = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent)
-    os.close(handle)
     temporary = Path(name)
-    # mkstemp creates the file private (0600); give it the mode a plain open() would, so
-    # that the result is as readable as any other file the user writes.
-    umask = os.umask(0)
-    os.umask(umask)
-    temporary.chmod(0o666 & ~umask)
     try:
+        os.close(handle)
+        # mkstemp creates the file private (0600); give it the mode a plain open() would,
+        # so that the result is as readable as any other file the user writes. Inside the
+        # try, so that an interrupt here still removes the temporary file.
+        umask = os.umask(0)
+        os.umask(umask)
+        temporary.chmod(0o666 & ~umask)
         yield temporary
         os.replace(temporary, final)
     except BaseException:

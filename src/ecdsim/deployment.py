@@ -16,6 +16,9 @@ import numpy as np
 
 from ecdsim._types import ArrayLike, BoolArray, FloatArray
 from ecdsim._version import __version__
+from ecdsim.dynamics.method import DynamicSolution
+from ecdsim.dynamics.params import DynamicParameters
+from ecdsim.dynamics.problem import DynamicDomainError, dynamic_problem
 from ecdsim.model import DeploymentSystem, EcdState
 from ecdsim.physics.assembly import damper_torque
 from ecdsim.solvers import SOLVERS, DeploymentSolution, QuasiStaticProblem, Trajectory
@@ -88,6 +91,9 @@ class Prediction:
 
     def trajectory(self, method: str, times: ArrayLike) -> Trajectory:
         """Angle and speed against time [s] by one method."""
+        solution = self.solutions.get(method)
+        if isinstance(solution, DynamicSolution):  # reuse the solved segments
+            return solution.trajectory(times)
         return SOLVERS[method].trajectory(self.problem, times)
 
     def time_difference(self, method: str = "paper", reference: str = "exact") -> FloatArray:
@@ -136,11 +142,11 @@ class Prediction:
             "components": {
                 "damper_damping_rate_Nms_per_rad": at(e.damper_damping_rate),
                 "gearbox_damping_rate_Nms_per_rad": at(e.gearbox_damping_rate),
-                "total_damping_rate_Nms_per_rad": at(e.total_damping_rate),
+                "high_speed_total_damping_rate_Nms_per_rad": at(e.total_damping_rate),
                 "damper_friction_Nm": at(e.damper_friction),
                 "lubrication_friction_Nm": at(e.lubrication_friction),
                 "gearbox_friction_Nm": at(e.gearbox_friction),
-                "total_friction_Nm": at(e.total_friction),
+                "high_speed_total_friction_Nm": at(e.total_friction),
                 "gear_ratio": at(e.gear_ratio),
                 "lost_motion_rad": float(self.system.ecd.gearbox.lost_motion),
             },
@@ -156,6 +162,8 @@ class Prediction:
                 "stalled": stalled,
                 "stall_angle_rad": at(solution.stall_angle) if stalled else None,
             }
+            if isinstance(solution, DynamicSolution):
+                case[name].update(solution.case_fields(i))
         if "paper" in self.solutions and "exact" in self.solutions:
             paper_t = case["paper"]["deployment_time_s"]
             exact_t = case["exact"]["deployment_time_s"]
@@ -190,11 +198,16 @@ def predict(
     system: DeploymentSystem,
     temperatures: ArrayLike,
     methods: Sequence[str] = DEFAULT_METHODS,
+    dynamics: DynamicParameters | None = None,
 ) -> Prediction:
     """Predict the deployment at each temperature [degC] by each named method.
 
-    Raises :class:`ModelDomainError` where the damping law gives a non-positive damping
-    rate (the model has no meaning there) and ``KeyError`` for an unknown method.
+    ``dynamics`` (inertia, stiction, end stop, ...) is needed by the ``dynamic`` method;
+    when given, every method solves the same :class:`~ecdsim.dynamics.DynamicProblem`
+    (the quasi-static methods use its quasi-static part). Raises
+    :class:`ModelDomainError` where the damping law gives a non-positive damping rate
+    (the model has no meaning there) or a dynamic parameter is out of its domain, and
+    ``KeyError`` for an unknown method.
     """
     unknown = [m for m in methods if m not in SOLVERS]
     if unknown:
@@ -203,6 +216,17 @@ def predict(
     ecd = system.ecd.at(temps)
     _check_damping_positive(ecd)
     problem, fs = build_problem(system, ecd, temps)
+    if dynamics is not None:
+        try:
+            problem = dynamic_problem(system, ecd, temps, problem, fs, dynamics)
+        except DynamicDomainError as exc:
+            raise ModelDomainError(exc.key, exc.message) from None
+    elif "dynamic" in methods:
+        raise ModelDomainError(
+            "load.inertia",
+            "missing; the dynamic method needs the load's moment of inertia about the ECD "
+            "input shaft, e.g. inertia = '5 kg*m^2' in [load]",
+        )
     solutions = {name: SOLVERS[name].solve(problem) for name in methods}
     prediction = Prediction(
         system=system,
@@ -217,14 +241,17 @@ def predict(
 
 
 def _check_damping_positive(ecd: EcdState) -> None:
-    bad = ~(ecd.ecd_damping_rate > 0.0)
+    # The damper's own rate must stay positive, not only the total: a negative BD_T hidden
+    # by the gearbox's BG is still a temperature law used beyond its range.
+    damper = np.broadcast_to(ecd.damper_damping_rate, np.shape(ecd.ecd_damping_rate))
+    bad = ~(damper > 0.0) | ~(ecd.ecd_damping_rate > 0.0)
     if np.any(bad):
         where = np.broadcast_to(ecd.temperature, bad.shape)[bad]
-        value = np.broadcast_to(ecd.damper_damping_rate, bad.shape)[bad]
+        value = damper[bad]
         raise ModelDomainError(
             "damper.damping_temperature_coefficient",
-            f"at {float(where.flat[0]):g} degC the damping law gives a total damping rate "
-            f"<= 0 (BD_T = {float(value.flat[0]):.4g} N*m*s/rad); the linear temperature law "
+            f"at {float(where.flat[0]):g} degC the damping law gives a damper damping rate "
+            f"BD_T = {float(value.flat[0]):.4g} N*m*s/rad <= 0; the linear temperature law "
             "does not reach that far",
         )
 
@@ -272,6 +299,12 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
     for name, solution in prediction.solutions.items():
         found.extend(_stall_warnings(prediction, name, solution))
         found.extend(_linear_range_warnings(prediction, name, solution))
+        if isinstance(solution, DynamicSolution):
+            flat_temps = np.ravel(np.broadcast_to(temps, solution.deployment_time.shape))
+            found.extend(
+                ModelWarning(code, message, float(flat_temps[i]), name)
+                for code, message, i in solution.findings()
+            )
     return found
 
 

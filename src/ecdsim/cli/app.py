@@ -14,6 +14,10 @@ import typer
 
 from ecdsim._version import __version__
 from ecdsim.cli.fit import fit_app
+from ecdsim.cli.montecarlo import EPILOG as MONTECARLO_EPILOG
+from ecdsim.cli.montecarlo import montecarlo
+from ecdsim.cli.report import APP_EPILOG, REPORT_EPILOG, explore, report
+from ecdsim.cli.size import FLUID_EPILOG, SIZE_EPILOG, compare_fluid, size
 
 if TYPE_CHECKING:
     from ecdsim.config import Config
@@ -33,6 +37,11 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 app.add_typer(fit_app, name="fit", help="Fit BECD(T) and FECD(T) to bench data (paper section 7).")
+app.command(epilog=MONTECARLO_EPILOG)(montecarlo)
+app.command(epilog=SIZE_EPILOG)(size)
+app.command(name="compare-fluid", epilog=FLUID_EPILOG)(compare_fluid)
+app.command(epilog=REPORT_EPILOG)(report)
+app.command(name="app", epilog=APP_EPILOG)(explore)
 
 
 def _version_callback(value: bool) -> None:
@@ -99,9 +108,24 @@ def _predict(config: Config) -> Prediction:
     from ecdsim.deployment import ModelDomainError, predict
 
     try:
-        return predict(config.system, config.temperatures, config.methods)
+        return predict(
+            config.system, config.temperatures, config.methods, dynamics=config.spec.dynamics()
+        )
     except ModelDomainError as exc:
         fail([f"{config.source}: {exc}"])
+
+
+def _write_timeseries(prediction: Prediction, path: Path, as_json: bool) -> None:
+    from ecdsim.dynamics.method import DynamicSolution
+
+    solution = prediction.solutions.get("dynamic")
+    if not isinstance(solution, DynamicSolution):
+        fail(["--timeseries needs the dynamic method (--method dynamic, or in [analysis])"])
+    try:
+        solution.result.to_csv(path)
+    except OSError as exc:
+        fail([f"--timeseries {path}: cannot write ({exc.strerror or exc})"])
+    typer.echo(f"wrote {path}", err=as_json)
 
 
 def _warn(prediction: Prediction) -> None:
@@ -143,12 +167,22 @@ TempOpt = Annotated[
     typer.Option(
         "--temperature",
         "-T",
-        help="Analysis temperature, repeatable; overrides [analysis] (bare numbers are degC).",
+        help="Analysis temperature, repeatable; overrides \\[analysis] (bare numbers are degC).",
     ),
 ]
 MethodOpt = Annotated[
     list[str] | None,
-    typer.Option("--method", "-m", help="Solver, repeatable: paper, exact. Overrides [analysis]."),
+    typer.Option(
+        "--method", "-m", help="Solver, repeatable: paper, exact, dynamic. Overrides \\[analysis]."
+    ),
+]
+TimeseriesOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--timeseries",
+        help="Write the dynamic method's time series (one block per temperature) as CSV.",
+        metavar="FILE.csv",
+    ),
 ]
 
 
@@ -163,10 +197,14 @@ def deploy(
     plot: PlotOpt = None,
     temperature: TempOpt = None,
     method: MethodOpt = None,
+    timeseries: TimeseriesOpt = None,
 ) -> None:
     """Predict deployment time, speeds and stall at each temperature (paper Eq. 1-13)."""
     loaded = _load(config, temperature, method)
-    _render(_predict(loaded), as_json, plot)
+    prediction = _predict(loaded)
+    if timeseries is not None:
+        _write_timeseries(prediction, timeseries, as_json)
+    _render(prediction, as_json, plot)
 
 
 @app.command(epilog="Example: [bold]ecdsim demo --out ecdsim-demo[/bold]")

@@ -49,8 +49,8 @@ def print_tables(prediction: Prediction) -> None:
         ecd.add_row(
             _fmt(case["temperature_C"]),
             _fmt(c["damper_damping_rate_Nms_per_rad"]),
-            _fmt(c["total_damping_rate_Nms_per_rad"]),
-            _fmt(c["total_friction_Nm"]),
+            _fmt(c["high_speed_total_damping_rate_Nms_per_rad"]),
+            _fmt(c["high_speed_total_friction_Nm"]),
             _fmt(case["damping_rate_Nms_per_rad"]),
             _fmt(case["friction_Nm"]),
             _fmt(case["system_friction_Nm"]),

@@ -7,25 +7,43 @@ missing-key message say which unit was expected.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import math
 from typing import Annotated, Any
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 from pydantic_core import PydanticCustomError
 
-from ecdsim.config.units import (
-    ABSOLUTE_ZERO_C,
-    ANGLE,
-    DAMPING,
-    NUMBER,
-    PER_KELVIN,
-    SPEED,
-    TEMPERATURE,
-    TORQUE,
-    TORQUE_PER_KELVIN,
-    Kind,
-    QuantityError,
+from ecdsim.config.fields import (
+    Angle,
+    NonNegativeAngle,
+    NonNegativeDamping,
+    NonNegativeInertia,
+    NonNegativeNumber,
+    NonNegativeTorque,
+    PerKelvin,
+    PositiveAngle,
+    PositiveDamping,
+    PositiveInertia,
+    PositiveNumber,
+    PositiveSpeed,
+    PositiveTime,
+    PositiveTorque,
+    Speed,
+    Temperature,
+    Torque,
+    TorquePerKelvin,
+    positive,
+    quantity,
 )
+from ecdsim.config.sizing_schema import FluidDamperSpec, RequirementsSpec
+from ecdsim.config.tolerance_schema import TolerancesSpec
+from ecdsim.config.units import (
+    HEAT_CAPACITY,
+    NUMBER,
+    THERMAL_RESISTANCE,
+    Kind,
+)
+from ecdsim.dynamics.params import INTEGRATORS, DynamicParameters, Rolloff, Thermal
 from ecdsim.model import (
     Ecd,
     Gearbox,
@@ -40,52 +58,20 @@ from ecdsim.model import (
 )
 from ecdsim.solvers import SOLVERS
 
-Check = Callable[[float], str | None]
-
-
-def _positive(x: float) -> str | None:
-    return None if x > 0.0 else "must be > 0"
-
-
-def _non_negative(x: float) -> str | None:
-    return None if x >= 0.0 else "must be >= 0"
-
-
-def _physical_temperature(x: float) -> str | None:
-    return None if x > ABSOLUTE_ZERO_C else "is below absolute zero"
-
-
-def _parser(kind: Kind, check: Check | None = None) -> BeforeValidator:
-    def parse(value: object) -> float:
-        try:
-            number = kind.parse(value)
-        except QuantityError as exc:
-            raise PydanticCustomError("quantity", "{detail}", {"detail": str(exc)}) from None
-        problem = check(number) if check else None
-        if problem:
-            shown = value if isinstance(value, str) else repr(value)
-            raise PydanticCustomError(
-                "quantity", "{detail}", {"detail": f"{shown!r} {problem}; {kind.expected}"}
-            )
-        return number
-
-    return BeforeValidator(parse)
-
-
-Torque = Annotated[float, _parser(TORQUE), TORQUE]
-PositiveTorque = Annotated[float, _parser(TORQUE, _positive), TORQUE]
-NonNegativeTorque = Annotated[float, _parser(TORQUE, _non_negative), TORQUE]
-PositiveDamping = Annotated[float, _parser(DAMPING, _positive), DAMPING]
-NonNegativeDamping = Annotated[float, _parser(DAMPING, _non_negative), DAMPING]
-Angle = Annotated[float, _parser(ANGLE), ANGLE]
-PositiveAngle = Annotated[float, _parser(ANGLE, _positive), ANGLE]
-NonNegativeAngle = Annotated[float, _parser(ANGLE, _non_negative), ANGLE]
-PositiveSpeed = Annotated[float, _parser(SPEED, _positive), SPEED]
-Temperature = Annotated[float, _parser(TEMPERATURE, _physical_temperature), TEMPERATURE]
-PerKelvin = Annotated[float, _parser(PER_KELVIN), PER_KELVIN]
-TorquePerKelvin = Annotated[float, _parser(TORQUE_PER_KELVIN), TORQUE_PER_KELVIN]
-PositiveNumber = Annotated[float, _parser(NUMBER, _positive), NUMBER]
-NonNegativeNumber = Annotated[float, _parser(NUMBER, _non_negative), NUMBER]
+# Dynamics (docs/dynamics.md).
+PositiveHeatCapacity = Annotated[float, quantity(HEAT_CAPACITY, positive), HEAT_CAPACITY]
+PositiveThermalResistance = Annotated[
+    float, quantity(THERMAL_RESISTANCE, positive), THERMAL_RESISTANCE
+]
+StaticFactor = Annotated[
+    float, quantity(NUMBER, lambda x: None if x >= 1.0 else "must be >= 1"), NUMBER
+]
+Restitution = Annotated[
+    float, quantity(NUMBER, lambda x: None if 0.0 <= x < 1.0 else "must be in [0, 1)"), NUMBER
+]
+Tolerance = Annotated[
+    float, quantity(NUMBER, lambda x: None if 0.0 < x <= 0.1 else "must be in (0, 0.1]"), NUMBER
+]
 
 
 class _Section(BaseModel):
@@ -129,6 +115,30 @@ class FrictionLawSpec(_Section):
         return LinearTemperatureLaw(self.slope, self.at_0C)
 
 
+class RolloffSpec(_Section):
+    """``[damper.rolloff]``: Kloss-form roll-off of the eddy torque (docs/dynamics.md)."""
+
+    peak_speed: PositiveSpeed
+    resistivity_coefficient: PerKelvin
+
+    def to_model(self) -> Rolloff:
+        """The model object (SI)."""
+        return Rolloff(self.peak_speed, self.resistivity_coefficient)
+
+
+class ThermalSpec(_Section):
+    """``[damper.thermal]``: lumped heat capacity of the damper (docs/dynamics.md)."""
+
+    heat_capacity: PositiveHeatCapacity
+    thermal_resistance: PositiveThermalResistance | None = None
+
+    def to_model(self) -> Thermal:
+        """The model object (SI); no thermal resistance means adiabatic."""
+        if self.thermal_resistance is None:
+            return Thermal(self.heat_capacity)
+        return Thermal(self.heat_capacity, self.thermal_resistance)
+
+
 class DamperSpec(_Section):
     """``[damper]``: the high-speed magnetic damper (paper section 2)."""
 
@@ -139,6 +149,10 @@ class DamperSpec(_Section):
     lubrication_friction: FrictionLawSpec | None = None
     max_linear_speed: PositiveSpeed | None = None
     max_linear_torque: PositiveTorque | None = None
+    rotor_inertia: NonNegativeInertia = 0.0  # at the high-speed shaft
+    static_friction_factor: StaticFactor = 1.0
+    rolloff: RolloffSpec | None = None
+    thermal: ThermalSpec | None = None
 
     def to_model(self) -> HighSpeedDamper:
         """The model object (SI)."""
@@ -165,6 +179,7 @@ class GearboxSpec(_Section):
     damping_rate: NonNegativeDamping | None = None
     coulomb_friction: NonNegativeTorque
     lost_motion: NonNegativeAngle = 0.0
+    inertia: NonNegativeInertia = 0.0  # referred to the high-speed shaft, like BG and FG
 
     @model_validator(mode="after")
     def _one_damping(self) -> GearboxSpec:
@@ -196,6 +211,8 @@ class LoadSpec(_Section):
     system_friction: FrictionLawSpec | None = None
     spring_temperature_coefficient: PerKelvin = 0.0
     reference_temperature: Temperature = 25.0
+    inertia: PositiveInertia | None = None
+    restitution: Restitution = 0.0
 
     @model_validator(mode="after")
     def _one_spring(self) -> LoadSpec:
@@ -265,11 +282,31 @@ def _known_method(name: str) -> str:
 Method = Annotated[str, BeforeValidator(_known_method)]
 
 
+def _known_integrator(name: object) -> str:
+    if name not in INTEGRATORS:
+        raise PydanticCustomError(
+            "method",
+            "{detail}",
+            {"detail": f"{name!r} is not an integrator; expected one of {list(INTEGRATORS)}"},
+        )
+    return str(name)
+
+
 class AnalysisSpec(_Section):
     """``[analysis]``: what to compute."""
 
     temperatures: list[Temperature] = Field(default_factory=lambda: [25.0], min_length=1)
     methods: list[Method] = Field(default_factory=lambda: ["paper", "exact"], min_length=1)
+    stop_time: PositiveTime | None = None
+    rtol: Tolerance = 1e-8
+    integrator: Annotated[str, BeforeValidator(_known_integrator)] = "RODAS4"
+
+
+class InitialSpec(_Section):
+    """``[initial]``: the state at release, for the dynamic method."""
+
+    angle: NonNegativeAngle = 0.0
+    speed: Speed = 0.0
 
 
 class ConfigSpec(_Section):
@@ -280,10 +317,50 @@ class ConfigSpec(_Section):
     gearbox: GearboxSpec
     load: LoadSpec
     analysis: AnalysisSpec = Field(default_factory=AnalysisSpec)
+    requirements: RequirementsSpec | None = None
+    fluid_damper: FluidDamperSpec | None = None
+    tolerances: TolerancesSpec | None = None
+    initial: InitialSpec = Field(default_factory=InitialSpec)
+
+    @model_validator(mode="after")
+    def _dynamic_inputs(self) -> ConfigSpec:
+        if "dynamic" in self.analysis.methods and self.load.inertia is None:
+            raise ValueError(
+                "the dynamic method needs [load] inertia (the load's moment of inertia about "
+                "the ECD input shaft, e.g. '5 kg*m^2')"
+            )
+        if self.initial.angle >= self.load.travel:
+            raise ValueError(
+                f"initial.angle {self.initial.angle:g} rad must be below the travel "
+                f"{self.load.travel:g} rad"
+            )
+        return self
 
     def ecd(self) -> Ecd:
         """The ECD model (SI)."""
         return Ecd(self.damper.to_model(), self.gearbox.to_model())
+
+    def dynamics(self) -> DynamicParameters | None:
+        """The dynamic parameters (SI), or None without ``[load] inertia``."""
+        if self.load.inertia is None:
+            return None
+        damper = self.damper
+        return DynamicParameters(
+            load_inertia=self.load.inertia,
+            rotor_inertia=damper.rotor_inertia,
+            gearbox_inertia=self.gearbox.inertia,
+            static_friction_factor=damper.static_friction_factor,
+            restitution=self.load.restitution,
+            initial_angle=self.initial.angle,
+            initial_speed=self.initial.speed,
+            rolloff=damper.rolloff.to_model() if damper.rolloff else None,
+            thermal=damper.thermal.to_model() if damper.thermal else None,
+            stop_time=(
+                self.analysis.stop_time if self.analysis.stop_time is not None else math.inf
+            ),
+            rtol=self.analysis.rtol,
+            integrator=self.analysis.integrator,
+        )
 
 
 def describe_field(loc: tuple[Any, ...]) -> tuple[str | None, list[str]]:

@@ -16,6 +16,9 @@ from typing import Any
 _NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 # Offset units are ambiguous inside compound units; in a rate ("per degC") they mean a
 # temperature difference, which pint spells delta_degC.
+# pint treats the radian as dimensionless, so it would read "30 Hz" as 30 rad/s (not
+# 2*pi*30) and "50 %" as 0.5 rad. For angles and angular speeds such units are refused.
+_NOT_ANGULAR = re.compile(r"(?<![A-Za-z_])(Hz|kHz|hertz|percent|ppm|%)(?![A-Za-z_])")
 _OFFSET_UNIT = re.compile(r"(?<![A-Za-z_])(degC|degF|celsius|fahrenheit)(?![A-Za-z_])")
 
 
@@ -40,12 +43,15 @@ class Kind:
     unit : the SI unit ecdsim uses inside ("N*m")
     example : a valid example string ("3.73 N*m")
     offset : True for absolute temperatures (converted to degC, not SI kelvin)
+    angular : True where the radian is part of the unit (angles, angular speeds), so
+        that dimensionless look-alikes (Hz, %) are refused rather than misread
     """
 
     name: str
     unit: str
     example: str
     offset: bool = False
+    angular: bool = False
 
     @property
     def expected(self) -> str:
@@ -80,6 +86,11 @@ class Kind:
             return number
         if not unit_text:
             raise QuantityError(f"{value!r} has no unit; {self.expected}")
+        if self.angular and _NOT_ANGULAR.search(unit_text):
+            raise QuantityError(
+                f"{value!r} is ambiguous: pint reads Hz and % as plain numbers, not angles; "
+                f"{self.expected} (for a frequency write turn/s or rpm)"
+            )
         return _convert(number, unit_text, value, self)
 
 
@@ -114,11 +125,21 @@ def _convert(number: float, unit_text: str, raw: str, kind: Kind) -> float:
 
 TORQUE = Kind("torque", "N*m", "3.73 N*m")
 DAMPING = Kind("damping rate", "N*m*s/rad", "1.3e-4 N*m*s/rad")
-ANGLE = Kind("angle", "rad", "1.57 rad")
-SPEED = Kind("angular speed", "rad/s", "2000 rad/s")
+ANGLE = Kind("angle", "rad", "1.57 rad", angular=True)
+SPEED = Kind("angular speed", "rad/s", "2000 rad/s", angular=True)
 TEMPERATURE = Kind("temperature", "degC", "25 degC", offset=True)
 PER_KELVIN = Kind("fractional change per kelvin", "1/K", "-0.004 / K")
 TORQUE_PER_KELVIN = Kind("torque change per kelvin", "N*m/K", "-0.0044 N*m/K")
 NUMBER = Kind("dimensionless number", "", "380")
+# Sizing and fluid-damper quantities (docs/sizing.md).
+TIME = Kind("time", "s", "30 s")
+MASS = Kind("mass", "kg", "0.185 kg")
+LENGTH = Kind("length", "m", "63 mm")
+INERTIA = Kind("moment of inertia", "kg*m^2", "2e-7 kg*m^2")
+DYNAMIC_VISCOSITY = Kind("dynamic viscosity", "Pa*s", "9.7 Pa*s")
+KINEMATIC_VISCOSITY = Kind("kinematic viscosity", "m^2/s", "10000 mm^2/s")
+# Dynamics quantities (docs/dynamics.md); INERTIA and TIME above serve them too.
+HEAT_CAPACITY = Kind("heat capacity", "J/K", "90 J/K")
+THERMAL_RESISTANCE = Kind("thermal resistance", "K/W", "2 K/W")
 
 ABSOLUTE_ZERO_C = -273.15

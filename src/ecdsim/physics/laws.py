@@ -8,6 +8,9 @@ import numpy as np
 
 from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 
+# Temperatures within this band of a table end count as inside the table [K].
+_RANGE_TOLERANCE_K = 1e-9
+
 
 def linear_in_temperature(temperature: ArrayLike, slope: ArrayLike, at_0c: ArrayLike) -> FloatArray:
     """A quantity linear in temperature: ``slope * T + at_0C`` (the paper's FL_T and FS_T).
@@ -61,4 +64,7 @@ def outside_table(temperature: ArrayLike, table_temperatures: ArrayLike) -> Bool
     """
     t = as_float(temperature)
     grid = as_float(table_temperatures)
-    return np.asarray((t < grid[0]) | (t > grid[-1]))
+    # A table written in degF or K converts to degC with rounding (-40 degF becomes
+    # -39.99999999999997 degC); a nanokelvin band keeps such end points inside.
+    band = _RANGE_TOLERANCE_K
+    return np.asarray((t < grid[0] - band) | (t > grid[-1] + band))

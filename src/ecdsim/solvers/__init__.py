@@ -4,6 +4,9 @@
 method is adding an entry, never an if/elif ladder.
 """
 
+# The dynamic method needs a DynamicProblem (a QuasiStaticProblem with inertia etc.),
+# which ecdsim.deployment.predict builds when given dynamics= (docs/dynamics.md).
+from ecdsim.dynamics.method import DYNAMIC
 from ecdsim.solvers.base import (
     DeploymentSolution,
     QuasiStaticProblem,
@@ -13,9 +16,10 @@ from ecdsim.solvers.base import (
 from ecdsim.solvers.exact import EXACT
 from ecdsim.solvers.paper import PAPER
 
-SOLVERS: dict[str, Solver] = {PAPER.name: PAPER, EXACT.name: EXACT}
+SOLVERS: dict[str, Solver] = {PAPER.name: PAPER, EXACT.name: EXACT, DYNAMIC.name: DYNAMIC}
 
 __all__ = [
+    "DYNAMIC",
     "EXACT",
     "PAPER",
     "SOLVERS",
