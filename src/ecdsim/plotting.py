@@ -7,7 +7,7 @@ non-interactive Agg backend is used, so plotting works on machines with no displ
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -27,8 +27,13 @@ def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
     return Figure(figsize=(width, height), layout="constrained")
 
 
-def _time_span(prediction: Prediction) -> float:
-    """A time axis long enough for every finite deployment, or a multiple of B/k if stalled."""
+def time_span(prediction: Prediction) -> float:
+    """The length of a time axis for plots of a prediction [s].
+
+    1.1 times the longest finite deployment time over every method and temperature; if
+    every case stalls, five times the largest ``B / k`` (damping rate over the spring's
+    mean torque drop per radian), a time scale of the motion towards the stall.
+    """
     finite = [
         t
         for s in prediction.solutions.values()
@@ -43,30 +48,53 @@ def _time_span(prediction: Prediction) -> float:
     return float(5.0 * np.max(scale))
 
 
-def plot_deployment(prediction: Prediction, n_points: int = 400) -> Figure:
-    """Deployed angle against time at each temperature, by each method (paper Fig. 4-6)."""
+def _plot_against_time(
+    prediction: Prediction,
+    quantity: Literal["angle", "speed"],
+    ylabel: str,
+    title: str,
+    n_points: int,
+) -> Figure:
+    """One line per (method, temperature) of a trajectory field against time."""
     fig = _figure()
     ax = fig.add_subplot()
-    times = np.linspace(0.0, _time_span(prediction), n_points)
+    times = np.linspace(0.0, time_span(prediction), n_points)
     temps = np.ravel(prediction.temperatures)
-    colors = _colors(len(temps))
+    colors = temperature_colors(len(temps))
     for name in prediction.solutions:
         trajectory = prediction.trajectory(name, times)
-        angle = np.degrees(trajectory.angle.reshape(len(times), -1))
+        if quantity == "angle":
+            values = np.degrees(trajectory.angle.reshape(len(times), -1))
+        else:
+            values = trajectory.speed.reshape(len(times), -1)
         for j, temp in enumerate(temps):
             ax.plot(
                 times,
-                angle[:, j],
+                values[:, j],
                 _LINESTYLES.get(name, ":"),
                 color=colors[j],
                 label=f"{temp:g} degC, {SOLVERS[name].label}",
             )
     ax.set_xlabel("time since release [s]")
-    ax.set_ylabel("deployed angle [deg]")
-    ax.set_title(f"{prediction.system.name}: angle against time")
+    ax.set_ylabel(ylabel)
+    ax.set_title(f"{prediction.system.name}: {title}")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
     return fig
+
+
+def plot_deployment(prediction: Prediction, n_points: int = 400) -> Figure:
+    """Deployed angle against time at each temperature, by each method (paper Fig. 4-6)."""
+    return _plot_against_time(
+        prediction, "angle", "deployed angle [deg]", "angle against time", n_points
+    )
+
+
+def plot_speed(prediction: Prediction, n_points: int = 400) -> Figure:
+    """Input-shaft speed against time at each temperature, by each method."""
+    return _plot_against_time(
+        prediction, "speed", "input shaft speed [rad/s]", "speed against time", n_points
+    )
 
 
 def plot_torque_speed(prediction: Prediction, n_points: int = 50) -> Figure:
@@ -86,7 +114,7 @@ def plot_torque_speed(prediction: Prediction, n_points: int = 50) -> Figure:
     end = np.ravel(reference.end_speed)
     top = 1.2 * float(np.max(start)) if np.max(start) > 0 else 1.0
     speeds = np.linspace(0.0, top, n_points)
-    colors = _colors(len(temps))
+    colors = temperature_colors(len(temps))
     for j, temp in enumerate(temps):
         ax.plot(
             speeds,
@@ -106,7 +134,8 @@ def plot_torque_speed(prediction: Prediction, n_points: int = 50) -> Figure:
     return fig
 
 
-def _colors(n: int) -> list[tuple[float, float, float, float]]:
+def temperature_colors(n: int) -> list[tuple[float, float, float, float]]:
+    """``n`` RGBA colours from cold blue to hot red, one per temperature in rising order."""
     from matplotlib import colormaps
 
     # Cold blue to hot red through green: every temperature stays readable on white,

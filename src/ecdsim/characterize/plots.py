@@ -23,7 +23,7 @@ from ecdsim.characterize.droptest import DropTestResult
 from ecdsim.characterize.stats import Estimate
 from ecdsim.characterize.templaws import TemperatureLaws
 from ecdsim.characterize.tracefit import TraceResult, model_angle
-from ecdsim.plotting import _colors, save_figure
+from ecdsim.plotting import save_figure, temperature_colors
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -51,7 +51,7 @@ def plot_torque_speed(result: DropTestResult) -> Figure:
     """Drive torque against (corrected) speed with each temperature's line (paper Fig. 8)."""
     fig = _figure()
     ax = fig.add_subplot()
-    colors = _colors(len(result.fits))
+    colors = temperature_colors(len(result.fits))
     top = max((float(np.max(f.corrected)) for f in result.fits), default=1.0) * 1.1
     speeds = np.linspace(0.0, top, 50)
     for fit, color in zip(result.fits, colors, strict=True):
@@ -132,7 +132,7 @@ def plot_line_residuals(result: DropTestResult) -> Figure:
     """Residual torque of each drop-test point against its speed, per temperature."""
     fig = _figure()
     ax = fig.add_subplot()
-    for fit, color in zip(result.fits, _colors(len(result.fits)), strict=True):
+    for fit, color in zip(result.fits, temperature_colors(len(result.fits)), strict=True):
         ax.plot(
             fit.corrected,
             fit.line.statistics.residuals,
@@ -151,7 +151,7 @@ def plot_traces(result: TraceResult, n_points: int = 400) -> Figure:
     fig = _figure()
     ax = fig.add_subplot()
     curves = result.curves
-    for curve, color in zip(curves, _colors(len(curves)), strict=True):
+    for curve, color in zip(curves, temperature_colors(len(curves)), strict=True):
         trace = curve.trace
         times = np.linspace(0.0, float(np.max(trace.time)), n_points)
         ax.plot(trace.time, np.degrees(trace.angle), ".", color=color, markersize=3)
@@ -170,7 +170,7 @@ def plot_trace_residuals(result: TraceResult) -> Figure:
     fig = _figure()
     ax = fig.add_subplot()
     curves = result.curves
-    for curve, color in zip(curves, _colors(len(curves)), strict=True):
+    for curve, color in zip(curves, temperature_colors(len(curves)), strict=True):
         ax.plot(
             curve.trace.time,
             np.degrees(curve.residuals),

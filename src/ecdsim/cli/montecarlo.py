@@ -9,12 +9,13 @@ disk, prints the command that resumes, and exits with code 130.
 from __future__ import annotations
 
 import json
-import math
 import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+
+from ecdsim.formatting import format_number
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -275,11 +276,8 @@ def _summarize(plan: Plan, out: Path, plot: bool, console: Console) -> dict[str,
 
 
 def _fmt(value: float | None, digits: int = 4) -> str:
-    if value is None:
-        return "inf"
-    if math.isinf(value):
-        return "inf"
-    return f"{value:.{digits}g}"
+    # The summary JSON stores non-finite values (a stall's time) as null: show "inf".
+    return format_number(value, digits, none="inf", signed_inf=False)
 
 
 def _print_tables(summary: dict[str, Any]) -> None:

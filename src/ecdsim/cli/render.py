@@ -7,6 +7,7 @@ import math
 from typing import Any
 
 from ecdsim.deployment import Prediction
+from ecdsim.formatting import format_number
 from ecdsim.solvers import SOLVERS
 
 
@@ -16,11 +17,7 @@ def to_json(prediction: Prediction) -> str:
 
 
 def _fmt(value: float | None, digits: int = 4) -> str:
-    if value is None:
-        return "-"
-    if math.isinf(value):
-        return "inf"
-    return f"{value:.{digits}g}"
+    return format_number(value, digits, signed_inf=False)
 
 
 def print_tables(prediction: Prediction) -> None:

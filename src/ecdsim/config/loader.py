@@ -37,20 +37,28 @@ class Config:
     sha256: str
 
 
+def read_config_text(path: Path, what: str = "config file", encoding: str = "utf-8") -> str:
+    """The text of an input file; :class:`ConfigError` if missing, unreadable or not UTF-8.
+
+    ``what`` names the file in the messages ("config file", "catalogue file"); ``encoding``
+    is "utf-8" or "utf-8-sig" (the latter drops a leading byte-order mark).
+    """
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise ConfigError([f"{what} not found: {path}"]) from None
+    except OSError as exc:
+        raise ConfigError([f"cannot read {what} {path}: {exc.strerror}"]) from None
+    try:
+        return data.decode(encoding)
+    except UnicodeDecodeError:
+        raise ConfigError(["the file is not UTF-8 text"], str(path)) from None
+
+
 def load_config(path: str | Path) -> Config:
     """Read and validate a TOML file; :class:`ConfigError` lists every problem."""
     file = Path(path)
-    try:
-        data = file.read_bytes()
-    except FileNotFoundError:
-        raise ConfigError([f"config file not found: {file}"]) from None
-    except OSError as exc:
-        raise ConfigError([f"cannot read config file {file}: {exc.strerror}"]) from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise ConfigError(["the file is not UTF-8 text"], str(file)) from None
-    return parse_config(text, str(file))
+    return parse_config(read_config_text(file), str(file))
 
 
 def parse_config(text: str, source: str = "<string>") -> Config:

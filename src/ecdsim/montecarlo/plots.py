@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ecdsim._types import FloatArray
+from ecdsim.plotting import temperature_colors
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -26,13 +27,6 @@ def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
     from matplotlib.figure import Figure
 
     return Figure(figsize=(width, height), layout="constrained")
-
-
-def _colors(n: int) -> list[tuple[float, float, float, float]]:
-    from matplotlib import colormaps
-
-    cmap = colormaps["turbo"]  # cold blue to hot red, every line readable on white
-    return [cmap(x) for x in np.linspace(0.1, 0.9, n)] if n > 1 else [cmap(0.1)]
 
 
 def plot_histogram(
@@ -51,7 +45,7 @@ def plot_histogram(
         low, high = float(joined.min()), float(joined.max())
         edges = np.linspace(low, high if high > low else low + 1.0, bins + 1)
         for color, (temperature, x), finite in zip(
-            _colors(len(samples)), samples.items(), finite_all, strict=True
+            temperature_colors(len(samples)), samples.items(), finite_all, strict=True
         ):
             stalled = 1.0 - finite.size / x.size if x.size else 0.0
             label = f"{temperature:g} degC" + (f" ({100 * stalled:.2g} % stall)" if stalled else "")
@@ -71,7 +65,9 @@ def plot_cdf(samples: Mapping[float, FloatArray], quantity: str, title: str) -> 
     """Empirical CDF at each temperature; stalled samples keep it below 1 (they never arrive)."""
     fig = _figure()
     ax = fig.add_subplot()
-    for color, (temperature, x) in zip(_colors(len(samples)), samples.items(), strict=True):
+    for color, (temperature, x) in zip(
+        temperature_colors(len(samples)), samples.items(), strict=True
+    ):
         n = x.size
         if n == 0:
             continue
@@ -107,7 +103,7 @@ def plot_tornado(summary: Mapping[str, Any]) -> Figure:
     ax = fig.add_subplot()
     height = 0.8 / max(1, len(cases))
     positions = np.arange(len(keys))
-    for i, (color, case) in enumerate(zip(_colors(len(cases)), cases, strict=True)):
+    for i, (color, case) in enumerate(zip(temperature_colors(len(cases)), cases, strict=True)):
         r2 = case["sensitivity"]["r_squared"]
         label = f"{case['temperature_C']:g} degC" + (f" (R^2 = {r2:.3f})" if r2 is not None else "")
         ax.barh(

@@ -13,7 +13,6 @@ import base64
 import datetime as dt
 import io
 import json
-import math
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -25,6 +24,7 @@ from ecdsim._version import __version__
 from ecdsim.atomic import write_text
 from ecdsim.config.units import Kind
 from ecdsim.deployment import Prediction, predict
+from ecdsim.formatting import format_number
 from ecdsim.solvers import SOLVERS
 
 if TYPE_CHECKING:
@@ -74,11 +74,7 @@ def lookup(case: dict[str, Any], key: str) -> Any:
 
 def fmt(value: float | None, digits: int = 6) -> str:
     """A number for a table cell: ``digits`` significant digits, "-" for None."""
-    if value is None:
-        return "-"
-    if math.isinf(value):
-        return "inf" if value > 0 else "-inf"
-    return f"{value:.{digits}g}"
+    return format_number(value, digits)
 
 
 def input_rows(spec: BaseModel, prefix: str = "") -> Iterator[tuple[str, str, str]]:
@@ -136,38 +132,8 @@ def figure_data_uri(fig: Figure) -> str:
     return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
 
 
-def plot_speed(prediction: Prediction, n_points: int = 400) -> Figure:
-    """Input-shaft speed against time at each temperature, by each method."""
-    from matplotlib.figure import Figure
-
-    from ecdsim.plotting import _colors, _time_span
-
-    fig = Figure(figsize=(7.5, 4.8), layout="constrained")
-    ax = fig.add_subplot()
-    times = np.linspace(0.0, _time_span(prediction), n_points)
-    temps = np.ravel(prediction.temperatures)
-    colors = _colors(len(temps))
-    styles = {"exact": "-", "paper": "--"}
-    for name in prediction.solutions:
-        speed = prediction.trajectory(name, times).speed.reshape(len(times), -1)
-        for j, temp in enumerate(temps):
-            ax.plot(
-                times,
-                speed[:, j],
-                styles.get(name, ":"),
-                color=colors[j],
-                label=f"{temp:g} degC, {SOLVERS[name].label}",
-            )
-    ax.set_xlabel("time since release [s]")
-    ax.set_ylabel("input shaft speed [rad/s]")
-    ax.set_title(f"{prediction.system.name}: speed against time")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
-    return fig
-
-
 def _figures(prediction: Prediction) -> list[dict[str, str]]:
-    from ecdsim.plotting import plot_deployment, plot_torque_speed
+    from ecdsim.plotting import plot_deployment, plot_speed, plot_torque_speed
 
     made = [
         ("angle", "Deployed angle against time (paper Fig. 4-6)", plot_deployment(prediction)),

@@ -29,6 +29,7 @@ from ecdsim.config.fields import (
     PositiveNumber,
     PositiveTorque,
 )
+from ecdsim.config.loader import read_config_text
 from ecdsim.config.schema import DamperSpec
 from ecdsim.config.sizing_schema import (
     Efficiency,
@@ -414,16 +415,7 @@ def parse_csv_catalogue(text: str, source: str = "<string>") -> Catalogue:
 def load_catalogue(path: str | Path) -> Catalogue:
     """Read a catalogue file; the suffix chooses the format (.toml or .csv)."""
     file = Path(path)
-    try:
-        data = file.read_bytes()
-    except FileNotFoundError:
-        raise ConfigError([f"catalogue file not found: {file}"]) from None
-    except OSError as exc:
-        raise ConfigError([f"cannot read catalogue file {file}: {exc.strerror}"]) from None
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise ConfigError(["the file is not UTF-8 text"], str(file)) from None
+    text = read_config_text(file, "catalogue file", encoding="utf-8-sig")
     suffix = file.suffix.lower()
     if suffix == ".toml":
         return parse_toml_catalogue(text, str(file))

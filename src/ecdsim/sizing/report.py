@@ -9,20 +9,12 @@ import math
 
 import numpy as np
 
+from ecdsim.formatting import format_number
 from ecdsim.sizing.fluid import DeadbandDeployment, FluidComparison
 from ecdsim.sizing.ratio import RatioIntervals
 from ecdsim.sizing.search import CandidateResult, SearchResult
 
 Table = tuple[str, list[str], list[list[str]]]
-
-
-def fmt(value: float | None, digits: int = 4) -> str:
-    """A number to ``digits`` significant figures; "-" for None, "inf" for infinity."""
-    if value is None:
-        return "-"
-    if math.isinf(value):
-        return "inf" if value > 0 else "-inf"
-    return f"{value:.{digits}g}"
 
 
 def percent(value: float | None) -> str:
@@ -70,7 +62,17 @@ def candidates_table(result: SearchResult) -> Table:
         label = c.candidate.label + (" *" if c.candidate.illustrative else "")
         if c.error is not None:
             rows.append(
-                [str(c.rank), label, "error", fmt(c.candidate.mass), c.error, "", "", "", ""]
+                [
+                    str(c.rank),
+                    label,
+                    "error",
+                    format_number(c.candidate.mass),
+                    c.error,
+                    "",
+                    "",
+                    "",
+                    "",
+                ]
             )
             continue
         angle = np.degrees(c.torque_margin_angle or 0.0)
@@ -79,12 +81,12 @@ def candidates_table(result: SearchResult) -> Table:
                 str(c.rank),
                 label,
                 "yes" if c.passed else "no",
-                fmt(c.candidate.mass),
+                format_number(c.candidate.mass),
                 percent(c.margin),
-                " / ".join(fmt(t) for t in c.deployment_time),
-                fmt(c.spread),
-                fmt(c.torque_margin),
-                f"{angle:.0f}, {fmt(c.torque_margin_temperature)}",
+                " / ".join(format_number(t) for t in c.deployment_time),
+                format_number(c.spread),
+                format_number(c.torque_margin),
+                f"{angle:.0f}, {format_number(c.torque_margin_temperature)}",
             ]
         )
     title = "Candidates, ranked: passing first, then mass, worst margin, time spread"
@@ -98,8 +100,8 @@ def checks_table(candidate: CandidateResult) -> Table:
             o.label,
             "pass" if o.passed else "FAIL",
             percent(o.margin),
-            f"{fmt(o.value)} {o.unit}",
-            fmt(o.temperature_C),
+            f"{format_number(o.value)} {o.unit}",
+            format_number(o.temperature_C),
         ]
         for o in candidate.checks
     ]
@@ -131,7 +133,7 @@ def intervals_table(intervals: RatioIntervals) -> Table:
 
 
 def _time(side: DeadbandDeployment, i: int) -> str:
-    return fmt(float(side.damped_time[i]))
+    return format_number(float(side.damped_time[i]))
 
 
 def fluid_table(comparison: FluidComparison) -> Table:
@@ -156,21 +158,21 @@ def fluid_table(comparison: FluidComparison) -> Table:
         assert fluid_t is not None
         ratio = float(fluid_t[i] / ecd_t[i]) if np.isfinite(ecd_t[i] * fluid_t[i]) else None
         row = [
-            fmt(float(t)) + (" (extrapolated)" if comparison.extrapolated[i] else ""),
-            fmt(float(comparison.ecd_damping_rate[i])),
-            fmt(float(comparison.fluid_coefficient[i])),
-            fmt(float(ecd_t[i])),
+            format_number(float(t)) + (" (extrapolated)" if comparison.extrapolated[i] else ""),
+            format_number(float(comparison.ecd_damping_rate[i])),
+            format_number(float(comparison.fluid_coefficient[i])),
+            format_number(float(ecd_t[i])),
             _time(comparison.fluid, i),
         ]
         if inertia:
             assert comparison.fluid.free_time is not None
             assert comparison.fluid.engage_speed is not None
             row += [
-                fmt(float(comparison.fluid.free_time[i])),
-                fmt(float(comparison.fluid.engage_speed[i])),
-                fmt(float(fluid_t[i])),
+                format_number(float(comparison.fluid.free_time[i])),
+                format_number(float(comparison.fluid.engage_speed[i])),
+                format_number(float(fluid_t[i])),
             ]
-        row.append(fmt(ratio, 3))
+        row.append(format_number(ratio, 3))
         rows.append(row)
     title = (
         f"ECD against {comparison.name}, matched at {comparison.match_temperature:g} degC "

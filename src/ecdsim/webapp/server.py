@@ -149,9 +149,9 @@ def curves(
     prediction: Prediction, config: Config, time_points: int, sweep_points: int
 ) -> dict[str, Any]:
     """Angle and speed against time, and deployment time against temperature (a sweep)."""
-    from ecdsim.plotting import _time_span
+    from ecdsim.plotting import time_span
 
-    times = np.linspace(0.0, _time_span(prediction), time_points)
+    times = np.linspace(0.0, time_span(prediction), time_points)
     n_temps = prediction.temperatures.size
     trajectories: dict[str, Any] = {"time_s": times.tolist(), "methods": {}}
     for name in prediction.solutions:
