@@ -262,7 +262,6 @@ class TemperatureFit:
     def to_dict(self) -> dict[str, Any]:
         """One entry of the ``temperatures`` list of the JSON document."""
         line = self.line
-        damping, friction = line.slope, line.intercept
         curvature = line.curvature
         points = []
         for i, row in enumerate(self.rows):
@@ -282,12 +281,8 @@ class TemperatureFit:
         return {
             "temperature_C": self.temperature,
             "n_points": line.n_points,
-            "damping_rate_Nms_per_rad": damping.value,
-            "damping_rate_se_Nms_per_rad": damping.standard_error,
-            "damping_rate_ci95": list(damping.ci95) if damping.ci95 else None,
-            "friction_Nm": friction.value,
-            "friction_se_Nm": friction.standard_error,
-            "friction_ci95": list(friction.ci95) if friction.ci95 else None,
+            **line.slope.to_dict("damping_rate", "_Nms_per_rad"),
+            **line.intercept.to_dict("friction", "_Nm"),
             "r_squared": line.r_squared,
             "residual_std_Nm": line.statistics.residual_std,
             "dof": line.statistics.dof,

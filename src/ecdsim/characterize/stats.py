@@ -90,12 +90,22 @@ class Estimate:
     standard_error: float | None
     ci95: tuple[float, float] | None
 
-    def to_dict(self, key: str) -> dict[str, Any]:
-        """``{key: value, key_se: ..., key_ci95: [low, high] | None}`` for JSON."""
+    def interval(self) -> list[float] | None:
+        """The 95 % confidence interval as a JSON list ``[low, high]``, or None."""
+        return list(self.ci95) if self.ci95 is not None else None
+
+    def to_dict(self, key: str, unit: str = "") -> dict[str, Any]:
+        """``{key+unit: value, key_se+unit: ..., key_ci95: [low, high] | None}`` for JSON.
+
+        ``unit`` is a key suffix naming the unit, e.g. ``"_Nm"``; the interval's key has none.
+
+        >>> Estimate(2.0, 0.5, (1.0, 3.0)).to_dict("friction", "_Nm")
+        {'friction_Nm': 2.0, 'friction_se_Nm': 0.5, 'friction_ci95': [1.0, 3.0]}
+        """
         return {
-            key: self.value,
-            f"{key}_se": self.standard_error,
-            f"{key}_ci95": list(self.ci95) if self.ci95 is not None else None,
+            f"{key}{unit}": self.value,
+            f"{key}_se{unit}": self.standard_error,
+            f"{key}_ci95": self.interval(),
         }
 
 

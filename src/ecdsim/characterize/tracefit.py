@@ -203,18 +203,13 @@ class TraceFit:
 
     def to_dict(self) -> dict[str, Any]:
         """One entry of the ``temperatures`` list of the JSON document."""
-        b, f, ft = self.damping_rate, self.friction, self.total_friction
         out = {
             "temperature_C": self.temperature,
             "n_points": self.statistics.n_points,
-            "damping_rate_Nms_per_rad": b.value,
-            "damping_rate_se_Nms_per_rad": b.standard_error,
-            "damping_rate_ci95": list(b.ci95) if b.ci95 else None,
-            "friction_Nm": f.value,
-            "friction_se_Nm": f.standard_error,
-            "friction_ci95": list(f.ci95) if f.ci95 else None,
-            "total_friction_Nm": ft.value,
-            "total_friction_ci95": list(ft.ci95) if ft.ci95 else None,
+            **self.damping_rate.to_dict("damping_rate", "_Nms_per_rad"),
+            **self.friction.to_dict("friction", "_Nm"),
+            "total_friction_Nm": self.total_friction.value,
+            "total_friction_ci95": self.total_friction.interval(),
             "system_friction_Nm": self.system_friction,
             "residual_std_rad": self.statistics.residual_std,
             "dof": self.statistics.dof,
@@ -247,9 +242,9 @@ class SpringFit:
         ts, te = self.start_torque, self.end_torque
         return {
             "start_torque_Nm": ts.value,
-            "start_torque_ci95": list(ts.ci95) if ts.ci95 else None,
+            "start_torque_ci95": ts.interval(),
             "end_torque_Nm": te.value,
-            "end_torque_ci95": list(te.ci95) if te.ci95 else None,
+            "end_torque_ci95": te.interval(),
             "reference_temperature_C": self.reference_temperature,
             "n_points": self.statistics.n_points,
             "residual_std_rad": self.statistics.residual_std,

@@ -11,6 +11,7 @@ excluded or any temperature could not be fitted.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
@@ -18,8 +19,10 @@ import typer
 
 if TYPE_CHECKING:
     from ecdsim.characterize.droptest import DropTestResult, FailedTemperature
+    from ecdsim.characterize.export import FittedEcd
     from ecdsim.characterize.findings import FitWarning
     from ecdsim.characterize.stats import Estimate
+    from ecdsim.characterize.templaws import TemperatureLaws
     from ecdsim.characterize.tracefit import TraceResult
     from ecdsim.config import Config
 
@@ -112,15 +115,35 @@ def _report(
         typer.echo(f"warning: {warning.message}", err=True)
 
 
-def _strict(strict: bool, bad_rows: list[str], failed: tuple[FailedTemperature, ...]) -> None:
-    if strict and (bad_rows or failed):
-        _fail(
-            [
-                *bad_rows,
-                *(f"not fitted: {f.message()}" for f in failed),
-                "--strict: the data have problems (listed above)",
-            ]
-        )
+def _check_fitted(
+    fitted: bool,
+    what: str,
+    bad_rows: list[str],
+    failed: tuple[FailedTemperature, ...],
+    strict: bool,
+) -> None:
+    """Fail where no ``what`` could be fitted, or with ``--strict`` where any data had problems."""
+    problems = [*bad_rows, *(f"not fitted: {f.message()}" for f in failed)]
+    if not fitted:
+        _fail([*problems, f"no {what} could be fitted"])
+    if strict and problems:
+        _fail([*problems, "--strict: the data have problems (listed above)"])
+
+
+def _fitted_ecd(
+    output: Path,
+    temperatures: Sequence[float],
+    damping: Sequence[Estimate],
+    friction: Sequence[Estimate],
+    laws: TemperatureLaws | None,
+) -> FittedEcd:
+    """The fitted ECD for the ``-o`` file; an ``error:`` line where it cannot be written."""
+    from ecdsim.characterize.export import ExportError, fitted_ecd
+
+    try:
+        return fitted_ecd(temperatures, damping, friction, laws)
+    except ExportError as exc:
+        _fail([f"-o {output}: {exc}"])
 
 
 def _write_outputs(
@@ -152,6 +175,32 @@ def _emit_json(document: dict[str, Any]) -> None:
     typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
 
 
+def _finish(
+    result: DropTestResult | TraceResult,
+    bad_rows: list[str],
+    warnings: list[FitWarning],
+    text: str | None,
+    output: Path | None,
+    plot: Path | None,
+    plotter: Callable[[Path], list[Path]],
+    printer: Callable[[], None],
+    as_json: bool,
+) -> None:
+    """Write the -o file and plots, render the result, then warnings and written paths."""
+    written, plots = _write_outputs(text, output, plot, plotter)
+    if as_json:
+        document = result.to_dict()
+        document["warnings"] = [w.to_dict() for w in warnings]
+        document["parameter_file"] = written
+        document["plots"] = plots
+        _emit_json(document)
+    else:
+        printer()
+    _report(bad_rows, result.failed, warnings)
+    for path in [*([written] if written else []), *plots]:
+        typer.echo(f"wrote {path}", err=as_json)
+
+
 @fit_app.command(
     "drop-test",
     epilog=(
@@ -177,13 +226,7 @@ def drop_test(
 ) -> None:
     """Fit BECD and FECD per temperature from drop tests, then laws over temperature."""
     from ecdsim.characterize.droptest import fit_drop_test
-    from ecdsim.characterize.export import (
-        ExportError,
-        fitted_ecd,
-        fitted_parameter_text,
-        largest_torque,
-        provenance,
-    )
+    from ecdsim.characterize.export import fitted_parameter_text, largest_torque, provenance
     from ecdsim.config import ConfigError
 
     _check_reference(reference_temperature)
@@ -193,28 +236,18 @@ def drop_test(
     except ConfigError as exc:
         _fail(str(exc).splitlines())
     bad_rows = [b.message() for b in result.table.bad_rows]
-    if not result.fits:
-        _fail(
-            [
-                *bad_rows,
-                *(f"not fitted: {f.message()}" for f in result.failed),
-                "no temperature could be fitted",
-            ]
-        )
-    _strict(strict, bad_rows, result.failed)
+    _check_fitted(bool(result.fits), "temperature", bad_rows, result.failed, strict)
     warnings = list(result.warnings)
     text: str | None = None
     if output is not None:
         fits = result.fits
-        try:
-            ecd = fitted_ecd(
-                [f.temperature for f in fits],
-                [f.line.slope for f in fits],
-                [f.line.intercept for f in fits],
-                result.laws,
-            )
-        except ExportError as exc:
-            _fail([f"-o {output}: {exc}"])
+        ecd = _fitted_ecd(
+            output,
+            [f.temperature for f in fits],
+            [f.line.slope for f in fits],
+            [f.line.intercept for f in fits],
+            result.laws,
+        )
         warnings.extend(ecd.warnings)
         if loaded is None:
             from ecdsim.characterize.findings import FitWarning
@@ -239,18 +272,17 @@ def drop_test(
 
         return write_drop_test_plots(result, folder)
 
-    written, plots = _write_outputs(text, output, plot, plotter)
-    if as_json:
-        document = result.to_dict()
-        document["warnings"] = [w.to_dict() for w in warnings]
-        document["parameter_file"] = written
-        document["plots"] = plots
-        _emit_json(document)
-    else:
-        _print_drop_test(result)
-    _report(bad_rows, result.failed, warnings)
-    for path in [*([written] if written else []), *plots]:
-        typer.echo(f"wrote {path}", err=as_json)
+    _finish(
+        result,
+        bad_rows,
+        warnings,
+        text,
+        output,
+        plot,
+        plotter,
+        lambda: _print_drop_test(result),
+        as_json,
+    )
 
 
 def _print_drop_test(result: DropTestResult) -> None:
@@ -296,6 +328,13 @@ def _print_drop_test(result: DropTestResult) -> None:
             escape("; ".join(flags)) or "-",
         )
     console.print(table)
+    _print_footer(console, result)
+
+
+def _print_footer(console: Any, result: DropTestResult | TraceResult) -> None:
+    """The laws over temperature, then how many rows were used."""
+    from rich.markup import escape
+
     _print_laws(console, result.laws)
     used, excluded = result.table.rows.size, len(result.table.excluded_rows)
     console.print(
@@ -378,8 +417,6 @@ def trace(
 ) -> None:
     """Fit recorded deployments (angle against time) against the exact solution."""
     from ecdsim.characterize.export import (
-        ExportError,
-        fitted_ecd,
         fitted_parameter_text,
         provenance,
         spring_parameter_text,
@@ -402,15 +439,8 @@ def trace(
     except ConfigError as exc:
         _fail(str(exc).splitlines())
     bad_rows = [b.message() for b in result.table.bad_rows]
-    if not result.fits and result.spring is None:
-        _fail(
-            [
-                *bad_rows,
-                *(f"not fitted: {f.message()}" for f in result.failed),
-                "no trace could be fitted",
-            ]
-        )
-    _strict(strict, bad_rows, result.failed)
+    fitted = bool(result.fits) or result.spring is not None
+    _check_fitted(fitted, "trace", bad_rows, result.failed, strict)
     warnings = list(result.warnings)
     source = provenance("ecdsim fit trace", result.table.source, result.table.sha256)
     text: str | None = None
@@ -421,15 +451,13 @@ def trace(
         )
     elif output is not None:
         fits = result.fits
-        try:
-            ecd = fitted_ecd(
-                [f.temperature for f in fits],
-                [f.damping_rate for f in fits],
-                [f.friction for f in fits],
-                result.laws,
-            )
-        except ExportError as exc:
-            _fail([f"-o {output}: {exc}"])
+        ecd = _fitted_ecd(
+            output,
+            [f.temperature for f in fits],
+            [f.damping_rate for f in fits],
+            [f.friction for f in fits],
+            result.laws,
+        )
         warnings.extend(ecd.warnings)
         text = fitted_parameter_text(
             ecd, loaded.spec.load, 0.0, f"ECD fitted from deployment traces ({data.name})", source
@@ -440,18 +468,17 @@ def trace(
 
         return write_trace_plots(result, folder)
 
-    written, plots = _write_outputs(text, output, plot, plotter)
-    if as_json:
-        document = result.to_dict()
-        document["warnings"] = [w.to_dict() for w in warnings]
-        document["parameter_file"] = written
-        document["plots"] = plots
-        _emit_json(document)
-    else:
-        _print_traces(result)
-    _report(bad_rows, result.failed, warnings)
-    for path in [*([written] if written else []), *plots]:
-        typer.echo(f"wrote {path}", err=as_json)
+    _finish(
+        result,
+        bad_rows,
+        warnings,
+        text,
+        output,
+        plot,
+        plotter,
+        lambda: _print_traces(result),
+        as_json,
+    )
 
 
 def _print_traces(result: TraceResult) -> None:
@@ -516,8 +543,4 @@ def _print_traces(result: TraceResult) -> None:
             _fmt(curve.deployment_time),
         )
     console.print(residuals)
-    _print_laws(console, result.laws)
-    used, excluded = result.table.rows.size, len(result.table.excluded_rows)
-    console.print(
-        escape(f"{result.table.source}: {used} rows used, {excluded} excluded"), style="dim"
-    )
+    _print_footer(console, result)

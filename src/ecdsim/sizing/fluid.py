@@ -28,7 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol, Self
 
 import numpy as np
 
@@ -154,27 +154,42 @@ def _outside(temperature: ArrayLike, points: Sequence[tuple[float, float]]) -> B
 
 
 @dataclass(frozen=True)
-class AndradeLaw:
-    """Andrade / Arrhenius law ``ln(visc) = a + b / T_K`` fitted through ``points``."""
+class _TwoConstantLaw:
+    """A viscosity law with two constants (a, b) fitted through ``points``.
+
+    Each subclass names its law's fit and evaluation functions; ``fit``, ``__call__`` and
+    ``out_of_range`` are shared.
+    """
 
     a: float
     b: float
     points: tuple[tuple[float, float], ...]
-    name: str = "andrade"
+
+    _fit_constants: ClassVar[staticmethod[[ArrayLike, ArrayLike], tuple[float, float]]]
+    _viscosity: ClassVar[staticmethod[[ArrayLike, float, float], FloatArray]]
 
     @classmethod
-    def fit(cls, points: Sequence[tuple[float, float]]) -> AndradeLaw:
+    def fit(cls, points: Sequence[tuple[float, float]]) -> Self:
         """Least-squares fit through two or more (T [degC], viscosity [SI]) points."""
-        a, b = andrade_fit([t for t, _ in points], [v for _, v in points])
+        a, b = cls._fit_constants([t for t, _ in points], [v for _, v in points])
         return cls(a, b, tuple(points))
 
     def __call__(self, temperature: ArrayLike) -> FloatArray:
-        """Viscosity at T [degC]."""
-        return andrade_viscosity(temperature, self.a, self.b)
+        """Viscosity at T [degC], in the points' SI unit."""
+        return self._viscosity(temperature, self.a, self.b)
 
     def out_of_range(self, temperature: ArrayLike) -> BoolArray:
         """True outside the fitted points' temperatures (extrapolation)."""
         return _outside(temperature, self.points)
+
+
+@dataclass(frozen=True)
+class AndradeLaw(_TwoConstantLaw):
+    """Andrade / Arrhenius law ``ln(visc) = a + b / T_K`` fitted through ``points``."""
+
+    name: str = "andrade"
+    _fit_constants = staticmethod(andrade_fit)
+    _viscosity = staticmethod(andrade_viscosity)
 
     def describe(self) -> str:
         """One-line description."""
@@ -182,27 +197,15 @@ class AndradeLaw:
 
 
 @dataclass(frozen=True)
-class WaltherLaw:
-    """Walther (ASTM D341) ``log10 log10(nu + 0.7) = a - b log10 T_K`` through ``points``."""
+class WaltherLaw(_TwoConstantLaw):
+    """Walther (ASTM D341) ``log10 log10(nu + 0.7) = a - b log10 T_K`` through ``points``.
 
-    a: float
-    b: float
-    points: tuple[tuple[float, float], ...]
+    Fitted through (T [degC], nu [m^2/s]) points; evaluates to nu [m^2/s].
+    """
+
     name: str = "walther"
-
-    @classmethod
-    def fit(cls, points: Sequence[tuple[float, float]]) -> WaltherLaw:
-        """Least-squares fit through two or more (T [degC], nu [m^2/s]) points."""
-        a, b = walther_fit([t for t, _ in points], [v for _, v in points])
-        return cls(a, b, tuple(points))
-
-    def __call__(self, temperature: ArrayLike) -> FloatArray:
-        """Kinematic viscosity at T [degC] [m^2/s]."""
-        return walther_viscosity(temperature, self.a, self.b)
-
-    def out_of_range(self, temperature: ArrayLike) -> BoolArray:
-        """True outside the fitted points' temperatures (extrapolation)."""
-        return _outside(temperature, self.points)
+    _fit_constants = staticmethod(walther_fit)
+    _viscosity = staticmethod(walther_viscosity)
 
     def describe(self) -> str:
         """One-line description."""
