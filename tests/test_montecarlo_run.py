@@ -303,8 +303,13 @@ def test_executor_choice(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(os, "cpu_count", lambda: 4)
     assert choose_executor(LARGE_RUN_SAMPLES, None, None) == DaskExecutor(workers=4)
     assert isinstance(choose_executor(LARGE_RUN_SAMPLES - 1, None, None), InProcess)
-    monkeypatch.setattr(os, "cpu_count", lambda: 3)
+    # Issue 6: the cluster is the default for large runs on any multi-core machine.
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    assert choose_executor(LARGE_RUN_SAMPLES, None, None) == DaskExecutor(workers=2)
+    monkeypatch.setattr(os, "cpu_count", lambda: 1)
     assert isinstance(choose_executor(LARGE_RUN_SAMPLES, None, None), InProcess)
+    monkeypatch.setattr(os, "cpu_count", lambda: 3)
+    assert choose_executor(LARGE_RUN_SAMPLES, None, None) == DaskExecutor(workers=3)
     with pytest.raises(RunError, match="either --workers or --scheduler"):
         choose_executor(10, 2, "tcp://h:8786")
     with pytest.raises(RunError, match="must be >= 0"):
