@@ -19,8 +19,15 @@ with the analytic Jacobian J of the segment's equations (see
 to their sparsity (the position row is ``x' = u``; the energy does not feed back). Steps
 are accepted when the embedded error, in the max norm over ``atol + rtol |y|``, is <= 1.
 Dense output between steps is the cubic Hermite interpolant of the step's end states
-and derivatives; events are located on it by bisection. The method's order (4) is
-checked in ``tests/test_dynamics_rosenbrock.py``.
+and derivatives; events and the interior maxima of speed and temperature are located on
+it by Newton's iteration safeguarded by bisection (the damping law's domain limit by
+bisection). The method's order (4) is checked in ``tests/test_dynamics_rosenbrock.py``.
+
+Cost: every array operation runs over the whole batch, so the step works in place on
+preallocated arrays, skips the rows that cannot change (without heating the temperature
+stages are zero), builds the last stage and the solution from stage 5 (stiffly
+accurate), and a rejected step simply leaves its case unchanged instead of gathering the
+accepted cases.
 """
 
 from __future__ import annotations
@@ -102,23 +109,27 @@ class Model:
             heating=self.heating,
         )
 
-    def rhs(self, y: FloatArray) -> FloatArray:
-        """``dy/dt``, shape (4, n)."""
+    def rhs(self, y: FloatArray, out: FloatArray | None = None) -> FloatArray:
+        """``dy/dt``, shape (4, n), written into ``out`` if given (which must not be y)."""
         x, u, temp = y[0], y[1], y[2]
+        dy = np.empty_like(y) if out is None else out
         shaft = self.ratio * u
         eddy = self.eddy.torque(shaft, temp)
         torque = self.ratio * (eddy + self.gearbox_damping * shaft)
-        out = np.empty_like(y)
-        out[0] = u
-        out[1] = (self.drive - self.stiffness * x - torque) / self.inertia
+        accel = dy[1]
+        np.multiply(self.stiffness, x, out=accel)
+        np.subtract(self.drive, accel, out=accel)
+        accel -= torque
+        accel /= self.inertia
         if self.heating:
-            out[2] = heat.temperature_rate(
+            dy[2] = heat.temperature_rate(
                 eddy * shaft, temp, self.ambient, self.heat_capacity, self.thermal_resistance
             )
         else:
-            out[2] = 0.0
-        out[3] = torque * u
-        return out
+            dy[2] = 0.0
+        np.multiply(torque, u, out=dy[3])
+        dy[0] = u
+        return dy
 
     def jacobian(self, y: FloatArray) -> tuple[FloatArray, ...]:
         """Nonzero entries (j10, j11, j12, j21, j22, j31, j32) of ``df/dy``."""
@@ -148,58 +159,133 @@ class Model:
 
 
 class _Solver:
-    """``(I - c J) z = r`` for the sparsity of :meth:`Model.jacobian`, many right-hand sides."""
+    """``(I - c J) z = r`` for the sparsity of :meth:`Model.jacobian`, many right-hand sides.
 
-    def __init__(self, jac: tuple[FloatArray, ...], c: FloatArray) -> None:
+    Without heating the temperature row of every right-hand side is zero, and so is the
+    solution's (``z[2] = r[2]``); :meth:`solve` then skips the temperature coupling.
+    """
+
+    def __init__(self, jac: tuple[FloatArray, ...], c: FloatArray, heating: bool = True) -> None:
         j10, j11, j12, j21, j22, j31, j32 = jac
         self.c = c
-        self.jac = jac
-        self.den2 = 1.0 - c * j22
-        safe2 = np.where(self.den2 != 0.0, self.den2, 1.0)
-        self.den1 = 1.0 - c * j11 - c * c * j10 - c * c * j12 * j21 / safe2
-        self.ok = (np.abs(self.den2) > 1e-12) & (np.abs(self.den1) > 1e-12)
-        self.safe1 = np.where(self.ok, self.den1, 1.0)
-        self.safe2 = np.where(self.ok, self.den2, 1.0)
+        self.heating = heating
+        den2 = 1.0 - c * j22
+        safe2 = np.where(den2 != 0.0, den2, 1.0)
+        den1 = 1.0 - c * j11 - c * c * j10 - c * c * j12 * j21 / safe2
+        self.ok = (np.abs(den2) > 1e-12) & (np.abs(den1) > 1e-12)
+        inv1 = 1.0 / np.where(self.ok, den1, 1.0)
+        inv2 = 1.0 / np.where(self.ok, den2, 1.0)
+        # z1 = (r1 + c j10 r0 + c j12 r2 / den2) / den1,   z0 = r0 + c z1,
+        # z2 = (r2 + c j21 z1) / den2,                     z3 = r3 + c (j31 z1 + j32 z2).
+        self.inv1 = inv1
+        self.p10 = c * j10 * inv1
+        self.p31 = c * j31
+        if heating:
+            self.inv2 = inv2
+            self.p12 = c * j12 * inv2 * inv1
+            self.p21 = c * j21 * inv2
+            self.p32 = c * j32
 
-    def solve(self, r: FloatArray) -> FloatArray:
-        """z with ``(I - c J) z = r``; r and z of shape (4, n)."""
-        j10, _, j12, j21, _, j31, j32 = self.jac
-        c = self.c
-        z = np.empty_like(r)
-        z[1] = (r[1] + c * j10 * r[0] + c * j12 * r[2] / self.safe2) / self.safe1
-        z[0] = r[0] + c * z[1]
-        z[2] = (r[2] + c * j21 * z[1]) / self.safe2
-        z[3] = r[3] + c * (j31 * z[1] + j32 * z[2])
+    def solve(
+        self, r: FloatArray, out: FloatArray | None = None, scratch: FloatArray | None = None
+    ) -> FloatArray:
+        """z with ``(I - c J) z = r``; r and z of shape (4, n); ``out`` must not be r."""
+        z = np.empty_like(r) if out is None else out
+        tmp = np.empty_like(r[0]) if scratch is None else scratch
+        z1 = z[1]
+        np.multiply(r[1], self.inv1, out=z1)
+        np.multiply(self.p10, r[0], out=tmp)
+        z1 += tmp
+        if self.heating:
+            np.multiply(self.p12, r[2], out=tmp)
+            z1 += tmp
+        np.multiply(self.c, z1, out=z[0])
+        z[0] += r[0]
+        np.multiply(self.p31, z1, out=z[3])
+        z[3] += r[3]
+        if self.heating:
+            np.multiply(r[2], self.inv2, out=z[2])
+            np.multiply(self.p21, z1, out=tmp)
+            z[2] += tmp
+            np.multiply(self.p32, z[2], out=tmp)
+            z[3] += tmp
+        else:
+            z[2] = r[2]
         return z
 
 
+# GAMMA * C: the coupling terms enter the stage equations scaled by GAMMA.
+_GC = tuple(tuple(GAMMA * c for c in row) for row in C)
+
+
+class _Work:
+    """Preallocated arrays for :func:`_step` on a batch of n cases."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.k = np.empty((6, 4, n))
+        self.stage = np.empty((4, n))
+        self.last = np.empty((4, n))
+        self.coupling = np.empty((4, n))
+        self.value = np.empty((4, n))
+        self.scratch = np.empty((4, n))
+
+
 def _step(
-    model: Model, y: FloatArray, f0: FloatArray, h: FloatArray
+    model: Model, y: FloatArray, f0: FloatArray, h: FloatArray, work: _Work | None = None
 ) -> tuple[FloatArray, FloatArray, BoolArray]:
-    """One RODAS4 step: new state, error estimate, and where the linear solve was sound."""
-    solver = _Solver(model.jacobian(y), h * GAMMA)
+    """One RODAS4 step: new state, error estimate, and where the linear solve was sound.
+
+    ``work`` (reused between calls) avoids allocations; the error estimate returned is
+    then a view into it, valid until its next use.
+    """
+    n = y.shape[1]
+    if work is None or work.n != n:
+        work = _Work(n)
+    heating = model.heating
     hg = h * GAMMA
-    stages = [solver.solve(hg * f0)]
-    scratch = np.empty_like(y)
+    solver = _Solver(model.jacobian(y), hg, heating)
+    k, stage, last = work.k, work.stage, work.last
+    coupling, value, scratch = work.coupling, work.value, work.scratch
+    # Rows that vary: without heating the temperature stages are all zero (the stage
+    # temperature stays y's) and the energy row is never read by the right-hand side.
+    every = slice(0, 4)
+    stage_rows = slice(0, 3) if heating else slice(0, 2)
+    coupling_rows = (every,) if heating else (slice(0, 2), slice(3, 4))
+    np.copyto(stage, y)
+    coupling[2] = 0.0
+    np.multiply(f0, hg, out=value)
+    solver.solve(value, k[0], scratch[0])
     for i in range(1, 6):
-        stage_y = y.copy()
-        coupling = np.zeros_like(y)
-        for a, c, k in zip(A[i], C[i], stages, strict=True):
-            if a != 0.0:
-                np.multiply(k, a, out=scratch)
-                stage_y += scratch
-            np.multiply(k, c, out=scratch)
-            coupling += scratch
-        value = model.rhs(stage_y)
+        # Stage states y + sum_j A_ij K_j. RODAS4 is stiffly accurate: stage 6's state is
+        # stage 5's plus K5, and y1 is stage 6's plus K6; those are kept, in full, in
+        # ``last``.
+        if i < 4:
+            target, rows = stage, stage_rows
+            if i > 1:
+                np.copyto(stage[rows], y[rows])
+        else:
+            target, rows = last, every
+            if i == 4:
+                np.copyto(last, y)
+        if i < 5:
+            for a, kj in zip(A[i], k[:i], strict=True):
+                np.multiply(kj[rows], a, out=scratch[rows])
+                target[rows] += scratch[rows]
+        else:
+            last += k[4]
+        # coupling = GAMMA * sum_j C_ij K_j
+        for rs in coupling_rows:
+            np.multiply(k[0][rs], _GC[i][0], out=coupling[rs])
+            for gc, kj in zip(_GC[i][1:], k[1:i], strict=True):
+                np.multiply(kj[rs], gc, out=scratch[rs])
+                coupling[rs] += scratch[rs]
+        model.rhs(target, out=value)
         value *= hg
-        coupling *= GAMMA
         value += coupling
-        stages.append(solver.solve(value))
-    y1 = y.copy()
-    for m, k in zip(M, stages, strict=True):
-        np.multiply(k, m, out=scratch)
-        y1 += scratch
-    return y1, stages[5], solver.ok  # E = (0, 0, 0, 0, 0, 1)
+        solver.solve(value, k[i], scratch[0])
+    y1 = last + k[5]
+    return y1, k[5], solver.ok  # E = (0, 0, 0, 0, 0, 1)
 
 
 def _hermite(
@@ -242,6 +328,54 @@ def _bisect(func: Callable[[FloatArray], FloatArray], n: int) -> FloatArray:
     return hi
 
 
+def _cubic(
+    y0: FloatArray, f0: FloatArray, y1: FloatArray, f1: FloatArray, h: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Power-basis coefficients (in the step fraction s) of :func:`_hermite`."""
+    hf0 = h * f0
+    hf1 = h * f1
+    dy = y1 - y0
+    return y0, hf0, 3.0 * dy - 2.0 * hf0 - hf1, hf0 + hf1 - 2.0 * dy
+
+
+def _root(coef: tuple[FloatArray, ...]) -> FloatArray:
+    """The root in [0, 1] of ``sum_k coef[k] s**k`` whose values at 0 and 1 differ in sign.
+
+    Newton's method safeguarded by bisection: the bracket shrinks every iteration and a
+    Newton step leaving it is replaced by the bracket's midpoint; it ends when the update
+    or the bracket is below 2^-48 of a step (the rounding of the event time).
+    """
+    degree = len(coef) - 1
+    lo = np.zeros_like(coef[0])
+    hi = np.ones_like(coef[0])
+    start = coef[0] > 0.0
+    total = coef[0] + coef[1]
+    for c in coef[2:]:
+        total = total + c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.clip(coef[0] / (coef[0] - total), 0.0, 1.0)  # secant on [0, 1]
+    s = np.where(np.isfinite(s), s, 0.5)
+    for _ in range(64):
+        p = coef[degree] * s + coef[degree - 1]
+        dp = coef[degree] * degree * s + (degree - 1) * coef[degree - 1]
+        for j in range(degree - 2, -1, -1):
+            p = p * s + coef[j]
+            if j > 0:
+                dp = dp * s + j * coef[j]
+        same = (p > 0.0) == start
+        lo = np.where(same, s, lo)
+        hi = np.where(same, hi, s)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton = s - p / dp
+        inside = (newton > lo) & (newton < hi)
+        new = np.where(inside, newton, 0.5 * (lo + hi))
+        settled = (np.abs(new - s) <= 2.0**-48) | (hi - lo <= 2.0**-48) | (p == 0.0)
+        s = np.where(p == 0.0, s, new)
+        if np.all(settled):
+            break
+    return np.asarray(s)
+
+
 @dataclass(frozen=True)
 class _Span:
     """The accepted steps of one iteration: end states and slopes, for interpolation."""
@@ -258,14 +392,6 @@ class _Span:
             self.y0[row, i], self.f0[row, i], self.y1[row, i], self.f1[row, i], self.h[i], s
         )
 
-    def crossing(self, row: int, target: FloatArray, i: NDArray[np.intp]) -> FloatArray:
-        """Fraction of the step where component ``row`` crosses ``target`` (cases i)."""
-
-        def gap(s: FloatArray) -> FloatArray:
-            return self.value(row, s, i) - target
-
-        return _bisect(gap, i.size)
-
     def domain_crossing(self, law: EddyLaw, i: NDArray[np.intp]) -> FloatArray:
         """Fraction of the step where the damping law's domain margin reaches 0."""
 
@@ -273,16 +399,6 @@ class _Span:
             return law.domain_margin(self.value(2, s, i))
 
         return _bisect(margin, i.size)
-
-    def turning_point(self, row: int, i: NDArray[np.intp]) -> FloatArray:
-        """Fraction of the step where component ``row`` has a zero derivative."""
-
-        def slope(s: FloatArray) -> FloatArray:
-            return _hermite_slope(
-                self.y0[row, i], self.f0[row, i], self.y1[row, i], self.f1[row, i], self.h[i], s
-            )
-
-        return _bisect(slope, i.size)
 
 
 def _earliest(
@@ -358,6 +474,10 @@ def integrate_batch(
     ``creep_speed`` where ``creeps`` (REST), the damping law's domain margin falls to 0
     when heating (``domain_kind``), the time reaches ``cap`` (CAP) or ``horizon``
     (``horizon_kind``).
+
+    The running cases' arrays are kept compact (a case leaves them when it ends); a
+    rejected step leaves its case's state unchanged, so every step needs no gathering
+    of the accepted cases.
     """
     n = y0.shape[1]
     kind = np.full(n, -1, dtype=np.int8)
@@ -366,6 +486,9 @@ def integrate_batch(
     max_speed = y0[1].copy()
     max_temp = y0[2].copy()
     steps: list[tuple[NDArray[np.intp], FloatArray, FloatArray, FloatArray]] = []
+    # Steps inside which the speed or the temperature peaks: (row, cases, fraction of the
+    # step the peak may lie within, the step's y0, f0, y1, f1, h); resolved at the end.
+    peaks: list[tuple[int, NDArray[np.intp], FloatArray, FloatArray, FloatArray]] = []
 
     work = np.arange(n)
     sub = model
@@ -375,119 +498,145 @@ def integrate_batch(
     t = np.zeros(n)
     h = np.minimum(first_step, np.where(np.isfinite(cap), cap, np.inf))
     end = np.minimum(cap, horizon)
+    level = length.copy()
+    creep = creep_speed.copy()
+    creeping = creeps.copy()
+    top_speed = y0[1].copy()
+    top_temp = y0[2].copy()
+    buffers = _Work(n)
+    rows = (1, 2) if model.heating else (1,)
     if record:
         steps.append((work.copy(), t.copy(), y.copy(), f.copy()))
     for _ in range(MAX_STEPS):
         if work.size == 0:
             break
-        h = np.minimum(h, end[work] - t)
-        y1, error, sound = _step(sub, y, f, h)
-        scale = tol + rtol * np.maximum(np.abs(y), np.abs(y1))
-        err = np.max(np.abs(error) / scale, axis=0)
-        finite = np.all(np.isfinite(y1), axis=0) & np.isfinite(err)
+        np.minimum(h, end - t, out=h)
+        y1, error, sound = _step(sub, y, f, h, buffers)
+        scale = np.maximum(np.abs(y), np.abs(y1))
+        scale *= rtol
+        scale += tol
+        np.abs(error, out=error)
+        error /= scale
+        err = np.max(error, axis=0)
+        with np.errstate(over="ignore", invalid="ignore"):
+            finite = np.isfinite(err + np.sum(y1, axis=0))
         accept = sound & finite & (err <= 1.0)
         factor = np.where(
             finite & sound,
-            np.clip(0.9 * np.maximum(err, 1e-10) ** ERROR_EXPONENT, 0.2, 5.0),
+            np.clip(0.9 / np.sqrt(np.sqrt(np.maximum(err, 1e-10))), 0.2, 5.0),
             0.25,
         )
         h_next = h * factor
         if not np.any(accept):
             h = h_next
             continue
-        every = bool(np.all(accept))
-        acc = np.arange(work.size) if every else np.flatnonzero(accept)
-        ya, yb, ha = (y, y1, h) if every else (y[:, acc], y1[:, acc], h[acc])
-        fa = f if every else f[:, acc]
-        sub_acc = sub if every else sub.take(acc)
-        fb = sub_acc.rhs(yb)
-        glob = work[acc]
-        span = _Span(ya, fa, yb, fb, ha)
-        event_s = np.full(acc.size, np.inf)
-        event_kind = np.full(acc.size, -1, dtype=np.int8)
-        level = length[glob]
+        # A rejected step leaves its case where it was (and its slope unchanged).
+        rejected = ~accept
+        np.copyto(y1, y, where=rejected)
+        fb = sub.rhs(y1)
+        np.copyto(fb, f, where=rejected)
+        ya, fa, yb = y, f, y1
+        event_s = np.full(work.size, np.inf)
+        event_kind = np.full(work.size, -1, dtype=np.int8)
         crossings = [
             (linear.REACH, 0, level, (ya[0] < level) & (yb[0] >= level)),
-            (linear.ZERO, 1, np.zeros(acc.size), (ya[1] > 0.0) & (yb[1] <= 0.0)),
-            (
-                linear.REST,
-                1,
-                creep_speed[glob],
-                creeps[glob] & (ya[1] > creep_speed[glob]) & (yb[1] <= creep_speed[glob]),
-            ),
+            (linear.ZERO, 1, None, (ya[1] > 0.0) & (yb[1] <= 0.0)),
+            (linear.REST, 1, creep, creeping & (ya[1] > creep) & (yb[1] <= creep)),
         ]
         for code, row, target, crossed in crossings:
             hit = np.flatnonzero(crossed)
             if hit.size:
-                _earliest(event_s, event_kind, hit, span.crossing(row, target[hit], hit), code)
+                c0, c1, c2, c3 = _cubic(
+                    ya[row, hit], fa[row, hit], yb[row, hit], fb[row, hit], h[hit]
+                )
+                if target is not None:
+                    c0 = c0 - target[hit]
+                _earliest(event_s, event_kind, hit, _root((c0, c1, c2, c3)), code)
         if model.heating:
-            margin_a = sub_acc.eddy.domain_margin(ya[2])
-            margin_b = sub_acc.eddy.domain_margin(yb[2])
+            margin_a = sub.eddy.domain_margin(ya[2])
+            margin_b = sub.eddy.domain_margin(yb[2])
             hit = np.flatnonzero((margin_a > 0.0) & (margin_b <= 0.0))
             if hit.size:
-                s_hit = span.domain_crossing(sub_acc.eddy.take(hit), hit)
+                span = _Span(ya[:, hit], fa[:, hit], yb[:, hit], fb[:, hit], h[hit])
+                every = np.arange(hit.size)
+                s_hit = span.domain_crossing(sub.eddy.take(hit), every)
                 _earliest(event_s, event_kind, hit, s_hit, domain_kind)
-        ended = event_kind >= 0
+        e_idx = np.flatnonzero(event_kind >= 0)
         # Extremes: the step's end (or event) value, and an interior maximum where the
-        # derivative changes sign from + to - before that point.
-        stop = np.where(ended, event_s, 1.0)
-        for row, tracker in ((1, max_speed), (2, max_temp)):
-            values = yb[row].copy()
-            e_idx = np.flatnonzero(ended)
-            if e_idx.size:
-                values[e_idx] = span.value(row, stop[e_idx], e_idx)
+        # derivative changes sign from + to - before that point (found at the end).
+        for row, tracker in zip(rows, (top_speed, top_temp), strict=False):
+            np.maximum(tracker, yb[row], out=tracker, where=event_kind < 0)
             turning = np.flatnonzero((fa[row] > 0.0) & (fb[row] < 0.0))
             if turning.size:
-                s_turn = span.turning_point(row, turning)
-                top = span.value(row, s_turn, turning)
-                inside = s_turn <= stop[turning]
-                values[turning] = np.where(
-                    inside, np.maximum(values[turning], top), values[turning]
+                stop = np.minimum(event_s[turning], 1.0)
+                peaks.append(
+                    (
+                        row,
+                        work[turning],
+                        stop,
+                        np.stack([ya[row, turning], fa[row, turning], yb[row, turning]]),
+                        np.stack([fb[row, turning], h[turning]]),
+                    )
                 )
-            tracker[glob] = np.maximum(tracker[glob], values)
         # Finish the cases with an event inside this step.
-        if np.any(ended):
-            e_idx = np.flatnonzero(ended)
+        if e_idx.size:
             s_e = event_s[e_idx]
-            state = _hermite(ya[:, e_idx], fa[:, e_idx], yb[:, e_idx], fb[:, e_idx], ha[e_idx], s_e)
+            h_e = h[e_idx]
+            state = _hermite(ya[:, e_idx], fa[:, e_idx], yb[:, e_idx], fb[:, e_idx], h_e, s_e)
+            top_speed[e_idx] = np.maximum(top_speed[e_idx], state[1])
+            if model.heating:
+                top_temp[e_idx] = np.maximum(top_temp[e_idx], state[2])
             codes = event_kind[e_idx]
-            state[0] = np.where(codes == linear.REACH, length[glob[e_idx]], state[0])
+            state[0] = np.where(codes == linear.REACH, level[e_idx], state[0])
             state[1] = np.where(codes == linear.ZERO, 0.0, state[1])
-            g = glob[e_idx]
+            g = work[e_idx]
             kind[g] = codes
-            duration[g] = t[acc[e_idx]] + s_e * ha[e_idx]
+            duration[g] = t[e_idx] + s_e * h_e
             final[:, g] = state
             if record:
-                slope = sub_acc.take(e_idx).rhs(state)
+                slope = sub.take(e_idx).rhs(state)
                 steps.append((g, duration[g].copy(), state, slope))
         # Advance the others; those that reached the cap or the horizon end there.
-        go = np.flatnonzero(~ended)
-        idx = acc[go]
-        t[idx] = t[idx] + ha[go]
-        y[:, idx] = yb[:, go]
-        f[:, idx] = fb[:, go]
-        if record and go.size:
-            steps.append((work[idx].copy(), t[idx].copy(), yb[:, go].copy(), fb[:, go].copy()))
-        at_end = go[t[idx] >= end[work[idx]] * (1.0 - 1e-15)]
+        t += np.where(accept, h, 0.0)
+        y, f = y1, fb
+        ended = event_kind >= 0
+        going = accept & ~ended
+        if record and np.any(going):
+            go = np.flatnonzero(going)
+            steps.append((work[go], t[go], y[:, go], f[:, go]))
+        at_end = np.flatnonzero(going & (t >= end * (1.0 - 1e-15)))
         if at_end.size:
-            g = glob[at_end]
+            g = work[at_end]
             kind[g] = np.where(cap[g] <= horizon, linear.CAP, horizon_kind)
-            duration[g] = t[acc[at_end]]
-            final[:, g] = yb[:, at_end]
+            duration[g] = t[at_end]
+            final[:, g] = y[:, at_end]
         h = h_next
-        done_now = np.zeros(work.size, dtype=bool)
-        done_now[acc[ended]] = True
-        done_now[acc[at_end]] = True
-        if np.any(done_now):
-            keep = np.flatnonzero(~done_now)
+        if e_idx.size or at_end.size:
+            ended[at_end] = True
+            gone = work[ended]
+            max_speed[gone] = np.maximum(max_speed[gone], top_speed[ended])
+            max_temp[gone] = np.maximum(max_temp[gone], top_temp[ended])
+            keep = np.flatnonzero(~ended)
             work, y, f, t, h = work[keep], y[:, keep], f[:, keep], t[keep], h[keep]
-            tol = tol[:, keep]
+            tol, end, level = tol[:, keep], end[keep], level[keep]
+            creep, creeping = creep[keep], creeping[keep]
+            top_speed, top_temp = top_speed[keep], top_temp[keep]
             sub = sub.take(keep)
+            buffers = _Work(keep.size)
     # Anything still running after MAX_STEPS is reported as cut short.
     if work.size:
         kind[work] = horizon_kind
         duration[work] = t
         final[:, work] = y
+        max_speed[work] = np.maximum(max_speed[work], top_speed)
+        max_temp[work] = np.maximum(max_temp[work], top_temp)
+    for row, cases, stop, ends, rest in peaks:
+        coef = _cubic(ends[0], ends[1], ends[2], rest[0], rest[1])
+        s_turn = _root((coef[1], 2.0 * coef[2], 3.0 * coef[3]))
+        top = _hermite(ends[0], ends[1], ends[2], rest[0], rest[1], s_turn)
+        tracker = max_speed if row == 1 else max_temp
+        inside = s_turn <= stop
+        np.maximum.at(tracker, cases[inside], top[inside])
     trajectories: list[Trajectory | None] = [None] * n
     if record:
         trajectories = _trajectories(steps, n)
