@@ -3,10 +3,11 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP_RUN := $(VENV)/.installed-run
+STAMP_DEMO := $(VENV)/.installed-demo
 STAMP_TEST := $(VENV)/.installed-test
 DEMO_DIR ?= ecdsim-demo
 
-.PHONY: demo test lint typecheck pytest bench clean
+.PHONY: demo test lint typecheck pytest browser bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -17,11 +18,17 @@ $(STAMP_RUN): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e .
 	touch $@
 
-$(STAMP_TEST): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+# The demo installs the extras too, so that every command the README shows
+# (ecdsim montecarlo, ecdsim app) works after make demo.
+$(STAMP_DEMO): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[montecarlo,app]'
 	touch $@ $(STAMP_RUN)
 
-demo: $(STAMP_RUN)
+$(STAMP_TEST): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[test]'
+	touch $@ $(STAMP_RUN) $(STAMP_DEMO)
+
+demo: $(STAMP_DEMO)
 	$(BIN)/ecdsim demo --out $(DEMO_DIR)
 
 lint: $(STAMP_TEST)
@@ -31,10 +38,15 @@ lint: $(STAMP_TEST)
 typecheck: $(STAMP_TEST)
 	$(BIN)/mypy
 
-pytest: $(STAMP_TEST)
+# The explorer's browser tests drive Debian's chromium: install it when missing, or stop
+# at once naming the package (they are never skipped).
+browser:
+	@bash scripts/ensure-chromium.sh
+
+pytest: $(STAMP_TEST) browser
 	$(BIN)/python -m pytest
 
-test: lint typecheck pytest
+test: browser lint typecheck pytest
 
 # Each benchmark measures its ratios within one run (the machines are shared and noisy).
 # The web and Monte Carlo benchmarks need the test extra (fastapi, dask, pyarrow).
