@@ -34,6 +34,10 @@ def reflect_inertia_to_input(inertia: ArrayLike, gear_ratio: ArrayLike) -> Float
 def kinetic_energy(inertia: ArrayLike, speed: ArrayLike) -> FloatArray:
     """Rotational kinetic energy ``J omega**2 / 2``.
 
+    Meriam and Kraige, *Engineering Mechanics: Dynamics*, 7th ed., 2012, section 6/6
+    (kinetic energy of a body rotating about a fixed axis). The paper neglects it
+    (section 4, end).
+
     Parameters
     ----------
     inertia : J [kg*m^2]
@@ -50,7 +54,9 @@ def plastic_engagement(
 
     Angular momentum is conserved through the (short, perfectly plastic) tooth contact
     (Meriam and Kraige 6/8): ``omega_after = J_L omega_L / (J_L + J_D)``, and the kinetic
-    energy lost in the engagement is ``J_L J_D omega_L**2 / (2 (J_L + J_D))``.
+    energy lost in the engagement is ``J_L J_D omega_L**2 / (2 (J_L + J_D))``. Sources:
+    Meriam and Kraige 2012, section 6/8 (angular impulse-momentum); the gear lost motion
+    it closes is the paper's section 3.4.
 
     Parameters
     ----------
@@ -81,6 +87,7 @@ def rebound(
 
     ``omega_after = -e * omega_before`` (Meriam and Kraige 3/12); the energy lost in the
     impact is ``(1 - e**2) J omega_before**2 / 2``. e = 0 is a latch (plastic stop).
+    Source: Meriam and Kraige 2012, section 3/12 (coefficient of restitution).
 
     Parameters
     ----------
@@ -104,6 +111,10 @@ def rebound(
 
 def static_friction(kinetic_friction: ArrayLike, static_factor: ArrayLike) -> FloatArray:
     """Breakaway (static) friction torque: ``factor * kinetic``, factor >= 1.
+
+    The static coefficient of friction is at least the kinetic one (Meriam and Kraige,
+    *Engineering Mechanics: Statics*, 7th ed., 2012, section 6/3); the paper calls the
+    damper's and gearbox's friction "coulomb (or static)" (section 2.2) and gives one value.
 
     Parameters
     ----------

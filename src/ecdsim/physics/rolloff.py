@@ -32,12 +32,13 @@ from ecdsim._types import ArrayLike, FloatArray, as_float
 def peak_torque_from_damping(damping_rate: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
     """Peak eddy-current torque whose Kloss curve has slope BD at zero speed.
 
-    ``T_peak = BD * omega_peak / 2``, from ``dT_d/domega_d (0) = 2 * T_peak / omega_peak``.
+    ``T_peak = BD * omega_peak / 2``, from ``dT_d/domega_d (0) = 2 * T_peak / omega_peak``
+    of the Kloss-form curve (Wouterse 1991, doi:10.1049/ip-b.1991.0019): the linear range
+    keeps the paper's rated BD (section 2.1).
 
     Parameters
     ----------
-    damping_rate : BD, the damper's linear damping rate at the reference temperature
-        [N*m*s/rad]
+    damping_rate : BD, linear damping rate at the reference temperature [N*m*s/rad]
     peak_speed : omega_peak at the reference temperature [rad/s]
 
     >>> round(float(peak_torque_from_damping(1.3e-4, 2000.0)), 12)
@@ -55,7 +56,9 @@ def peak_speed_at(
     """Speed of peak eddy-current torque at conductor temperature T.
 
     ``omega_peak(T) = omega_peak_ref * (1 + alpha * (T - T_ref))``: the peak speed is
-    proportional to the conductor's resistivity (Wouterse 1991), linear in temperature.
+    proportional to the conductor's resistivity (Wouterse 1991,
+    doi:10.1049/ip-b.1991.0019), linear in temperature; to first order this is the
+    paper's 0.4 % per degC fall of BD (Eq. 1).
 
     Parameters
     ----------
@@ -75,8 +78,10 @@ def peak_speed_at(
 def kloss_torque(speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
     """Eddy-current torque against speed, Kloss form: ``2 T_peak x / (1 + x**2)``.
 
-    ``x = omega_d / omega_peak``. Odd in the speed: the torque opposes the motion's
-    direction when the sign convention ``damping torque = -T_d`` is used.
+    ``x = omega_d / omega_peak`` (Wouterse 1991, doi:10.1049/ip-b.1991.0019). Odd in
+    the speed: the torque opposes the motion's direction when the sign convention
+    ``damping torque = -T_d`` is used. Linear below the peak: the paper's section 2.1
+    roll-off point.
 
     Parameters
     ----------
@@ -96,8 +101,9 @@ def kloss_speed_derivative(
 ) -> FloatArray:
     """``dT_d / domega_d`` of the Kloss torque: ``(2 T_peak / omega_peak)(1 - x**2)/(1 + x**2)**2``.
 
-    The local damping rate of the damper; equal to BD at zero speed, zero at the peak and
-    negative beyond it.
+    The local damping rate of the damper (the slope definition of paper section 2.1);
+    equal to BD at zero speed, zero at the peak and negative beyond it. The derivative
+    of the Kloss form of Wouterse 1991 (doi:10.1049/ip-b.1991.0019).
 
     Parameters
     ----------
@@ -118,7 +124,9 @@ def kloss_peak_speed_derivative(
     """``dT_d / domega_peak`` of the Kloss torque at fixed speed and peak torque.
 
     ``-(2 T_peak x / omega_peak)(1 - x**2)/(1 + x**2)**2``; with ``domega_peak/dT =
-    omega_peak_ref * alpha`` it gives the torque's temperature sensitivity.
+    omega_peak_ref * alpha`` (:func:`peak_speed_at`) it gives the torque's temperature
+    sensitivity, the roll-off counterpart of the paper's Eq. 1 coefficient. Derivative of
+    the Kloss form of Wouterse 1991 (doi:10.1049/ip-b.1991.0019).
 
     Parameters
     ----------

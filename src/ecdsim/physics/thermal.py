@@ -24,6 +24,10 @@ def heat_loss(
 ) -> FloatArray:
     """Heat flow from the damper to ambient: ``(T - T_ambient) / R``; 0 where R is inf.
 
+    The loss term of the lumped-capacitance balance (Incropera, DeWitt, Bergman and
+    Lavine 2007, section 5.1, Eq. 5.2), written with a thermal resistance (their
+    section 3.1.3).
+
     Parameters
     ----------
     temperature : damper temperature T [degC]
@@ -69,6 +73,10 @@ def temperature_rate(
 
 def adiabatic_temperature_rise(energy: ArrayLike, heat_capacity: ArrayLike) -> FloatArray:
     """Temperature rise of an adiabatic lumped body: ``dT = E / C``.
+
+    Incropera, DeWitt, Bergman and Lavine 2007, section 5.1, Eq. 5.2 integrated with no
+    loss to ambient (R = inf): the energy a deployment dissipates in the damper (paper
+    Eq. 5's damping torque times the speed, integrated over the deployment).
 
     Parameters
     ----------
