@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -193,17 +194,29 @@ def test_missing_file_is_a_config_error(tmp_path: Path) -> None:
         load_config(tmp_path / "nope.toml")
 
 
-def test_spring_table_config() -> None:
+@pytest.mark.parametrize(
+    ("end", "travel", "radians"),
+    [("1.57 rad", "1.57 rad", 1.57), ("90 deg", "90 deg", math.pi / 2.0)],
+    ids=["rad", "deg"],
+)
+def test_spring_table_config(end: str, travel: str, radians: float) -> None:
+    # A two-point table ending exactly at the travel is the linear spring of Eq. 7. (A
+    # table ending at 90 deg = 1.5708 rad with the paper's 1.57 rad travel is not: the
+    # torque at the travel is then 1.5811 N*m, and the time 7.1e-4 shorter.)
     text = replace_line("start_torque", "")
     text = replace_line(
-        "end_torque", 'spring_table = [["0 deg", "3.73 N*m"], ["90 deg", "1.58 N*m"]]', text
+        "end_torque", f'spring_table = [["0 deg", "3.73 N*m"], ["{end}", "1.58 N*m"]]', text
     )
+    text = replace_line("travel", f'travel = "{travel}"', text)
     config = parse_config(text)
-    # A two-point table equal to the linear spring gives the hand solution.
+    assert config.system.load.travel == pytest.approx(radians, rel=1e-15)  # pint: exact pi/180
     from ecdsim.deployment import predict
 
     result = predict(config.system, [25.0]).solutions["exact"]
-    assert result.deployment_time[0] == pytest.approx(hand.exact_time(25.0), rel=1e-3)
+    # Log-mean form against the hand ln form: the same closed form, rounding only (1e-12,
+    # as in test_solvers).
+    expected = hand.exact_time(25.0, travel=radians)
+    assert result.deployment_time[0] == pytest.approx(expected, rel=1e-12)
 
 
 @pytest.mark.parametrize(
