@@ -10,7 +10,8 @@ The pieces, each in its own module (user guide: docs/montecarlo.md):
 * :mod:`~ecdsim.montecarlo.run`: chunk evaluation (one vectorised ``predict`` per chunk),
   in process or on dask.distributed, streamed to Parquet, resumable;
 * :mod:`~ecdsim.montecarlo.stats` and :mod:`~ecdsim.montecarlo.repeatability`: the
-  statistics; :mod:`~ecdsim.montecarlo.plots`: histogram, CDF and tornado plots.
+  statistics, on the ranks and intervals of :mod:`~ecdsim.montecarlo.intervals`;
+  :mod:`~ecdsim.montecarlo.plots`: histogram, CDF and tornado plots.
 
 pandas, pyarrow and dask are optional (``pip install 'ecdsim[montecarlo]'``) and are
 imported only when a study runs.

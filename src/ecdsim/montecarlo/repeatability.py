@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ecdsim._types import ArrayLike, as_float
+from ecdsim.montecarlo.intervals import proportion_interval, rank_of
 
 
 def typical_max_deviation(deviations: ArrayLike, runs: int) -> float:
@@ -40,8 +41,6 @@ def typical_max_deviation(deviations: ArrayLike, runs: int) -> float:
     >>> typical_max_deviation([0.1, 0.2, 0.3, 0.4], 1)  # the median of one draw
     0.2
     """
-    from ecdsim.montecarlo.stats import rank_of
-
     d = as_float(deviations).reshape(-1)
     rank = rank_of(d.size, 0.5 ** (1.0 / runs))
     return float(np.partition(d, rank)[rank])
@@ -57,8 +56,6 @@ def study(times: ArrayLike, nominal: float | None, within: float, runs: int) -> 
     within : the stated spread, a deviation either way [s]
     runs : deployments in one campaign [-]
     """
-    from ecdsim.montecarlo.stats import proportion_interval
-
     t = as_float(times).reshape(-1)
     base = {"within_s": within, "runs": runs, "nominal_time_s": nominal}
     if nominal is None or t.size == 0:

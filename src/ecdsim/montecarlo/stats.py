@@ -42,6 +42,8 @@ import numpy as np
 
 from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim._version import __version__
+from ecdsim.montecarlo import repeatability
+from ecdsim.montecarlo.intervals import confidence_ranks, proportion_interval, rank_of
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -49,7 +51,6 @@ if TYPE_CHECKING:
     from ecdsim.montecarlo.run import Plan
 
 PERCENTILES: dict[str, float] = {"P1": 0.01, "P5": 0.05, "P50": 0.50, "P95": 0.95, "P99": 0.99}
-CONFIDENCE = 0.95
 MAX_BINS = 64
 REGRESSION_BLOCK = 1_000_000
 
@@ -57,31 +58,6 @@ REGRESSION_BLOCK = 1_000_000
 def _number(value: float) -> float | None:
     """A float for JSON: None for inf or NaN."""
     return float(value) if math.isfinite(value) else None
-
-
-def rank_of(n: int, probability: float) -> int:
-    """0-based rank of the ``probability`` percentile of n samples: ceil(p*n) - 1.
-
-    >>> rank_of(100, 0.05), rank_of(100, 0.5), rank_of(101, 0.5)
-    (4, 49, 50)
-    """
-    # Rounding the product guards ceil() against 0.29 * 100 = 28.999999999999996.
-    return min(max(math.ceil(round(probability * n, 9)) - 1, 0), n - 1)
-
-
-def confidence_ranks(n: int, probability: float) -> tuple[int | None, int | None]:
-    """0-based ranks (r, s) of a distribution-free 95 % interval of a percentile.
-
-    With B ~ Binomial(n, p) the number of samples below the true percentile,
-    ``P(x_(r) <= q_p <= x_(s)) = P(r <= B <= s - 1)`` (1-based ranks); r and s - 1 are
-    B's 2.5 % and 97.5 % quantiles. None where the rank falls outside the sample.
-    """
-    from scipy.stats import binom
-
-    tail = (1.0 - CONFIDENCE) / 2.0
-    low = int(binom.ppf(tail, n, probability))  # 1-based rank r
-    high = int(binom.ppf(1.0 - tail, n, probability)) + 1  # 1-based rank s
-    return (low - 1 if low >= 1 else None, high - 1 if high <= n else None)
 
 
 def percentiles(
@@ -108,18 +84,6 @@ def percentiles(
     return {
         name: {"value": at(k), "low": at(lo), "high": at(hi)} for name, (k, lo, hi) in ranks.items()
     }
-
-
-def proportion_interval(successes: int, trials: int) -> tuple[float, float]:
-    """Exact (Clopper-Pearson) 95 % interval of a proportion [-]."""
-    from scipy.stats import beta
-
-    tail = (1.0 - CONFIDENCE) / 2.0
-    low = 0.0 if successes == 0 else float(beta.ppf(tail, successes, trials - successes + 1))
-    high = (
-        1.0 if successes == trials else float(beta.ppf(1 - tail, successes + 1, trials - successes))
-    )
-    return low, high
 
 
 def describe(values: ArrayLike) -> dict[str, Any]:
@@ -386,7 +350,6 @@ def _warnings(tags: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def summarize(plan: Plan, out: Path) -> dict[str, Any]:
     """The study's statistics per temperature, read from its chunk files (JSON-ready)."""
-    from ecdsim.montecarlo import repeatability
     from ecdsim.montecarlo.run import output_column
     from ecdsim.montecarlo.store import ChunkReader
 
