@@ -114,7 +114,7 @@ def test_bad_quantities(kind: object, value: object, fragment: str) -> None:
         (
             "damping_rate",
             'damping_rate = "-1.3e-4 N*m*s/rad"',
-            "damper.damping_rate: '-1.3e-4 N*m*s/rad' must be > 0",
+            "damper.damping_rate: '-1.3e-4 N*m*s/rad' must be >= 0",
         ),
         # negative ratio
         ("ratio", "ratio = -380", "gearbox.ratio: -380 must be > 0"),

@@ -154,11 +154,21 @@ class Prediction:
         for name, solution in self.solutions.items():
             time = at(solution.deployment_time)
             stalled = bool(np.broadcast_to(solution.stalled, self.temperatures.shape)[i])
+            solved = bool(np.broadcast_to(solution.solved_mask, self.temperatures.shape)[i])
+
+            # A case the method cannot solve has no speeds either (not 0: null in JSON).
+            speeds = {
+                key: at(values) if solved else None
+                for key, values in (
+                    ("start_speed_rad_s", solution.start_speed),
+                    ("end_speed_rad_s", solution.end_speed),
+                    ("max_speed_rad_s", solution.max_speed),
+                )
+            }
             case[name] = {
+                "solved": solved,
                 "deployment_time_s": time if np.isfinite(time) else None,
-                "start_speed_rad_s": at(solution.start_speed),
-                "end_speed_rad_s": at(solution.end_speed),
-                "max_speed_rad_s": at(solution.max_speed),
+                **speeds,
                 "stalled": stalled,
                 "stall_angle_rad": at(solution.stall_angle) if stalled else None,
             }
@@ -241,17 +251,19 @@ def predict(
 
 
 def _check_damping_positive(ecd: EcdState) -> None:
-    # The damper's own rate must stay positive, not only the total: a negative BD_T hidden
-    # by the gearbox's BG is still a temperature law used beyond its range.
+    # The damper's own rate must not go negative, not only the total: a negative BD_T
+    # hidden by the gearbox's BG is still a temperature law used beyond its range. Zero is
+    # a real case (an undamped coast, a damper removed): the methods that cannot solve it
+    # say so per case (DeploymentSolution.solved).
     damper = np.broadcast_to(ecd.damper_damping_rate, np.shape(ecd.ecd_damping_rate))
-    bad = ~(damper > 0.0) | ~(ecd.ecd_damping_rate > 0.0)
+    bad = ~(damper >= 0.0) | ~(ecd.ecd_damping_rate >= 0.0)
     if np.any(bad):
         where = np.broadcast_to(ecd.temperature, bad.shape)[bad]
         value = damper[bad]
         raise ModelDomainError(
             "damper.damping_temperature_coefficient",
             f"at {float(where.flat[0]):g} degC the damping law gives a damper damping rate "
-            f"BD_T = {float(value.flat[0]):.4g} N*m*s/rad <= 0; the linear temperature law "
+            f"BD_T = {float(value.flat[0]):.4g} N*m*s/rad < 0; the linear temperature law "
             "does not reach that far",
         )
 
@@ -297,6 +309,7 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
                 )
             )
     for name, solution in prediction.solutions.items():
+        found.extend(_unsolved_warnings(prediction, name, solution))
         found.extend(_stall_warnings(prediction, name, solution))
         found.extend(_linear_range_warnings(prediction, name, solution))
         if isinstance(solution, DynamicSolution):
@@ -308,23 +321,52 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
     return found
 
 
+def _unsolved_warnings(
+    prediction: Prediction, name: str, solution: DeploymentSolution
+) -> list[ModelWarning]:
+    unsolved = ~solution.solved_mask
+    return [
+        ModelWarning(
+            "not_solved",
+            f"the {name} method cannot solve the case at {t:g} degC: the ECD's damping rate "
+            "BECD_T is 0, so its quasi-static equation gives an infinite speed; use the "
+            "dynamic method (give [load] inertia)",
+            t,
+            name,
+        )
+        for t in _temperature_at(prediction, unsolved)
+    ]
+
+
 def _stall_warnings(
     prediction: Prediction, name: str, solution: DeploymentSolution
 ) -> list[ModelWarning]:
     out = []
-    temps = np.broadcast_to(prediction.temperatures, solution.stalled.shape)
-    for t, angle in zip(
-        temps[solution.stalled], solution.stall_angle[solution.stalled], strict=True
+    shape = solution.stalled.shape
+    temps = np.broadcast_to(prediction.temperatures, shape)
+    drive = np.broadcast_to(prediction.problem.torques[0], shape)
+    friction = np.broadcast_to(prediction.problem.friction, shape)
+    stalled = solution.stalled
+    for t, angle, start, resist in zip(
+        temps[stalled],
+        solution.stall_angle[stalled],
+        drive[stalled],
+        friction[stalled],
+        strict=True,
     ):
-        out.append(
-            ModelWarning(
-                "stall",
-                f"stalls at {float(angle):.4g} rad ({np.degrees(float(angle)):.1f} deg) at "
-                f"{float(t):g} degC: spring torque falls to the friction before the end of travel",
-                float(t),
-                name,
+        if float(angle) == 0.0:
+            # Say what happened at release rather than "stalls at 0 rad".
+            message = (
+                f"cannot start at {float(t):g} degC: the drive torque at release "
+                f"{float(start):.4g} N*m does not exceed the friction {float(resist):.4g} N*m"
             )
-        )
+        else:
+            message = (
+                f"stalls at {float(angle):.4g} rad ({np.degrees(float(angle)):.1f} deg) at "
+                f"{float(t):g} degC: spring torque falls to the friction before the end of "
+                "travel"
+            )
+        out.append(ModelWarning("stall", message, float(t), name))
     return out
 
 

@@ -45,7 +45,9 @@ def time_span(prediction: Prediction) -> float:
     problem = prediction.problem
     drop = np.abs(problem.torques[0] - problem.torques[-1]) / problem.travel
     scale = problem.damping_rate / np.where(drop > 0.0, drop, 1.0)
-    return float(5.0 * np.max(scale))
+    span = float(5.0 * np.max(scale))
+    # No damping and no finite time (nothing solved, nothing to scale by): one second.
+    return span if span > 0.0 else 1.0
 
 
 def _plot_against_time(
@@ -61,13 +63,24 @@ def _plot_against_time(
     times = np.linspace(0.0, time_span(prediction), n_points)
     temps = np.ravel(prediction.temperatures)
     colors = temperature_colors(len(temps))
-    for name in prediction.solutions:
+    for name, solution in prediction.solutions.items():
         trajectory = prediction.trajectory(name, times)
+        solved = np.ravel(np.broadcast_to(solution.solved_mask, prediction.temperatures.shape))
         if quantity == "angle":
             values = np.degrees(trajectory.angle.reshape(len(times), -1))
         else:
             values = trajectory.speed.reshape(len(times), -1)
         for j, temp in enumerate(temps):
+            if not solved[j]:
+                # No curve to draw, but the case must not vanish silently from the legend.
+                ax.plot(
+                    [],
+                    [],
+                    _LINESTYLES.get(name, ":"),
+                    color=colors[j],
+                    label=f"{temp:g} degC, {SOLVERS[name].label}: not solved (BECD = 0)",
+                )
+                continue
             ax.plot(
                 times,
                 values[:, j],

@@ -22,7 +22,6 @@ from ecdsim.config.fields import (
     NonNegativeTorque,
     PerKelvin,
     PositiveAngle,
-    PositiveDamping,
     PositiveInertia,
     PositiveNumber,
     PositiveSpeed,
@@ -142,7 +141,7 @@ class ThermalSpec(_Section):
 class DamperSpec(_Section):
     """``[damper]``: the high-speed magnetic damper (paper section 2)."""
 
-    damping_rate: PositiveDamping
+    damping_rate: NonNegativeDamping
     reference_temperature: Temperature = 25.0
     damping_temperature_coefficient: PerKelvin = -0.004
     coulomb_friction: NonNegativeTorque
@@ -204,13 +203,14 @@ class GearboxSpec(_Section):
 class LoadSpec(_Section):
     """``[load]``: spring torque over the travel and system friction (paper section 5)."""
 
-    start_torque: PositiveTorque | None = None
+    start_torque: NonNegativeTorque | None = None
     end_torque: NonNegativeTorque | None = None
     spring_table: list[tuple[Angle, NonNegativeTorque]] | None = None
     travel: PositiveAngle
     system_friction: FrictionLawSpec | None = None
     spring_temperature_coefficient: PerKelvin = 0.0
     reference_temperature: Temperature = 25.0
+    # Every load has mass, and the dynamic method divides by it: > 0, unlike the torques.
     inertia: PositiveInertia | None = None
     restitution: Restitution = 0.0
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
@@ -99,6 +99,10 @@ class DeploymentSolution:
     max_speed : highest speed over the travel [rad/s]
     stalled : True where the spring torque falls to the friction before the end of travel
     stall_angle : deployed angle at which it stalls [rad]; NaN where not stalled
+    solved : False where this method cannot solve the case at all (the quasi-static
+        methods with no damping, BECD_T = 0: their equation gives an infinite speed);
+        there the time is +inf, the speeds are 0 and the case is not flagged as stalled.
+        None (the default) means every case was solved.
     """
 
     method: str
@@ -108,6 +112,17 @@ class DeploymentSolution:
     max_speed: FloatArray
     stalled: BoolArray
     stall_angle: FloatArray
+    solved: BoolArray | None = None
+
+    def __post_init__(self) -> None:
+        if self.solved is None:
+            object.__setattr__(self, "solved", np.ones(self.stalled.shape, dtype=bool))
+
+    @property
+    def solved_mask(self) -> BoolArray:
+        """``solved`` as an array of the batch shape (True where the method has an answer)."""
+        assert self.solved is not None  # set in __post_init__
+        return np.broadcast_to(self.solved, self.stalled.shape)
 
 
 @dataclass(frozen=True)
@@ -148,6 +163,44 @@ class Solver(Protocol):
     def trajectory(self, problem: QuasiStaticProblem, times: ArrayLike) -> Trajectory:
         """Angle and speed at the given times [s] for every case of the batch."""
         ...
+
+
+def undamped_cases(problem: QuasiStaticProblem) -> tuple[QuasiStaticProblem, BoolArray]:
+    """Split off the cases a quasi-static method cannot solve: BECD_T = 0.
+
+    ``B * dphi/dt = T(phi) - F`` gives an infinite speed where B = 0 and the net torque is
+    positive, so the quasi-static methods have no answer there (the dynamic method, with
+    inertia, does). Returns the problem with those damping rates replaced by
+    1 N*m*s/rad, so that the solver's arithmetic stays finite, and the mask of the
+    replaced cases, which :func:`mark_unsolved` then reports as not solved.
+    """
+    undamped = ~(problem.damping_rate > 0.0)
+    if not np.any(undamped):
+        return problem, undamped
+    safe = replace(problem, damping_rate=np.where(undamped, 1.0, problem.damping_rate))
+    return safe, undamped
+
+
+def mark_unsolved(solution: DeploymentSolution, unsolved: BoolArray) -> DeploymentSolution:
+    """The solution with the ``unsolved`` cases flagged (``solved`` False, time +inf)."""
+    if not np.any(unsolved):
+        return solution
+    shape = solution.stalled.shape
+    unsolved = np.broadcast_to(unsolved, shape)
+
+    def zero_where(values: FloatArray) -> FloatArray:
+        return np.where(unsolved, 0.0, np.broadcast_to(values, shape))
+
+    return replace(
+        solution,
+        deployment_time=np.where(unsolved, np.inf, solution.deployment_time),
+        start_speed=zero_where(solution.start_speed),
+        end_speed=zero_where(solution.end_speed),
+        max_speed=zero_where(solution.max_speed),
+        stalled=solution.stalled & ~unsolved,
+        stall_angle=np.where(unsolved, np.nan, solution.stall_angle),
+        solved=~unsolved,
+    )
 
 
 def times_against_batch(times: ArrayLike, batch_ndim: int) -> FloatArray:

@@ -25,7 +25,9 @@ from ecdsim.solvers.base import (
     DeploymentSolution,
     QuasiStaticProblem,
     Trajectory,
+    mark_unsolved,
     times_against_batch,
+    undamped_cases,
 )
 
 
@@ -54,7 +56,14 @@ class ExactMethod:
     label: str = "exact quasi-static"
 
     def solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
-        """Deployment time, start, end and peak speed for every case of the batch."""
+        """Deployment time, start, end and peak speed for every case of the batch.
+
+        Cases with no damping (BECD_T = 0) are returned as not solved.
+        """
+        problem, undamped = undamped_cases(problem)
+        return mark_unsolved(self._solve(problem), undamped)
+
+    def _solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
         shape = problem.batch_shape
         net = np.broadcast_to(problem.net_torques, (problem.angles.shape[0], *shape))
         b = problem.damping_rate
@@ -72,7 +81,22 @@ class ExactMethod:
         )
 
     def trajectory(self, problem: QuasiStaticProblem, times: ArrayLike) -> Trajectory:
-        """Angle and speed at the given times; held at the latch after arrival."""
+        """Angle and speed at the given times; held at the latch after arrival.
+
+        A case with no damping (not solved, see :meth:`solve`) stays at 0.
+        """
+        problem, undamped = undamped_cases(problem)
+        path = self._trajectory(problem, times)
+        if not np.any(undamped):
+            return path
+        return Trajectory(
+            method=path.method,
+            time=path.time,
+            angle=np.where(undamped, 0.0, path.angle),
+            speed=np.where(undamped, 0.0, path.speed),
+        )
+
+    def _trajectory(self, problem: QuasiStaticProblem, times: ArrayLike) -> Trajectory:
         shape = problem.batch_shape
         n_points = problem.angles.shape[0]
         t = times_against_batch(times, len(shape))

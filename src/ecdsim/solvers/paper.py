@@ -23,7 +23,9 @@ from ecdsim.solvers.base import (
     DeploymentSolution,
     QuasiStaticProblem,
     Trajectory,
+    mark_unsolved,
     times_against_batch,
+    undamped_cases,
 )
 
 
@@ -117,7 +119,15 @@ class PaperMethod:
     label: str = "paper (Eq. 8-13)"
 
     def solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
-        """Eq. 8-11 for every case; stalled cases get +inf and the stall angle."""
+        """Eq. 8-11 for every case; stalled cases get +inf and the stall angle.
+
+        Cases with no damping (BECD_T = 0: Eq. 8-9 divide by it) are returned as not
+        solved.
+        """
+        problem, undamped = undamped_cases(problem)
+        return mark_unsolved(self._solve(problem), undamped)
+
+    def _solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
         shape = problem.batch_shape
         stalled, stall_angle = locate_stall(problem.angles, problem.net_torques)
         omega_s = start_speed(problem.torques[0], problem.friction, problem.damping_rate)
