@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -62,7 +63,54 @@ def test_json_output(tmp_path: Path) -> None:
     assert [e["temperature_C"] for e in document["temperatures"]] == [-40.0, 25.0, 100.0]
     assert document["bad_rows"] == []
     assert document["parameter_file"] is None
-    assert document["temperature_laws"]["comparison"]["better"] in {"linear", "resistivity", None}
+    # The example is drawn from a linear law (Truth: BECD = 24 (1 - 0.004 (T - 25)),
+    # tests/test_characterize_synthetic.py). The resistivity law makes 1/BECD linear in T;
+    # through the true values 1/BECD bends: at 25 degC it misses the chord of its -40 and
+    # 100 degC values by 8.8 % (by hand below), over eight times the largest relative 95 %
+    # half-width of the per-temperature values (1.0 %). A best fit spreads that miss over
+    # the three points, still about three half-widths at each: only the linear law fits.
+    truth = Truth()
+    inverse = {t: 1.0 / truth.damping(t) for t in (-40.0, 25.0, 100.0)}
+    chord = inverse[-40.0] + (inverse[100.0] - inverse[-40.0]) * 65.0 / 140.0
+    bend = chord / inverse[25.0] - 1.0
+    assert bend == pytest.approx(0.0884, abs=1e-4)
+    widths = [
+        (e["damping_rate_ci95"][1] - e["damping_rate_ci95"][0]) / 2 / e["damping_rate_Nms_per_rad"]
+        for e in document["temperatures"]
+    ]
+    assert bend > 8.0 * max(widths)
+    comparison = document["temperature_laws"]["comparison"]
+    assert comparison["better"] == "linear"
+    assert comparison["delta_aic"] < -2.0  # AIC(linear) - AIC(resistivity), Burnham-Anderson
+
+
+@dataclass(frozen=True)
+class ResistivityTruth(Truth):
+    """BECD = b_ref / (1 - c (T - t_ref)): the resistivity law with alpha = -c."""
+
+    def damping(self, t: float) -> float:
+        return self.b_ref / (1.0 - self.c * (t - self.t_ref))
+
+
+@pytest.mark.parametrize(
+    ("truth", "temperatures", "better"),
+    [
+        (Truth(), [-40.0, 25.0, 100.0], "linear"),
+        (ResistivityTruth(), [-40.0, 25.0, 100.0], "resistivity"),
+        (ResistivityTruth(), [-40.0, 100.0], None),  # two points: both laws pass through
+    ],
+    ids=["linear", "resistivity", "two-temperatures"],
+)
+def test_json_names_the_law_the_data_were_drawn_from(
+    tmp_path: Path, truth: Truth, temperatures: list[float], better: str | None
+) -> None:
+    # Noise-free drops: the true law fits to round-off, the other misses by percents.
+    points = drop_points(truth, temperatures, [2.0, 4.0, 6.0, 8.0])
+    path = write(tmp_path, drop_csv(points, inertia_column=False).splitlines())
+    result = runner.invoke(app, ["fit", "drop-test", str(path), "--json"])
+    assert result.exit_code == 0, result.output
+    comparison = json.loads(result.stdout)["temperature_laws"]["comparison"]
+    assert comparison["better"] == better
 
 
 def test_bad_rows_are_reported_and_the_rest_fitted(tmp_path: Path) -> None:
