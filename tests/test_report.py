@@ -218,7 +218,7 @@ def test_pdf_without_browser_is_a_clear_error(
 
 def test_pdf_with_chromium(tmp_path: Path) -> None:
     if shutil.which("chromium") is None:
-        pytest.fail("chromium is not installed (apt-get install chromium; .ci/run does it)")
+        pytest.fail("chromium is not installed (make test installs it: apt-get install chromium)")
     out = tmp_path / "report.html"
     result = runner.invoke(app, ["report", str(PAPER_CONFIG), "-o", str(out), "--pdf"])
     assert result.exit_code == 0, result.output

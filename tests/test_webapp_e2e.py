@@ -3,7 +3,7 @@
 The server runs in a background thread on a free loopback port. The test loads the paper
 example, moves the gear-ratio slider, and checks that the plot and the table change and
 equal the API's JSON for the config the page holds. Without /usr/bin/chromium the test
-fails (CI installs it in .ci/run); it is never skipped.
+fails naming the package (make test installs it); it is never skipped.
 """
 
 from __future__ import annotations
