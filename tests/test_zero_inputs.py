@@ -190,3 +190,16 @@ def test_quasi_static_solvers_flag_zero_damping_in_a_batch() -> None:
     path = SOLVERS["exact"].trajectory(problem, [0.0, 1.0, 100.0])
     assert np.all(np.isfinite(path.angle))
     assert path.angle[:, 1].tolist() == [0.0, 0.0, 0.0]
+
+
+def test_long_plot_titles_are_wrapped_not_cut_off() -> None:
+    # The dynamic example's system name plus "ECD torque against speed" is 79 characters,
+    # wider than a 7.5 in figure at the default font: it must wrap onto a second line.
+    from ecdsim.plotting import plot_title
+
+    system = "CDA Cc-16 test deployment (paper section 6), full dynamics"
+    title = plot_title(system, "ECD torque against speed")
+    lines = title.split("\n")
+    assert len(lines) == 2
+    assert all(len(line) <= 70 for line in lines)
+    assert " ".join(lines) == f"{system}: ECD torque against speed"

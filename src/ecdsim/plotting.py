@@ -27,6 +27,13 @@ def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
     return Figure(figsize=(width, height), layout="constrained")
 
 
+def plot_title(system: str, what: str, width: int = 70) -> str:
+    """``"system: what"``, wrapped so that a long system name is not cut off the figure."""
+    import textwrap
+
+    return "\n".join(textwrap.wrap(f"{system}: {what}", width))
+
+
 def time_span(prediction: Prediction) -> float:
     """The length of a time axis for plots of a prediction [s].
 
@@ -90,7 +97,7 @@ def _plot_against_time(
             )
     ax.set_xlabel("time since release [s]")
     ax.set_ylabel(ylabel)
-    ax.set_title(f"{prediction.system.name}: {title}")
+    ax.set_title(plot_title(prediction.system.name, title))
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
     return fig
@@ -139,7 +146,7 @@ def plot_torque_speed(prediction: Prediction, n_points: int = 50) -> Figure:
         ax.plot(ends, friction[j] + damping[j] * ends, "o", color=colors[j])
     ax.set_xlabel("input shaft speed [rad/s]")
     ax.set_ylabel("ECD reaction torque [N*m]")
-    ax.set_title(f"{prediction.system.name}: ECD torque against speed")
+    ax.set_title(plot_title(prediction.system.name, "ECD torque against speed"))
     ax.set_xlim(left=0.0)
     ax.set_ylim(bottom=0.0)
     ax.grid(True, alpha=0.3)
