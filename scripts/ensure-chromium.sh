@@ -4,7 +4,9 @@
 # impossible, stop at once with one line naming the package, so the browser tests are
 # never skipped and never fail halfway through the suite.
 set -euo pipefail
-CHROMIUM=/usr/bin/chromium
+# ECDSIM_CHROMIUM is for this script's own test (tests/test_setup.py); the browser tests use
+# /usr/bin/chromium.
+CHROMIUM=${ECDSIM_CHROMIUM:-/usr/bin/chromium}
 if [ -x "$CHROMIUM" ]; then
     exit 0
 fi

@@ -1,0 +1,57 @@
+"""The README's set-up: make test installs chromium itself or stops with one line.
+
+Issue 11, item 1: the browser tests are never skipped; where chromium cannot be
+installed, ``make test`` stops at once naming the package.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+from tests.conftest import ROOT
+
+SCRIPT = ROOT / "scripts" / "ensure-chromium.sh"
+
+
+def test_missing_chromium_without_apt_stops_with_one_line(tmp_path: Path) -> None:
+    # A PATH that has bash but no apt-get, and a chromium that is not there.
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    bash = shutil.which("bash")
+    assert bash is not None
+    (bin_dir / "bash").symlink_to(bash)
+    env = {**os.environ, "PATH": str(bin_dir), "ECDSIM_CHROMIUM": str(tmp_path / "chromium")}
+    result = subprocess.run(
+        [bash, str(SCRIPT)], env=env, capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert "'chromium'" in lines[0]
+    assert "apt-get is not available" in lines[0]
+
+
+def test_present_chromium_is_left_alone(tmp_path: Path) -> None:
+    fake = tmp_path / "chromium"
+    fake.write_text("#!/bin/sh\n")
+    fake.chmod(0o755)
+    env = {**os.environ, "ECDSIM_CHROMIUM": str(fake)}
+    result = subprocess.run(
+        ["bash", str(SCRIPT)], env=env, capture_output=True, text=True, check=False
+    )
+    assert (result.returncode, result.stdout, result.stderr) == (0, "", "")
+
+
+def test_make_test_installs_the_browser_and_ci_only_calls_make_test() -> None:
+    makefile = (ROOT / "Makefile").read_text()
+    assert "\ntest: browser " in makefile  # the browser first: stop before a long run
+    ci = [
+        line
+        for line in (ROOT / ".ci" / "run").read_text().splitlines()
+        if line.strip() and not line.startswith("#")
+    ]
+    assert ci[-1] == "make test"
+    assert not any("apt-get" in line or "pip install" in line for line in ci)
