@@ -72,7 +72,7 @@ def _wait_requests(page: Any, count: int) -> None:
 
 def test_explorer_end_to_end(server: str) -> None:
     if not CHROMIUM.is_file():
-        pytest.fail(f"{CHROMIUM} is missing: install Debian's chromium (apt-get install chromium)")
+        pytest.fail(f"{CHROMIUM} is missing: apt-get install -y chromium (make test does it)")
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as p:
