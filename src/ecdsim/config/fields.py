@@ -15,7 +15,6 @@ from pydantic import BeforeValidator
 from pydantic_core import PydanticCustomError
 
 from ecdsim.config.units import (
-    ABSOLUTE_ZERO_C,
     ANGLE,
     DAMPING,
     INERTIA,
@@ -28,6 +27,8 @@ from ecdsim.config.units import (
     TORQUE_PER_KELVIN,
     Kind,
     QuantityError,
+    quoted,
+    temperature_problem,
 )
 
 Check = Callable[[float], str | None]
@@ -43,11 +44,6 @@ def non_negative(x: float) -> str | None:
     return None if x >= 0.0 else "must be >= 0"
 
 
-def physical_temperature(x: float) -> str | None:
-    """Check: above absolute zero [degC]."""
-    return None if x > ABSOLUTE_ZERO_C else "is below absolute zero"
-
-
 def quantity(kind: Kind, check: Check | None = None) -> BeforeValidator:
     """A pydantic validator that parses ``kind`` and applies ``check`` to the SI value."""
 
@@ -59,7 +55,7 @@ def quantity(kind: Kind, check: Check | None = None) -> BeforeValidator:
         problem = check(number) if check else None
         if problem:
             raise PydanticCustomError(
-                "quantity", "{detail}", {"detail": f"{value!r} {problem}; {kind.expected}"}
+                "quantity", "{detail}", {"detail": f"{quoted(value)} {problem}; {kind.expected}"}
             )
         return number
 
@@ -76,7 +72,8 @@ PositiveAngle = Annotated[float, quantity(ANGLE, positive), ANGLE]
 NonNegativeAngle = Annotated[float, quantity(ANGLE, non_negative), ANGLE]
 Speed = Annotated[float, quantity(SPEED), SPEED]
 PositiveSpeed = Annotated[float, quantity(SPEED, positive), SPEED]
-Temperature = Annotated[float, quantity(TEMPERATURE, physical_temperature), TEMPERATURE]
+# The same rule as units.parse_temperature, the command line's reader.
+Temperature = Annotated[float, quantity(TEMPERATURE, temperature_problem), TEMPERATURE]
 PerKelvin = Annotated[float, quantity(PER_KELVIN), PER_KELVIN]
 TorquePerKelvin = Annotated[float, quantity(TORQUE_PER_KELVIN), TORQUE_PER_KELVIN]
 Number = Annotated[float, quantity(NUMBER), NUMBER]

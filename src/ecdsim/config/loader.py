@@ -12,6 +12,7 @@ from pydantic import ValidationError
 
 from ecdsim.config.errors import ConfigError
 from ecdsim.config.schema import ConfigSpec, describe_field
+from ecdsim.config.units import quoted
 from ecdsim.model import DeploymentSystem
 
 
@@ -61,12 +62,22 @@ def load_config(path: str | Path) -> Config:
     return parse_config(read_config_text(file), str(file))
 
 
+# No ecdsim config nests deeper than a few levels (a table of tables of lists of pairs);
+# anything much deeper is a mistake or an attack, refused before it is walked.
+MAX_NESTING = 32
+
+
 def parse_config(text: str, source: str = "<string>") -> Config:
     """Validate TOML text; :class:`ConfigError` lists every problem."""
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError([f"not valid TOML: {exc}"], source) from None
+    except RecursionError:
+        # tomllib parses nested arrays and inline tables recursively.
+        raise ConfigError(
+            [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"], source
+        ) from None
     spec = validate(raw, source)
     system = DeploymentSystem(ecd=spec.ecd(), load=spec.load.to_model(), name=spec.title)
     return Config(
@@ -79,8 +90,38 @@ def parse_config(text: str, source: str = "<string>") -> Config:
     )
 
 
+def nesting_depth(document: object, limit: int = MAX_NESTING) -> int:
+    """Depth of nested dicts and lists in ``document``, counted up to ``limit + 1``.
+
+    Iterative (no recursion) and stops as soon as the limit is passed, so any document,
+    however deep, is measured safely.
+
+    >>> nesting_depth({"a": [1, [2]]})
+    3
+    """
+    deepest = 0
+    stack: list[tuple[object, int]] = [(document, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, dict):
+            children: list[object] = list(item.values())
+        elif isinstance(item, list | tuple):
+            children = list(item)
+        else:
+            continue
+        deepest = max(deepest, depth)
+        if deepest > limit:
+            return deepest
+        stack.extend((child, depth + 1) for child in children)
+    return deepest
+
+
 def validate(raw: dict[str, Any], source: str = "<string>") -> ConfigSpec:
     """Validate a parsed TOML document against the schema."""
+    if nesting_depth(raw) > MAX_NESTING:
+        raise ConfigError(
+            [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"], source
+        )
     try:
         return ConfigSpec.model_validate(raw)
     except ValidationError as exc:
@@ -114,4 +155,4 @@ def _message(error: Any) -> str:
         message = "expected at least one entry"
     if kind == "value_error":
         return f"{path}: {message}"
-    return f"{path} = {error.get('input')!r}: {message}"
+    return f"{path} = {quoted(error.get('input'))}: {message}"

@@ -41,8 +41,10 @@ from ecdsim.config.units import (
     NUMBER,
     THERMAL_RESISTANCE,
     Kind,
+    quoted,
 )
 from ecdsim.dynamics.params import INTEGRATORS, DynamicParameters, Rolloff, Thermal
+from ecdsim.methods import SOLVERS
 from ecdsim.model import (
     Ecd,
     Gearbox,
@@ -55,7 +57,6 @@ from ecdsim.model import (
     TabulatedTemperatureLaw,
     TemperatureLaw,
 )
-from ecdsim.solvers import SOLVERS
 
 # Dynamics (docs/dynamics.md).
 PositiveHeatCapacity = Annotated[float, quantity(HEAT_CAPACITY, positive), HEAT_CAPACITY]
@@ -269,12 +270,13 @@ class LoadSpec(_Section):
         )
 
 
-def _known_method(name: str) -> str:
-    if name not in SOLVERS:
+def _known_method(name: object) -> str:
+    # Check the type first: a list (methods = [["exact"]]) is not hashable.
+    if not isinstance(name, str) or name not in SOLVERS:
         raise PydanticCustomError(
             "method",
             "{detail}",
-            {"detail": f"{name!r} is not a method; expected one of {sorted(SOLVERS)}"},
+            {"detail": f"{quoted(name)} is not a method; expected one of {sorted(SOLVERS)}"},
         )
     return name
 
@@ -287,7 +289,7 @@ def _known_integrator(name: object) -> str:
         raise PydanticCustomError(
             "method",
             "{detail}",
-            {"detail": f"{name!r} is not an integrator; expected one of {list(INTEGRATORS)}"},
+            {"detail": f"{quoted(name)} is not an integrator; expected one of {list(INTEGRATORS)}"},
         )
     return str(name)
 
@@ -324,10 +326,11 @@ class ConfigSpec(_Section):
 
     @model_validator(mode="after")
     def _dynamic_inputs(self) -> ConfigSpec:
-        if "dynamic" in self.analysis.methods and self.load.inertia is None:
+        needing = [m for m in self.analysis.methods if SOLVERS[m].needs_dynamics]
+        if needing and self.load.inertia is None:
             raise ValueError(
-                "the dynamic method needs [load] inertia (the load's moment of inertia about "
-                "the ECD input shaft, e.g. '5 kg*m^2')"
+                f"the {needing[0]} method needs [load] inertia (the load's moment of inertia "
+                "about the ECD input shaft, e.g. '5 kg*m^2')"
             )
         if self.initial.angle >= self.load.travel:
             raise ValueError(

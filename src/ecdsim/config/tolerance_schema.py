@@ -33,12 +33,15 @@ from ecdsim.config.units import (
     ANGLE,
     DAMPING,
     INERTIA,
+    MAX_QUANTITY_LENGTH,
     NUMBER,
+    NUMBER_PATTERN,
     PER_KELVIN,
     TORQUE,
     TORQUE_PER_KELVIN,
     Kind,
     QuantityError,
+    quoted,
 )
 
 DURATION = Kind("time", "s", "0.5 s")
@@ -52,7 +55,8 @@ SPREAD_FIELDS = {
 }
 DEFAULT_CHUNK_SIZE = 65_536
 
-_PERCENT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(?:%|percent)\s*$")
+# Linear time: the number pattern splits a digit run one way only (see config.units).
+_PERCENT = re.compile(rf"^\s*({NUMBER_PATTERN})\s*(?:%|percent)\s*$")
 
 
 @dataclass(frozen=True)
@@ -176,11 +180,15 @@ def parse_spread(raw: object, kind: Kind) -> Spread:
     """A width written in ``kind``'s unit or as a percentage; QuantityError if neither."""
     expected = f"{kind.expected}, or a percentage of the configured value, e.g. '5 %'"
     if isinstance(raw, str):
+        if len(raw) > MAX_QUANTITY_LENGTH:
+            raise QuantityError(
+                f"{quoted(raw)} is too long (at most {MAX_QUANTITY_LENGTH} characters); {expected}"
+            )
         match = _PERCENT.match(raw)
         if match is not None:
             fraction = float(match.group(1)) / 100.0
             if not fraction > 0.0 or fraction == float("inf"):
-                raise QuantityError(f"{raw!r} must be > 0; {expected}")
+                raise QuantityError(f"{quoted(raw)} must be > 0; {expected}")
             return Spread(value=fraction, relative=True, text=raw)
     try:
         value = kind.parse(raw)
@@ -190,7 +198,7 @@ def parse_spread(raw: object, kind: Kind) -> Spread:
         ) from None
     if not value > 0.0:
         raise QuantityError(
-            f"{raw!r} must be > 0 (remove the entry to hold the quantity at its configured "
+            f"{quoted(raw)} must be > 0 (remove the entry to hold the quantity at its configured "
             f"value); {expected}"
         )
     return Spread(value=value, relative=False, text=str(raw))
@@ -286,7 +294,9 @@ class RepeatabilitySpec(_Section):
             raise PydanticCustomError("quantity", "{detail}", {"detail": str(exc)}) from None
         if not seconds > 0.0:
             raise PydanticCustomError(
-                "quantity", "{detail}", {"detail": f"{value!r} must be > 0; {DURATION.expected}"}
+                "quantity",
+                "{detail}",
+                {"detail": f"{quoted(value)} must be > 0; {DURATION.expected}"},
             )
         return seconds
 

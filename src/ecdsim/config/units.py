@@ -13,7 +13,21 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
-_NUMBER = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
+# One way to split a digit run (``\d+(?:\.\d*)?``, not ``\d+\.?\d*``), so that a failed
+# match of a long number is linear, not quadratic, in its length.
+NUMBER_PATTERN = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"
+_NUMBER = re.compile(rf"^\s*({NUMBER_PATTERN})\s*(.*?)\s*$")
+# The unit grammar: names joined by '*', '/' or spaces, each with an optional integer
+# power ('^2', '**-1'); a number only as the magnitude (and a leading '1/' for a
+# reciprocal). Anything else is refused before pint sees it: pint *evaluates* its unit
+# strings, so 'N*m/0' divided by zero and 'deg**999999' overflowed.
+_UNIT_NAME = r"(?:[A-Za-z_\u00b0\u00b5\u03bc\u2126][A-Za-z0-9_\u00b0\u00b5\u03bc\u2126]*|%)"
+_UNIT_POWER = r"(?:\s*(?:\^|\*\*)\s*[-+]?\d{1,2})?"
+_UNIT_FACTOR = rf"{_UNIT_NAME}{_UNIT_POWER}"
+_UNIT = re.compile(rf"^(?:1\s*)?(?:/\s*)?{_UNIT_FACTOR}(?:\s*(?:\*|/|\s)\s*{_UNIT_FACTOR})*$")
+# The longest quantity string read, and the most of a bad value an error line quotes.
+MAX_QUANTITY_LENGTH = 200
+MAX_QUOTED = 80
 # Offset units are ambiguous inside compound units; in a rate ("per degC") they mean a
 # temperature difference, which pint spells delta_degC.
 # pint treats the radian as dimensionless, so it would read "30 Hz" as 30 rad/s (not
@@ -24,6 +38,35 @@ _OFFSET_UNIT = re.compile(r"(?<![A-Za-z_])(degC|degF|celsius|fahrenheit)(?![A-Za
 
 class QuantityError(ValueError):
     """A value that is not a quantity of the expected kind; the message says why."""
+
+
+def quoted(value: object, limit: int = MAX_QUOTED) -> str:
+    """``repr(value)``, cut to about ``limit`` characters for an error line."""
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    return f"{text[: limit - 3]}... ({len(str(value))} characters)"
+
+
+def check_unit_grammar(unit_text: str) -> str | None:
+    """Why ``unit_text`` is not a unit expression, or None if it is one.
+
+    Accepted: unit names joined by ``*``, ``/`` or spaces, each with an optional integer
+    power of at most two digits (``kg*m^2``, ``N*m*s/rad``, ``mm**2/s``, ``/ K``,
+    ``1/K``). Refused: numbers inside the unit, parentheses, any other operator.
+
+    >>> check_unit_grammar("N*m*s/rad") is None
+    True
+    >>> check_unit_grammar("N*m/0")
+    'is not a unit expression (unit names joined by *, / or spaces, integer powers)'
+    """
+    if _UNIT.match(unit_text.strip()) is None:
+        return "is not a unit expression (unit names joined by *, / or spaces, integer powers)"
+    return None
+
+
+ABSOLUTE_ZERO_C = -273.15
+"""Absolute zero [degC]; temperatures at or below it are refused."""
 
 
 @cache
@@ -67,17 +110,24 @@ class Kind:
     def parse(self, value: object) -> float:
         """The value in this kind's SI unit (degC for temperatures); QuantityError if not."""
         if isinstance(value, bool):
-            raise QuantityError(f"{value!r} is not a number; {self.expected}")
+            raise QuantityError(f"{quoted(value)} is not a number; {self.expected}")
         if isinstance(value, int | float):
             number = float(value)
             if self.unit != "":
-                raise QuantityError(f"{value!r} has no unit; {self.expected}")
+                raise QuantityError(f"{quoted(value)} has no unit; {self.expected}")
             return _finite(number, value, self)
         if not isinstance(value, str):
-            raise QuantityError(f"{value!r} is not a quantity; {self.expected}")
+            raise QuantityError(f"{quoted(value)} is not a quantity; {self.expected}")
+        if len(value) > MAX_QUANTITY_LENGTH:
+            raise QuantityError(
+                f"{quoted(value)} is too long for a quantity (at most {MAX_QUANTITY_LENGTH} "
+                f"characters); {self.expected}"
+            )
         match = _NUMBER.match(value)
         if match is None:
-            raise QuantityError(f"{value!r} does not start with a finite number; {self.expected}")
+            raise QuantityError(
+                f"{quoted(value)} does not start with a finite number; {self.expected}"
+            )
         number = _finite(float(match.group(1)), value, self)
         unit_text = match.group(2)
         if self.unit == "":
@@ -85,10 +135,10 @@ class Kind:
                 return _convert(number, unit_text, value, self)
             return number
         if not unit_text:
-            raise QuantityError(f"{value!r} has no unit; {self.expected}")
+            raise QuantityError(f"{quoted(value)} has no unit; {self.expected}")
         if self.angular and _NOT_ANGULAR.search(unit_text):
             raise QuantityError(
-                f"{value!r} is ambiguous: pint reads Hz and % as plain numbers, not angles; "
+                f"{quoted(value)} is ambiguous: pint reads Hz and % as plain numbers, not angles; "
                 f"{self.expected} (for a frequency write turn/s or rpm)"
             )
         return _convert(number, unit_text, value, self)
@@ -96,13 +146,16 @@ class Kind:
 
 def _finite(number: float, raw: object, kind: Kind) -> float:
     if not math.isfinite(number):
-        raise QuantityError(f"{raw!r} is not finite; {kind.expected}")
+        raise QuantityError(f"{quoted(raw)} is not finite; {kind.expected}")
     return number
 
 
 def _convert(number: float, unit_text: str, raw: str, kind: Kind) -> float:
     import pint
 
+    bad_grammar = check_unit_grammar(unit_text)
+    if bad_grammar is not None:
+        raise QuantityError(f"{quoted(raw)}: {quoted(unit_text)} {bad_grammar}; {kind.expected}")
     registry = _registry()
     if unit_text.startswith("/"):
         unit_text = "1 " + unit_text
@@ -115,11 +168,15 @@ def _convert(number: float, unit_text: str, raw: str, kind: Kind) -> float:
         else:
             result = float(quantity.to(kind.unit or "dimensionless").magnitude)
     except pint.errors.DimensionalityError:
-        raise QuantityError(f"{raw!r} has the wrong dimension; {kind.expected}") from None
+        raise QuantityError(f"{quoted(raw)} has the wrong dimension; {kind.expected}") from None
     except (pint.errors.UndefinedUnitError, pint.errors.DefinitionSyntaxError, AttributeError):
-        raise QuantityError(f"{raw!r} has a unit pint does not know; {kind.expected}") from None
-    except (pint.errors.PintError, ValueError, TypeError) as exc:
-        raise QuantityError(f"{raw!r} could not be read ({exc}); {kind.expected}") from None
+        raise QuantityError(
+            f"{quoted(raw)} has a unit pint does not know; {kind.expected}"
+        ) from None
+    except (pint.errors.PintError, ValueError, TypeError, ArithmeticError) as exc:
+        raise QuantityError(
+            f"{quoted(raw)} could not be read ({quoted(str(exc))}); {kind.expected}"
+        ) from None
     return _finite(result, raw, kind)
 
 
@@ -142,4 +199,24 @@ KINEMATIC_VISCOSITY = Kind("kinematic viscosity", "m^2/s", "10000 mm^2/s")
 HEAT_CAPACITY = Kind("heat capacity", "J/K", "90 J/K")
 THERMAL_RESISTANCE = Kind("thermal resistance", "K/W", "2 K/W")
 
-ABSOLUTE_ZERO_C = -273.15
+
+def temperature_problem(celsius: float) -> str | None:
+    """Why an absolute temperature [degC] is not physical, or None: at or below 0 K."""
+    return None if celsius > ABSOLUTE_ZERO_C else "is below absolute zero"
+
+
+def parse_temperature(value: object) -> float:
+    """An absolute temperature [degC] from a quantity ("25 degC", "-40 degF", "300 K").
+
+    The one reader of absolute temperatures at the edge: the config's temperature fields
+    (through :func:`temperature_problem`), every command-line temperature option and so
+    the explorer's API, which reads configs. Raises :class:`QuantityError` naming the
+    value and the expected unit if it is not a temperature or lies at or below absolute
+    zero.
+    """
+    number = TEMPERATURE.parse(value)
+    problem = temperature_problem(number)
+    if problem:
+        raise QuantityError(f"{quoted(value)} {problem}; {TEMPERATURE.expected}")
+    return number
+

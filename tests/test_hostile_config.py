@@ -1,0 +1,127 @@
+"""Hostile and careless input at the config edge (issue 12, items 1, 2, 3 and 5).
+
+Unit strings follow a grammar (pint would evaluate them), nesting is bounded before it
+is walked, every field is type-checked before use, no pattern is quadratic, and an error
+line quotes at most about 80 characters of a bad value. Each case ends in one clear
+message and exit code 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from ecdsim.cli.app import app
+from ecdsim.config import ConfigError, parse_config
+from ecdsim.config.loader import MAX_NESTING, nesting_depth
+from ecdsim.config.units import MAX_QUANTITY_LENGTH, MAX_QUOTED, TORQUE, QuantityError
+from tests.conftest import PAPER_CONFIG, ROOT
+
+runner = CliRunner()
+PAPER = PAPER_CONFIG.read_text()
+START = 'start_torque = "3.73 N*m"'
+
+
+def _problems(text: str) -> list[str]:
+    with pytest.raises(ConfigError) as info:
+        parse_config(text)
+    return info.value.problems
+
+
+@pytest.mark.parametrize(
+    "unit",
+    ["N*m/0", "N*m*0**-1", "deg**999999", "__import__('os')", "(N*m)", "N*m + 1", "N*m; 2"],
+)
+def test_unit_expressions_are_parsed_not_evaluated(unit: str) -> None:
+    problems = _problems(PAPER.replace(START, f'start_torque = "3.73 {unit}"'))
+    assert len(problems) == 1, problems
+    assert problems[0].startswith("load.start_torque: ")
+    assert "is not a unit expression" in problems[0]
+
+
+@pytest.mark.parametrize(
+    ("text", "si"),
+    [
+        # Hand conversions: 1 in*lbf = 0.0254 m * 4.4482216152605 N; 1 ozf = lbf / 16.
+        ("3.73 N*m", 3.73),
+        ("3.73 N m", 3.73),
+        ("1 in*lbf", 0.0254 * 4.4482216152605),
+        ("16 in * ozf", 0.0254 * 4.4482216152605),
+        ("1 kN*mm", 1.0),
+    ],
+)
+def test_the_grammar_keeps_every_ordinary_unit(text: str, si: float) -> None:
+    assert TORQUE.parse(text) == pytest.approx(si, rel=1e-12)  # exact unit factors
+
+
+def test_unit_grammar_applies_to_csv_headers(tmp_path: Path) -> None:
+    rows = (ROOT / "examples" / "drop_test.csv").read_text().splitlines()
+    for bad in ("[1/0]", "[deg**999999]", "[__import__('os')]"):
+        csv = tmp_path / "bad.csv"
+        csv.write_text("\n".join([rows[0].replace("angle [deg]", f"angle {bad}"), *rows[1:]]))
+        result = runner.invoke(app, ["fit", "drop-test", str(csv)])
+        assert result.exit_code == 2, result.output
+        assert "Traceback" not in result.output
+        assert "angle" in result.stderr
+
+
+@pytest.mark.parametrize("depth", [40, 500, 5000])
+def test_deep_nesting_is_refused_cleanly(depth: int) -> None:
+    text = PAPER + "\n[extra]\nx = " + "[" * depth + "]" * depth + "\n"
+    problems = _problems(text)
+    assert problems == [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"]
+
+
+def test_nesting_depth_counts_without_recursion() -> None:
+    deep: list[object] = []
+    node = deep
+    for _ in range(100_000):  # far past Python's recursion limit
+        child: list[object] = []
+        node.append(child)
+        node = child
+    assert nesting_depth(deep) == MAX_NESTING + 1  # stops counting past the limit
+    assert nesting_depth({"a": {"b": [1, 2]}, "c": 3}) == 3
+
+
+def test_wrong_types_are_reported_not_raised() -> None:
+    text = PAPER.replace(
+        'temperatures = ["-40 degC", "25 degC", "100 degC"]',
+        'temperatures = ["25 degC"]\nmethods = [["exact"]]',
+    )
+    problems = _problems(text)
+    assert problems == [
+        "analysis.methods[0]: ['exact'] is not a method; expected one of "
+        "['dynamic', 'exact', 'paper']"
+    ]
+
+
+def test_long_values_are_refused_and_quoted_briefly(tmp_path: Path) -> None:
+    huge = "3" * 1_000_000
+    config = tmp_path / "huge.toml"
+    config.write_text(PAPER.replace(START, f'start_torque = "{huge} N*m"'))
+    result = runner.invoke(app, ["deploy", str(config)])
+    assert result.exit_code == 2
+    (line,) = result.stderr.strip().splitlines()
+    assert f"at most {MAX_QUANTITY_LENGTH} characters" in line
+    # The quote is cut to MAX_QUOTED characters plus a note of the full length; the rest
+    # of the line names the file, the key and the expected unit.
+    assert len(line) < MAX_QUOTED + 300
+    assert f"({len(huge) + len(' N*m')} characters)" in line
+
+
+def test_long_tolerance_spreads_are_refused() -> None:
+    text = (ROOT / "examples" / "paper_cc16_tolerances.toml").read_text()
+    assert 'plus_minus = "' in text
+    long_digits = "1" * 100_000 + "x %"
+    problems = _problems(text.replace('plus_minus = "', f'plus_minus = "{long_digits}', 1))
+    assert any(f"at most {MAX_QUANTITY_LENGTH} characters" in p for p in problems), problems
+
+
+def test_number_pattern_splits_a_digit_run_one_way() -> None:
+    # The old pattern \d+\.?\d* can split "111...1" at any of n places, which makes a
+    # failed match quadratic; the new one has exactly one way, so a non-matching
+    # 150-character run is refused by the grammar, not by a timeout.
+    with pytest.raises(QuantityError, match="does not start with a finite number|unit"):
+        TORQUE.parse("1" * 150 + "x")
