@@ -7,7 +7,7 @@ STAMP_DEMO := $(VENV)/.installed-demo
 STAMP_TEST := $(VENV)/.installed-test
 DEMO_DIR ?= ecdsim-demo
 
-.PHONY: demo test lint typecheck pytest browser bench clean
+.PHONY: demo test lint typecheck pytest browser bench validate clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -32,8 +32,8 @@ demo: $(STAMP_DEMO)
 	$(BIN)/ecdsim demo --out $(DEMO_DIR)
 
 lint: $(STAMP_TEST)
-	$(BIN)/ruff check src tests benchmarks
-	$(BIN)/ruff format --check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks validation
+	$(BIN)/ruff format --check src tests benchmarks validation
 
 typecheck: $(STAMP_TEST)
 	$(BIN)/mypy
@@ -55,6 +55,11 @@ bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_dynamic.py
 	$(BIN)/python benchmarks/bench_webapp.py
 	$(BIN)/python benchmarks/bench_montecarlo.py
+
+# The validation suite against independent references (validation/); writes docs/validation.md
+# and exits non-zero if any check fails.
+validate: $(STAMP_TEST)
+	$(BIN)/python -m validation --out docs/validation.md
 
 clean:
 	rm -rf $(VENV) $(DEMO_DIR) build dist src/*.egg-info .mypy_cache .pytest_cache .ruff_cache

@@ -1,0 +1,213 @@
+"""Tight scipy integrations of the validation cases' equations, written from their sources.
+
+Nothing here imports ecdsim: each right-hand side is typed from the equations of the source
+it names (the Modelica models' equations, the paper's Eq. 1-11, the lumped heat balance), in
+plain floats, and integrated with scipy at tolerances far below the ones the validation
+allows (rtol 1e-12). They serve two purposes: a second, tight reference for ecdsim, and a
+check that a case is mapped onto the right equations (the Modelica reference results must
+agree with them too, to their own solver's tolerance).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+from scipy.integrate import solve_ivp
+
+FloatArray = npt.NDArray[np.float64]
+Rhs = Callable[[float, FloatArray], list[float]]
+
+RTOL = 1e-12  # far below every validation tolerance
+ATOL = 1e-14
+
+
+@dataclass(frozen=True)
+class SpinDown:
+    """A free inertia braked by a temperature-dependent Kloss torque, heating a capacity.
+
+    The equations of Modelica.Mechanics.Rotational.Sources.EddyCurrentTorque with an
+    Inertia and an isolated HeatCapacitor (MSL Rotational.Examples.EddyCurrentBrake):
+
+        J w' = -tau,  C T' = tau w,  phi' = w,
+        tau = 2 tau_n x / (1 + x^2),  x = w / (w_n (1 + alpha (T - T_ref))).
+
+    Attributes
+    ----------
+    inertia : J [kg*m^2]
+    tau_nominal : tau_n, the peak torque [N*m]
+    w_nominal : w_n, the speed of peak torque at T_ref [rad/s]
+    alpha : temperature coefficient of w_n [1/K]
+    reference_temperature : T_ref [degC]
+    heat_capacity : C [J/K]
+    """
+
+    inertia: float
+    tau_nominal: float
+    w_nominal: float
+    alpha: float
+    reference_temperature: float
+    heat_capacity: float
+
+    def torque(self, speed: float, temperature: float) -> float:
+        """The braking torque at speed w [rad/s] and brake temperature T [degC] [N*m]."""
+        x = speed / (
+            self.w_nominal * (1.0 + self.alpha * (temperature - self.reference_temperature))
+        )
+        return 2.0 * self.tau_nominal * x / (1.0 + x * x)
+
+    def solve(self, speed0: float, temperature0: float, times: FloatArray) -> dict[str, FloatArray]:
+        """Angle [rad], speed [rad/s], temperature [degC], loss power [W] at ``times`` [s]."""
+
+        def rhs(_t: float, y: FloatArray) -> list[float]:
+            _phi, w, temp = y
+            tau = self.torque(w, temp)
+            return [w, -tau / self.inertia, tau * w / self.heat_capacity]
+
+        sol = solve_ivp(
+            rhs,
+            (0.0, float(times[-1])),
+            [0.0, speed0, temperature0],
+            method="Radau",
+            t_eval=times,
+            rtol=RTOL,
+            atol=ATOL,
+        )
+        angle, speed, temperature = sol.y
+        power = np.array([self.torque(w, t) * w for w, t in zip(speed, temperature, strict=True)])
+        return {"angle": angle, "speed": speed, "temperature": temperature, "power": power}
+
+
+def damped_mass(
+    mass: float, damping: float, stiffness: float, speed0: float, times: FloatArray
+) -> dict[str, FloatArray]:
+    """``m x'' = -d x' - c x`` from x = 0, x' = v0: position [m] and speed [m/s] at ``times``.
+
+    The mass-damper(-spring) of MSL Translational.Examples.Damper.
+    """
+
+    def rhs(_t: float, y: FloatArray) -> list[float]:
+        x, v = y
+        return [v, (-damping * v - stiffness * x) / mass]
+
+    sol = solve_ivp(
+        rhs,
+        (0.0, float(times[-1])),
+        [0.0, speed0],
+        method="DOP853",
+        t_eval=times,
+        rtol=RTOL,
+        atol=ATOL,
+    )
+    return {"position": sol.y[0], "speed": sol.y[1]}
+
+
+@dataclass(frozen=True)
+class PaperSystem:
+    """The paper's section 6 Cc-16 system, evaluated from its printed constants.
+
+    Eq. 1-4 at the analysis temperature T [degC]; the spring is Eq. 7 (linear in angle); FS_T
+    is the paper's linear system friction. Values are the paper's, typed here.
+    """
+
+    bd: float = 1.3e-4  # BD [N*m*s/rad], rated at +25 degC
+    bd_coefficient: float = -0.004  # Eq. 1 [1/K]
+    bg_fraction: float = 0.26  # BG = 0.26 BD
+    fd: float = 7.9e-4  # FD [N*m]
+    fl_slope: float = -2.12e-6  # FL_T = slope T + at_0 [N*m/K]
+    fl_at_0: float = 2.2e-4
+    fg: float = 4.5e-4  # FG [N*m]
+    ratio: float = 380.0  # N
+    start_torque: float = 3.73  # Ts [N*m]
+    end_torque: float = 1.58  # Te [N*m]
+    travel: float = 1.57  # delta theta [rad]
+    fs_slope: float = -0.0044  # FS_T = slope T + at_0 [N*m/K]
+    fs_at_0: float = 0.58
+
+    def damper_rate(self, temperature: float) -> float:
+        """BD_T, the eddy-current part of Eq. 1 [N*m*s/rad]."""
+        return self.bd * (1.0 + self.bd_coefficient * (temperature - 25.0))
+
+    def becd(self, temperature: float) -> float:
+        """BECD_T = (BD_T + BG) N^2 (Eq. 1, 3) [N*m*s/rad]."""
+        return (self.damper_rate(temperature) + self.bg_fraction * self.bd) * self.ratio**2
+
+    def fecd(self, temperature: float) -> float:
+        """FECD_T = (FD + FL_T + FG) N (Eq. 2, 4) [N*m]."""
+        fl = self.fl_slope * temperature + self.fl_at_0
+        return (self.fd + fl + self.fg) * self.ratio
+
+    def friction(self, temperature: float) -> float:
+        """FECD_T + FS_T [N*m]."""
+        return self.fecd(temperature) + self.fs_slope * temperature + self.fs_at_0
+
+    def spring(self, angle: float) -> float:
+        """Eq. 7: Ts at release, Te at the end of travel, linear in the deployed angle."""
+        return self.start_torque + (self.end_torque - self.start_torque) * angle / self.travel
+
+    def paper_time(self, temperature: float) -> float:
+        """Eq. 8-11 as printed: travel over the mean of the start and end speeds [s]."""
+        b, f = self.becd(temperature), self.friction(temperature)
+        start = (self.start_torque - f) / b
+        end = (self.end_torque - f) / b
+        return self.travel / ((start + end) / 2.0)
+
+    def quasi_static_time(self, temperature: float) -> float:
+        """Time to travel by integrating Eq. 5 along the travel, phi' = (T(phi) - F) / B [s]."""
+        b, f = self.becd(temperature), self.friction(temperature)
+        return _arrival(lambda _t, y: [(self.spring(y[0]) - f) / b], [0.0], self.travel, "DOP853")[
+            0
+        ]
+
+    def dynamic_time(self, temperature: float, inertia: float) -> tuple[float, float]:
+        """Deployment time [s] and arrival speed [rad/s] with inertia J [kg*m^2] from rest.
+
+        ``J w' = T(phi) - F - B w`` (the spring beats the friction at release, so the
+        mechanism breaks away at once and never stops before the end).
+        """
+        b, f = self.becd(temperature), self.friction(temperature)
+
+        def rhs(_t: float, y: FloatArray) -> list[float]:
+            phi, w = y
+            return [w, (self.spring(phi) - f - b * w) / inertia]
+
+        time, state = _arrival(rhs, [0.0, 0.0], self.travel, "Radau")
+        return time, float(state[1])
+
+    def heated_time(
+        self, temperature: float, inertia: float, heat_capacity: float, resistance: float
+    ) -> tuple[float, float, float]:
+        """Time [s], arrival speed [rad/s], damper temperature at arrival [degC] with heating.
+
+        The damper's temperature T_d follows ``C T_d' = BD(T_d) (N w)^2 - (T_d - T) / R``
+        (only the eddy-current power heats it) and its damping follows Eq. 1 at T_d; the
+        gearbox damping and every friction stay at the ambient temperature T.
+        """
+        f = self.friction(temperature)
+        bg = self.bg_fraction * self.bd * self.ratio**2
+
+        def rhs(_t: float, y: FloatArray) -> list[float]:
+            phi, w, td = y
+            eddy = self.damper_rate(td) * self.ratio**2
+            power = eddy * w * w
+            return [
+                w,
+                (self.spring(phi) - f - (eddy + bg) * w) / inertia,
+                (power - (td - temperature) / resistance) / heat_capacity,
+            ]
+
+        time, state = _arrival(rhs, [0.0, 0.0, temperature], self.travel, "Radau")
+        return time, float(state[1]), float(state[2])
+
+
+def _arrival(rhs: Rhs, y0: list[float], travel: float, method: str) -> tuple[float, FloatArray]:
+    """Integrate from rest-or-given state until ``y[0]`` reaches the travel: (time, state)."""
+
+    def arrive(_t: float, y: FloatArray) -> float:
+        return float(y[0] - travel)
+
+    arrive.terminal = True  # type: ignore[attr-defined]
+    sol = solve_ivp(rhs, (0.0, 1e4), y0, method=method, events=arrive, rtol=RTOL, atol=ATOL)
+    return float(sol.t_events[0][0]), np.asarray(sol.y_events[0][0], dtype=float)
