@@ -122,13 +122,16 @@ def test_torque_margin_at_a_fixed_speed() -> None:
 
 
 def test_torque_margin_at_the_deployment_speed() -> None:
-    # Damping at the deployment's own speed: B*omega = T - F, so with unit factors the
-    # resistance equals the drive everywhere the mechanism moves: margin 0 exactly.
-    evaluation = run(Requirements(TEMPS))
+    # Damping at the deployment's own speed (damping_speed None): B*omega = T - F, so with
+    # unit factors the resistance equals the drive everywhere the mechanism moves: margin
+    # 0 exactly.
+    evaluation = run(Requirements(TEMPS, margin=MarginSettings(damping_speed=None)))
     assert np.all(evaluation.torque_margin == 0.0)
     # Friction factor 2: margin = T/(2F + T - F) - 1 = -F/(T + F), lowest where T is lowest
     # (the end of travel): -0.2/0.9.
-    factored = Requirements(TEMPS, margin=MarginSettings(factors={"friction": 2.0}))
+    factored = Requirements(
+        TEMPS, margin=MarginSettings(factors={"friction": 2.0}, damping_speed=None)
+    )
     evaluation = run(factored)
     assert float(evaluation.torque_margin[0, 0]) == pytest.approx(-0.2 / 0.9, rel=TIGHT)
     assert float(evaluation.torque_margin_angle[0, 0]) == pytest.approx(1.0, rel=TIGHT)
@@ -143,8 +146,9 @@ def test_margin_over_travel_minimum_is_exact_between_breakpoints() -> None:
     factors = {"friction": 1.5, "damping": 1.2}
     stall = 0.4 + 0.6 * (0.9 - 0.3) / (0.9 - 0.1)
     result = margin_over_travel(
-        angles, torques, friction, damping, True, stall, MarginSettings(factors, {}, speed)
-    )
+        angles, torques, ecd_friction=friction, system_friction=0.0, damping_rate=damping,
+        stalled=True, stall_angle=stall, settings=MarginSettings(factors, {}, speed),
+    )  # fmt: skip
     low, where = result.minimum()
     phi = np.linspace(0.0, 1.0, 20001)
     spring = np.interp(phi, angles, torques)
@@ -157,8 +161,8 @@ def test_margin_over_travel_minimum_is_exact_between_breakpoints() -> None:
 
 
 def test_margin_functions_by_hand() -> None:
-    assert float(torque_margin(2.0, {"friction": 0.5, "damping": 0.5}, {})) == 1.0
-    assert float(torque_margin(1.0, {"friction": 0.0}, {})) == np.inf  # nothing resists
+    assert float(torque_margin(2.0, {"ecd_friction": 0.5, "damping": 0.5}, {})) == 1.0
+    assert float(torque_margin(1.0, {"system_friction": 0.0}, {})) == np.inf  # nothing resists
     with pytest.raises(KeyError, match="unknown resistive torque"):
         torque_margin(1.0, {"wind": 1.0}, {})
     assert float(min_time_margin(np.inf, 5.0)) == 1.0
@@ -228,7 +232,8 @@ def test_requirements_section_parses_to_si() -> None:
     assert r.temperatures == (-40.0, 25.0, 100.0)  # ends + listed, sorted, no repeats
     assert r.max_deployment_time == 60.0
     assert r.max_end_speed == pytest.approx(math.radians(6.0), rel=TIGHT)
-    assert r.margin.factors["friction"] == 2.0
+    # `friction` is the factor of both Coulomb kinds (neither is given on its own).
+    assert r.margin.factors["ecd_friction"] == r.margin.factors["system_friction"] == 2.0
     assert r.margin.factors["damping"] == 1.0
     assert r.margin.allowances == {"harness": pytest.approx(0.01)}
     assert r.margin.damping_speed == 0.005
@@ -246,6 +251,8 @@ def test_requirements_section_parses_to_si() -> None:
          "must be >= 1"),
         ('temperatures = ["25 degC"]\n[requirements.torque_margin]\ndamping_speed = "fast"',
          'or "deployment"'),
+        ('temperatures = ["25 degC"]\n[requirements.torque_margin]\n'
+         'factors = { system_friction = 0.9 }', "system_friction: 0.9 must be >= 1"),
         ('temperature_range = ["100 degC", "-40 degC"]', "cold < hot"),
     ],
 )  # fmt: skip

@@ -60,7 +60,12 @@ from ecdsim.characterize.linefit import (
     summarise_line,
 )
 from ecdsim.characterize.stats import Estimate, finite_or_none
-from ecdsim.characterize.templaws import MISFIT_LEVEL, TemperatureLaws, fit_temperature_laws
+from ecdsim.characterize.templaws import (
+    MISFIT_LEVEL,
+    LawFit,
+    TemperatureLaws,
+    fit_temperature_laws,
+)
 from ecdsim.config.units import ANGLE, TEMPERATURE, TORQUE
 
 STANDARD_GRAVITY = 9.80665  # m/s**2, the conventional value (3rd CGPM, 1901)
@@ -545,6 +550,7 @@ def reduce_drop_test(
             [law_input(f.line.slope, f.line) for f in fits],
             [law_input(f.line.intercept, f.line) for f in fits],
             reference_temperature,
+            scatter=[f.line.statistics.scatter for f in fits],
         )
         warnings.extend(law_warnings(laws))
     elif len(fits) == 1:
@@ -666,6 +672,11 @@ def _uncorrected_transient(
     ]
 
 
+def _misfit_test(fit: LawFit) -> str:
+    """The name of the law's misfit test: F with pooled scatter, chi-square else."""
+    return "F" if fit.scatter_dof is not None else "chi-square"
+
+
 def law_warnings(laws: TemperatureLaws) -> list[FitWarning]:
     """Warnings about the laws over temperature (misfit, failures)."""
     out = []
@@ -675,7 +686,7 @@ def law_warnings(laws: TemperatureLaws) -> list[FitWarning]:
                 FitWarning(
                     "law_misfit",
                     f"the {name} damping law misses the per-temperature values by more than "
-                    f"their errors (chi-square p = {fit.p_value:.2g}); its intervals are "
+                    f"their errors ({_misfit_test(fit)} p = {fit.p_value:.2g}); its intervals are "
                     "widened by the scatter",
                 )
             )

@@ -17,6 +17,7 @@ scipy is imported inside the functions.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from statistics import NormalDist
 from typing import Any
@@ -67,6 +68,18 @@ def chi2_survival(value: float, dof: int) -> float:
     from scipy import stats
 
     return float(stats.chi2.sf(value, dof))
+
+
+def f_survival(value: float, dof_numerator: int, dof_denominator: int) -> float:
+    """``P(F > value)`` for Fisher's F with the given degrees of freedom: the p-value of
+    a ratio of two independent variance estimates (a lack-of-fit test).
+
+    >>> round(f_survival(1.0, 3, 10**9), 6) == round(chi2_survival(3.0, 3), 6)
+    True
+    """
+    from scipy import stats
+
+    return float(stats.f.sf(value, dof_numerator, dof_denominator))
 
 
 def finite_or_none(value: float) -> float | None:
@@ -128,6 +141,41 @@ def estimates(
 
 
 @dataclass(frozen=True)
+class Scatter:
+    """The residual scatter a fit's standard errors were scaled by.
+
+    A fit's standard errors are ``s * sqrt(u)`` with ``u`` the unscaled variance (known
+    from the design) and ``s**2`` the residual variance, itself an estimate with ``dof``
+    degrees of freedom. Fits that share one noise level pool their ``s**2``
+    (:func:`pooled_variance`), which gives the combined estimate an exact Student-t
+    interval.
+
+    Attributes
+    ----------
+    variance : residual variance ``s**2`` [unit of the observations**2]
+    dof : its degrees of freedom n - p
+    """
+
+    variance: float
+    dof: int
+
+
+def pooled_variance(scatter: Sequence[Scatter]) -> Scatter:
+    """The pooled residual variance ``sum(dof_i s_i**2) / sum(dof_i)`` of fits sharing one
+    noise level, with ``sum(dof_i)`` degrees of freedom (Draper and Smith, section 2.1,
+    "pure error": under Gaussian noise ``sum(dof_i s_i**2) / sigma**2`` is chi-square
+    with ``sum(dof_i)`` degrees of freedom).
+
+    >>> pooled_variance([Scatter(1.0, 3), Scatter(3.0, 1)])
+    Scatter(variance=1.5, dof=4)
+    """
+    dof = sum(s.dof for s in scatter)
+    if dof <= 0:
+        raise ValueError("pooling needs at least one degree of freedom")
+    return Scatter(sum(s.dof * s.variance for s in scatter) / dof, dof)
+
+
+@dataclass(frozen=True)
 class Linearised:
     """The statistics of a least-squares fit, linearised at the solution.
 
@@ -156,6 +204,14 @@ class Linearised:
     def residual_std(self) -> float | None:
         """``s`` [unit of the observations]; None where dof == 0."""
         return math.sqrt(self.residual_variance) if self.dof > 0 else None
+
+    @property
+    def scatter(self) -> Scatter | None:
+        """``s**2`` with its degrees of freedom; None where dof == 0 or the fit is exact
+        (then the standard errors are round-off, not uncertainty)."""
+        if self.dof <= 0 or self.exact:
+            return None
+        return Scatter(self.residual_variance, self.dof)
 
     def studentized(self) -> FloatArray:
         """Externally studentised residuals ``e_i / (s_(i) sqrt(1 - h_i))``.

@@ -13,14 +13,34 @@ Two damping laws are offered, as a registry (:data:`DAMPING_LAWS`):
 FECD(T) is fitted as a line ``slope * T + at_0C`` (the paper's form for FL_T, section 2.3;
 :func:`ecdsim.physics.laws.linear_in_temperature`).
 
-Each law is fitted by weighted least squares with weights ``1 / se**2`` from the
-per-temperature fits, whose standard errors are taken as known: the covariance is
-``(D^T W D)^-1`` and the 95 % intervals use the normal quantile 1.96. (With few points
-per temperature the standard errors are themselves uncertain and the intervals cover a
-little less than 95 %; the tests bound this.) A chi-square goodness-of-fit test checks the
-law against those errors; where it fails at the 1 % level (the scatter about the law is
-larger than the per-temperature errors explain: the law or the errors are incomplete) the
-covariance is scaled by the reduced chi-square and the intervals use Student t with
+Each law is fitted by weighted least squares to the per-temperature estimates, with
+weights ``1 / se**2``. How the intervals are built depends on what is known about those
+standard errors:
+
+* **Pooled scatter** (``scatter`` given, as the drop test does). Each per-temperature
+  standard error is ``s_i * sqrt(u_i)``: ``u_i`` follows from the design (the speeds)
+  and is known, ``s_i**2`` is the line's residual variance with only ``n_i - 2`` degrees
+  of freedom (3 for five masses). Taking such ``se_i`` as known and using the normal
+  quantile makes the intervals far too short (coverage 80-86 % at a nominal 95 % with
+  five masses per temperature, measured; docs/characterize.md section 2). Instead the
+  residual variances of all temperatures are pooled, ``s**2 = sum(nu_i s_i**2) / nu``
+  with ``nu = sum(n_i - 2)`` (one noise level for the whole campaign, as a one-stage fit
+  of all drops would assume), every ``se_i`` is recomputed as ``s * sqrt(u_i)``, and the
+  intervals use Student t with ``nu`` degrees of freedom. Under Gaussian noise this is
+  exact for the laws linear in their parameters: the weighted estimate is normal with
+  covariance ``sigma**2 (D^T U^-1 D)^-1``, and ``nu s**2 / sigma**2`` is an independent
+  chi-square. The misfit statistic ``chi2 / (temperatures - 2)`` is then a ratio of two
+  independent variance estimates and is tested against Fisher's F with
+  ``(temperatures - 2, nu)`` degrees of freedom, so it raises 1 % false alarms at the
+  1 % level.
+* **Known errors** (no ``scatter``, as the trace fit, whose traces have tens of samples
+  each): the standard errors are taken as known, covariance ``(D^T W D)^-1``, the normal
+  quantile 1.96, and the misfit test is chi-square with (temperatures - 2) degrees of
+  freedom. This is the large-sample limit of the pooled case (nu -> infinity).
+
+Where the misfit test fails at the 1 % level (the scatter about the law is larger than
+the per-temperature errors explain: the law or the errors are incomplete) the covariance
+is scaled by the reduced chi-square and the intervals use Student t with
 (temperatures - 2) degrees of freedom. Where a per-temperature fit has no usable standard
 error (two points, or noise-free data) the fit is unweighted and the covariance comes from
 the scatter about the law alone (Student t).
@@ -43,18 +63,21 @@ from ecdsim._types import ArrayLike, FloatArray, as_float
 from ecdsim.characterize.stats import (
     EXACT_FIT_RESOLUTION,
     Estimate,
+    Scatter,
     chi2_survival,
     estimates,
+    f_survival,
     finite_or_none,
     linearised,
     normal_quantile,
+    pooled_variance,
     t_quantile,
 )
 from ecdsim.physics.assembly import damper_damping_rate
 from ecdsim.physics.laws import linear_in_temperature
 
-# A chi-square p-value below this means the law does not describe the values within
-# their errors; the covariance is then scaled by the scatter.
+# A misfit p-value (F or chi-square, see fit_law) below this means the law does not
+# describe the values within their errors; the covariance is then scaled by the scatter.
 MISFIT_LEVEL = 0.01
 # Below this the AIC difference is not evidence for either law (Burnham and Anderson).
 AIC_DISTINCTION = 2.0
@@ -213,7 +236,12 @@ class LawFit:
     weighted : True where the per-temperature standard errors were the weights
     chi_square : weighted sum of squared residuals [-] (plain sum when unweighted)
     dof : number of temperatures minus 2
-    p_value : chi-square goodness-of-fit p-value (weighted fits with dof > 0), else None
+    scatter_dof : degrees of freedom of the pooled per-temperature scatter the weights
+        were scaled by (nu, module docstring); None where the errors were taken as known
+        or the fit is unweighted
+    p_value : goodness-of-fit p-value (weighted fits with dof > 0), else None: Fisher's
+        F of ``chi_square / dof`` with (dof, scatter_dof) degrees of freedom, or
+        chi-square with dof where the errors were taken as known
     scaled : True where the covariance was scaled by the scatter about the law (a
         weighted fit that fails the chi-square test, or any unweighted fit)
     aic : Akaike information criterion of the fit (for comparing laws) [-]
@@ -230,6 +258,7 @@ class LawFit:
     weighted: bool
     chi_square: float
     dof: int
+    scatter_dof: int | None
     p_value: float | None
     scaled: bool
     aic: float
@@ -272,6 +301,7 @@ class LawFit:
             weighted=self.weighted,
             chi_square=self.chi_square,
             dof=self.dof,
+            scatter_dof=self.scatter_dof,
             p_value=self.p_value,
             covariance_scaled=self.scaled,
             aic=finite_or_none(self.aic),
@@ -285,6 +315,8 @@ def fit_law(
     temperatures: ArrayLike,
     values: Sequence[Estimate],
     reference_temperature: float = 25.0,
+    *,
+    scatter: Sequence[Scatter | None] | None = None,
 ) -> LawFit:
     """Fit ``law`` to per-temperature estimates by weighted least squares.
 
@@ -294,6 +326,10 @@ def fit_law(
     temperatures : test temperatures, at least two distinct [degC]
     values : the estimate at each temperature (value and standard error)
     reference_temperature : T_ref of the law [degC]
+    scatter : the residual variance each standard error was scaled by, one per
+        temperature; given (and none None), the variances are pooled and the intervals
+        use Student t with the pooled degrees of freedom (module docstring). None: the
+        standard errors are taken as known.
     """
     from scipy.optimize import least_squares
 
@@ -304,6 +340,10 @@ def fit_law(
     errors = [v.standard_error for v in values]
     weighted = all(e is not None and math.isfinite(e) and e > 0.0 for e in errors)
     sigma = np.array(errors, dtype=float) if weighted else np.ones_like(y)
+    pooled = _pool(scatter, y.size) if weighted else None
+    if pooled is not None and scatter is not None:
+        own = np.array([s.variance for s in scatter if s is not None])
+        sigma = sigma * np.sqrt(pooled.variance / own)
     x0 = law.initial(t, y, 1.0 / sigma**2, reference_temperature)
 
     def residual(p: FloatArray) -> FloatArray:
@@ -326,10 +366,16 @@ def fit_law(
     reduced = chi_square / dof if dof > 0 else math.nan
     covariance: FloatArray | None
     if weighted:
-        p_value = chi2_survival(chi_square, dof) if dof > 0 else None
+        p_value = _misfit_p_value(chi_square, dof, pooled)
         scaled = p_value is not None and p_value < MISFIT_LEVEL
         covariance = stats.unscaled_covariance * (reduced if scaled else 1.0)
-        quantile: float | None = t_quantile(dof) if scaled else normal_quantile()
+        quantile: float | None
+        if scaled:
+            quantile = t_quantile(dof)
+        elif pooled is not None:
+            quantile = t_quantile(pooled.dof)
+        else:
+            quantile = normal_quantile()
         aic = chi_square + 2.0 * 2
     else:
         scaled = dof > 0
@@ -350,10 +396,36 @@ def fit_law(
         weighted=weighted,
         chi_square=chi_square,
         dof=dof,
+        scatter_dof=pooled.dof if pooled is not None else None,
         p_value=p_value,
         scaled=scaled,
         aic=aic,
     )
+
+
+def _pool(scatter: Sequence[Scatter | None] | None, n: int) -> Scatter | None:
+    """The pooled scatter, or None where any temperature has none to pool."""
+    if scatter is None:
+        return None
+    if len(scatter) != n:
+        raise ValueError(f"{len(scatter)} scatter entries for {n} temperatures")
+    known = [s for s in scatter if s is not None and s.dof > 0 and s.variance > 0.0]
+    return pooled_variance(known) if len(known) == n else None
+
+
+def _misfit_p_value(chi_square: float, dof: int, pooled: Scatter | None) -> float | None:
+    """p-value of the law's misfit: F(dof, nu) with pooled scatter, chi-square(dof) else.
+
+    With pooled scatter the weights carry ``s**2`` instead of ``sigma**2``:
+    ``chi_square / dof = (Q / sigma**2 / dof) / (s**2 / sigma**2)``, a ratio of two
+    independent chi-squares over their dof, which is Fisher's F (Draper and Smith,
+    section 2.1, the lack-of-fit F test against pure error).
+    """
+    if dof <= 0:
+        return None
+    if pooled is None:
+        return chi2_survival(chi_square, dof)
+    return f_survival(chi_square / dof, dof, pooled.dof)
 
 
 @dataclass(frozen=True)
@@ -438,6 +510,8 @@ def fit_temperature_laws(
     damping: Sequence[Estimate],
     friction: Sequence[Estimate],
     reference_temperature: float = 25.0,
+    *,
+    scatter: Sequence[Scatter | None] | None = None,
 ) -> TemperatureLaws:
     """Fit every damping law and the friction line to per-temperature estimates.
 
@@ -447,18 +521,23 @@ def fit_temperature_laws(
     damping : BECD at each temperature [N*m*s/rad]
     friction : FECD at each temperature [N*m]
     reference_temperature : T_ref of the damping laws [degC]
+    scatter : residual variance of each temperature's fit, which scaled both its BECD
+        and FECD standard errors [N*m**2]; None: the errors are taken as known (see
+        :func:`fit_law`)
     """
     fits: dict[str, LawFit] = {}
     failures: dict[str, str] = {}
     for name, law in DAMPING_LAWS.items():
         try:
-            fits[name] = fit_law(law, temperatures, damping, reference_temperature)
+            fits[name] = fit_law(law, temperatures, damping, reference_temperature, scatter=scatter)
         except LawFitError as exc:
             failures[name] = str(exc)
     friction_fit: LawFit | None = None
     friction_failure: str | None = None
     try:
-        friction_fit = fit_law(FRICTION_LINE, temperatures, friction, reference_temperature)
+        friction_fit = fit_law(
+            FRICTION_LINE, temperatures, friction, reference_temperature, scatter=scatter
+        )
     except LawFitError as exc:
         friction_failure = str(exc)
     return TemperatureLaws(

@@ -177,6 +177,7 @@ def size(
         ]
         if chosen:
             tables.append(report.checks_table(chosen[0]))
+            tables.append(report.torque_margin_table(chosen[0]))
         if intervals is not None:
             tables.append(report.intervals_table(intervals))
         _print(tables, notes)

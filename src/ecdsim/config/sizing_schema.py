@@ -21,7 +21,6 @@ from ecdsim.config.fields import (
     PositiveTime,
     PositiveTorque,
     Temperature,
-    non_negative,
     positive,
     quantity,
 )
@@ -49,7 +48,10 @@ def _at_least_one(x: float) -> str | None:
 
 
 def _deployment_or_speed(value: object) -> float | None:
-    """``"deployment"`` (None: the deployment's own speed) or an angular speed [rad/s]."""
+    """``"deployment"`` (None: the deployment's own speed) or an angular speed >= 0 [rad/s].
+
+    0 (the default) means no damping torque in the margin.
+    """
     if value is None or value == "deployment":
         return None
     try:
@@ -58,14 +60,21 @@ def _deployment_or_speed(value: object) -> float | None:
         raise PydanticCustomError(
             "quantity", "{detail}", {"detail": f'{exc} (or "deployment")'}
         ) from None
-    if not number > 0.0:
+    if not number >= 0.0:
         raise PydanticCustomError(
-            "quantity", "{detail}", {"detail": f'{value!r} must be > 0 (or "deployment")'}
+            "quantity",
+            "{detail}",
+            {"detail": f'{value!r} must be >= 0 (0 = no damping torque; or "deployment")'},
         )
     return number
 
 
-NonNegativeMass = Annotated[float, quantity(MASS, non_negative), MASS]
+def _known_mass(x: float) -> str | None:
+    return None if x > 0.0 else "must be > 0 (leave mass out if it is not known)"
+
+
+# A catalogue mass: 0 is no placeholder for "unknown" (that would rank a part as weightless).
+KnownMass = Annotated[float, quantity(MASS, _known_mass), MASS]
 PositiveLength = Annotated[float, quantity(LENGTH, positive), LENGTH]
 Efficiency = Annotated[float, quantity(NUMBER, _fraction), NUMBER]
 PositiveDynamicViscosity = Annotated[
@@ -83,13 +92,17 @@ class _Section(BaseModel):
 
 
 class FactorsSpec(_Section):
-    """Uncertainty factors per resistive-torque type; 1 means "no factor applied".
+    """Uncertainty factors per resistive-torque kind; 1 means "no factor applied".
 
     ecdsim ships no standard's values: take them from the standard the project applies
-    (docs/sizing.md, "Torque margin").
+    (docs/sizing.md, "Torque margin"). ``friction`` is the factor of both Coulomb
+    frictions (ECSS-E-ST-33-01C has one friction kind); ``ecd_friction`` (FECD_T) and
+    ``system_friction`` (FS_T) override it for one of them.
     """
 
     friction: Factor = 1.0
+    ecd_friction: Factor | None = None
+    system_friction: Factor | None = None
     damping: Factor = 1.0
     inertia: Factor = 1.0
     spring: Factor = 1.0
@@ -107,7 +120,7 @@ class AllowancesSpec(_Section):
 class TorqueMarginSpec(_Section):
     """``[requirements.torque_margin]``: how the torque margin is computed."""
 
-    damping_speed: DampingSpeed = None
+    damping_speed: DampingSpeed = 0.0
     factors: FactorsSpec = Field(default_factory=FactorsSpec)
     allowances: AllowancesSpec = Field(default_factory=AllowancesSpec)
 

@@ -314,11 +314,12 @@ def outputs_of(plan: Plan, prediction: Prediction) -> dict[str, np.ndarray[Any, 
         lowest, _ = margin_over_travel(
             problem.angles,
             problem.torques,
-            problem.friction,
-            problem.damping_rate,
-            solution.stalled,
-            solution.stall_angle,
-            plan.margin,
+            ecd_friction=prediction.ecd.ecd_friction,
+            system_friction=prediction.system_friction,
+            damping_rate=problem.damping_rate,
+            stalled=solution.stalled,
+            stall_angle=solution.stall_angle,
+            settings=plan.margin,
         ).minimum()
         found[MARGIN] = np.broadcast_to(lowest, shape)
     return found

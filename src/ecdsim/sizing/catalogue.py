@@ -33,7 +33,7 @@ from ecdsim.config.loader import read_config_text
 from ecdsim.config.schema import DamperSpec
 from ecdsim.config.sizing_schema import (
     Efficiency,
-    NonNegativeMass,
+    KnownMass,
     PositiveLength,
 )
 from ecdsim.config.units import Kind
@@ -63,9 +63,18 @@ class DamperEntrySpec(DamperSpec):
     source: SourceText
     note: str = ""
     max_torque: PositiveTorque | None = None
-    mass: NonNegativeMass | None = None
+    mass: KnownMass | None = None
+    mass_includes_gearbox: str | None = Field(default=None, min_length=1)
     length: PositiveLength | None = None
     diameter: PositiveLength | None = None
+
+    @model_validator(mode="after")
+    def _assembly_mass(self) -> DamperEntrySpec:
+        if self.mass_includes_gearbox is not None and self.mass is None:
+            raise ValueError(
+                "mass_includes_gearbox needs mass (the mass of this damper with that gearbox)"
+            )
+        return self
 
 
 class GearboxEntrySpec(BaseModel):
@@ -83,7 +92,7 @@ class GearboxEntrySpec(BaseModel):
     max_output_torque: PositiveTorque | None = None
     efficiency: Efficiency | None = None
     lost_motion: NonNegativeAngle = 0.0
-    mass: NonNegativeMass | None = None
+    mass: KnownMass | None = None
 
     @model_validator(mode="after")
     def _one_damping(self) -> GearboxEntrySpec:
@@ -107,7 +116,9 @@ class DamperEntry:
     damper : the model object (BD, temperature law, FD, FL_T, linear-range limits)
     rotor_inertia : rotor inertia at the damper shaft [kg*m^2], None if not given
     max_torque : largest allowed torque at the damper shaft [N*m], None if not given
-    mass : [kg], None if not given
+    mass : [kg], None if not given; with ``mass_includes_gearbox``, the assembly's mass
+    mass_includes_gearbox : name of the gearbox whose mass ``mass`` includes (an
+        assembly mass, e.g. the paper's Cc-16), else None
     length : [m], None if not given
     diameter : [m], None if not given
     """
@@ -119,6 +130,7 @@ class DamperEntry:
     rotor_inertia: float | None
     max_torque: float | None
     mass: float | None
+    mass_includes_gearbox: str | None
     length: float | None
     diameter: float | None
 
@@ -214,6 +226,7 @@ def _damper_entry(spec: DamperEntrySpec) -> DamperEntry:
         rotor_inertia=spec.rotor_inertia if spec.rotor_inertia > 0.0 else None,
         max_torque=spec.max_torque,
         mass=spec.mass,
+        mass_includes_gearbox=spec.mass_includes_gearbox,
         length=spec.length,
         diameter=spec.diameter,
     )
@@ -302,6 +315,13 @@ def build_catalogue(entries: list[tuple[str, str, dict[str, Any]]], source: str)
         problems.append("the catalogue lists no damper ([[damper]] entries)")
     if not problems and not gearboxes:
         problems.append("the catalogue lists no gearbox ([[gearbox]] entries)")
+    names = {g.name for g in gearboxes}
+    for damper in dampers:
+        if damper.mass_includes_gearbox is not None and damper.mass_includes_gearbox not in names:
+            problems.append(
+                f"damper {damper.name!r}: mass_includes_gearbox: no gearbox "
+                f"{damper.mass_includes_gearbox!r} in the catalogue (known: {sorted(names)})"
+            )
     if problems:
         raise ConfigError(problems, source)
     return Catalogue(tuple(dampers), tuple(gearboxes), source)
@@ -402,7 +422,7 @@ def parse_csv_catalogue(text: str, source: str = "<string>") -> Catalogue:
             elif name in _LUBRICATION_COLUMNS:
                 law = fields.setdefault("lubrication_friction", {})
                 law[_LUBRICATION_COLUMNS[name]] = _cell(value, unit)
-            elif name in {"name", "source", "note"}:
+            elif name in {"name", "source", "note", "mass_includes_gearbox"}:
                 fields[name] = value
             else:
                 fields[name] = _cell(value, unit)

@@ -1,20 +1,25 @@
-"""Torque margin after the space-mechanism motorisation-ratio approach (docs/sizing.md).
+"""Torque margin in the motorisation-ratio form of ECSS-E-ST-33-01C (docs/sizing.md).
 
 The margin at one point of the travel and one temperature is ::
 
-    margin = drive / sum_k(f_k * R_k) - 1
+    TM = drive / sum_k(f_k * R_k) - 1
 
 where ``drive`` is the spring torque (the motorisation torque of a spring-driven
-deployment), ``R_k`` are the resistive torques by type (friction, damping, inertia,
-spring, harness) and ``f_k`` their uncertainty factors. This is the form of the
-motorisation ratio of ECSS-E-ST-33-01C (margin = ratio - 1). ecdsim ships **no** factor
-values from any standard: every factor defaults to 1 ("no factors applied") and must be
-taken from the standard the project applies (docs/sizing.md explains why).
+deployment), ``R_k`` are the resistive torques by kind and ``f_k`` their uncertainty
+factors. Every torque is referred to the ECD's input (slow) shaft, the hinge axis, at the
+same angle and temperature. This is the form of ECSS-E-ST-33-01C (motorisation ratio
+minus one). ecdsim ships **no** factor values from any standard: every factor defaults to
+1 ("no factors applied") and must be taken from the standard the project applies
+(docs/sizing.md explains why).
 
-For an ECD deployment the resistive torques at a point are: friction = FECD_T + FS_T,
-damping = BECD_T * omega (the deployment's own speed at that angle, or a fixed required
-speed), and user allowances for inertia, resisting springs and harness that the
-quasi-static model does not contain.
+The resistive torques of an ECD deployment, by kind (:data:`RESISTIVE_TYPES`):
+
+* ``ecd_friction``: the ECD's Coulomb friction FECD_T (Eq. 2, 4 of the ECD paper);
+* ``system_friction``: the load's friction FS_T (hinge, harness, as measured; section 5);
+* ``damping``: BECD_T * omega (Eq. 3) at a required speed, or at the deployment's own
+  speed, or nothing (speed 0, the default);
+* ``inertia``, ``spring`` (a *resisting* spring) and ``harness``: user allowances that
+  the quasi-static model does not contain.
 """
 
 from __future__ import annotations
@@ -23,16 +28,71 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim.physics.assembly import input_speed
 
-RESISTIVE_TYPES = ("friction", "damping", "inertia", "spring", "harness")
+RESISTIVE_TYPES = (
+    "ecd_friction",
+    "system_friction",
+    "damping",
+    "inertia",
+    "spring",
+    "harness",
+)
+# ECSS-E-ST-33-01C has one kind for friction; ``friction`` is the factor of both Coulomb
+# kinds unless ``ecd_friction`` or ``system_friction`` is given on its own.
+FRICTION_TYPES = ("ecd_friction", "system_friction")
+FACTOR_KEYS = ("friction", *RESISTIVE_TYPES)
 
 # Below this relative size a margin is float rounding of an exact zero: with damping at the
 # deployment's own speed and unit factors, drive and resistance are equal by quasi-static
 # equilibrium, and their quotient differs from 1 only in the last bits.
 _ROUNDING = 1e-12
+
+
+def factor_of(kind: str, factors: Mapping[str, float]) -> float:
+    """The uncertainty factor of one resistive kind [-]: its own, else ``friction`` for
+    the two Coulomb kinds, else 1 ("no factor applied").
+
+    Parameters
+    ----------
+    kind : resistive kind, one of RESISTIVE_TYPES
+    factors : uncertainty factors by key of FACTOR_KEYS [-]
+
+    >>> factor_of("system_friction", {"friction": 1.5})
+    1.5
+    >>> factor_of("ecd_friction", {"friction": 1.5, "ecd_friction": 2.0})
+    2.0
+    """
+    unknown = set(factors) - set(FACTOR_KEYS)
+    if unknown:
+        raise KeyError(f"unknown uncertainty factor(s) {sorted(unknown)}; known: {FACTOR_KEYS}")
+    if kind in factors:
+        return float(factors[kind])
+    if kind in FRICTION_TYPES:
+        return float(factors.get("friction", 1.0))
+    return 1.0
+
+
+def factored_resistance(
+    resistive: Mapping[str, ArrayLike], factors: Mapping[str, float]
+) -> FloatArray:
+    """``sum_k(f_k * R_k)``, the factored resistive torque [N*m].
+
+    Parameters
+    ----------
+    resistive : resistive torque by kind, keys from RESISTIVE_TYPES [N*m]
+    factors : uncertainty factors by key of FACTOR_KEYS, missing ones count 1 [-]
+    """
+    unknown = set(resistive) - set(RESISTIVE_TYPES)
+    if unknown:
+        raise KeyError(f"unknown resistive torque type(s) {sorted(unknown)}")
+    total = as_float(0.0)
+    for kind, torque in resistive.items():
+        total = as_float(total + factor_of(kind, factors) * as_float(torque))
+    return total
 
 
 def torque_margin(
@@ -49,18 +109,14 @@ def torque_margin(
     Parameters
     ----------
     drive : driving (motorisation) torque, here the spring torque [N*m]
-    resistive : resistive torque by type, keys from RESISTIVE_TYPES [N*m]
-    factors : uncertainty factor by type, missing types count 1 [-]
+    resistive : resistive torque by kind, keys from RESISTIVE_TYPES [N*m]
+    factors : uncertainty factors by key of FACTOR_KEYS, missing ones count 1 [-]
 
-    >>> round(float(torque_margin(3.0, {"friction": 1.0, "damping": 0.5}, {"friction": 2.0})), 12)
+    >>> torque = {"ecd_friction": 0.5, "system_friction": 0.5, "damping": 0.5}
+    >>> round(float(torque_margin(3.0, torque, {"friction": 2.0})), 12)
     0.2
     """
-    unknown = set(resistive) - set(RESISTIVE_TYPES)
-    if unknown:
-        raise KeyError(f"unknown resistive torque type(s) {sorted(unknown)}")
-    total = as_float(0.0)
-    for kind, torque in resistive.items():
-        total = as_float(total + factors.get(kind, 1.0) * as_float(torque))
+    total = factored_resistance(resistive, factors)
     t = as_float(drive)
     total, t = np.broadcast_arrays(total, t)
     positive = total > 0.0
@@ -75,21 +131,29 @@ class MarginSettings:
 
     Attributes
     ----------
-    factors : uncertainty factor per resistive-torque type [-]; 1 = no factor applied
+    factors : uncertainty factor by key of FACTOR_KEYS [-]; 1 = no factor applied
     allowances : margin-only resistive torques (inertia, spring, harness) [N*m]
-    damping_speed : speed at which the damping torque is taken [rad/s]; None = the
+    damping_speed : speed at which the damping torque is taken [rad/s]; 0 (the default)
+        = no damping torque (the margin of a mechanism that must just move); None = the
         deployment's own speed at each angle (then, with unit factors, the margin is 0 by
         quasi-static equilibrium wherever the mechanism moves)
     """
 
     factors: Mapping[str, float] = field(default_factory=dict)
     allowances: Mapping[str, float] = field(default_factory=dict)
-    damping_speed: float | None = None
+    damping_speed: float | None = 0.0
 
     @property
     def factors_applied(self) -> bool:
         """False when every factor is 1 (the default: "no factors applied")."""
         return any(v != 1.0 for v in self.factors.values())
+
+    @property
+    def damping_mode(self) -> str:
+        """``"none"`` (speed 0), ``"fixed"`` (a required speed) or ``"deployment"``."""
+        if self.damping_speed is None:
+            return "deployment"
+        return "fixed" if self.damping_speed > 0.0 else "none"
 
 
 @dataclass(frozen=True)
@@ -104,27 +168,76 @@ class MarginOverTravel:
     Attributes
     ----------
     angle : deployed angle of each point [rad]
+    drive : spring torque at each point [N*m]
+    resistive : unfactored resistive torque by kind at each point [N*m]
+    factored : sum of the factored resistive torques at each point [N*m]
     margin : torque margin at each point [-]
     valid : False for the padding point where a case does not stall
     """
 
     angle: FloatArray
+    drive: FloatArray
+    resistive: dict[str, FloatArray]
+    factored: FloatArray
     margin: FloatArray
     valid: BoolArray
 
+    def _lowest(self) -> NDArray[np.intp]:
+        lowest: NDArray[np.intp] = np.argmin(np.where(self.valid, self.margin, np.inf), axis=0)
+        return lowest[np.newaxis]
+
     def minimum(self) -> tuple[FloatArray, FloatArray]:
         """Minimum margin over the travel and the angle [rad] where it occurs."""
+        index = self._lowest()
         masked = np.where(self.valid, self.margin, np.inf)
-        index = np.argmin(masked, axis=0)
-        low = np.take_along_axis(masked, index[np.newaxis], axis=0)[0]
-        where = np.take_along_axis(self.angle, index[np.newaxis], axis=0)[0]
+        low = np.take_along_axis(masked, index, axis=0)[0]
+        where = np.take_along_axis(self.angle, index, axis=0)[0]
         return as_float(low), as_float(where)
+
+    def at_minimum(self) -> TorqueMarginTerms:
+        """Every term of the margin at the point of the travel where it is smallest."""
+        index = self._lowest()
+
+        def pick(values: FloatArray) -> FloatArray:
+            full = np.broadcast_to(values, self.margin.shape)
+            return as_float(np.take_along_axis(full, index, axis=0)[0])
+
+        low, where = self.minimum()
+        return TorqueMarginTerms(
+            margin=low,
+            angle=where,
+            drive=pick(self.drive),
+            resistive={kind: pick(torque) for kind, torque in self.resistive.items()},
+            factored=pick(self.factored),
+        )
+
+
+@dataclass(frozen=True)
+class TorqueMarginTerms:
+    """The torque margin and its terms at one point of the travel, per case.
+
+    Attributes
+    ----------
+    margin : TM = drive / factored - 1 [-]
+    angle : deployed angle of the point [rad]
+    drive : spring torque there [N*m]
+    resistive : unfactored resistive torque by kind there, at the ECD input [N*m]
+    factored : sum of the factored resistive torques there [N*m]
+    """
+
+    margin: FloatArray
+    angle: FloatArray
+    drive: FloatArray
+    resistive: dict[str, FloatArray]
+    factored: FloatArray
 
 
 def margin_over_travel(
     breakpoint_angles: ArrayLike,
     spring_torques: ArrayLike,
-    friction: ArrayLike,
+    *,
+    ecd_friction: ArrayLike,
+    system_friction: ArrayLike,
     damping_rate: ArrayLike,
     stalled: ArrayLike,
     stall_angle: ArrayLike,
@@ -132,15 +245,18 @@ def margin_over_travel(
 ) -> MarginOverTravel:
     """Torque margin at every spring breakpoint and at the stall point (docs/sizing.md).
 
-    Resistive torques at a point: friction = FECD_T + FS_T; damping = BECD_T * omega with
-    omega the quasi-static speed there (Eq. 5, zero where the spring torque does not
-    exceed the friction) or ``settings.damping_speed``; plus the settings' allowances.
+    Resistive torques at a point, at the ECD input: ``ecd_friction`` = FECD_T,
+    ``system_friction`` = FS_T, ``damping`` = BECD_T * omega with omega
+    ``settings.damping_speed`` (0 by default: no damping torque) or, if that is None, the
+    quasi-static speed there (Eq. 5, zero where the spring torque does not exceed the
+    friction); plus the settings' allowances.
 
     Parameters
     ----------
     breakpoint_angles : deployed angles of the spring breakpoints, along axis 0 [rad]
     spring_torques : spring torque at each breakpoint, the drive [N*m]
-    friction : FECD_T + FS_T at the input shaft [N*m]
+    ecd_friction : FECD_T at the input shaft [N*m]
+    system_friction : FS_T at the input shaft [N*m]
     damping_rate : BECD_T at the input shaft [N*m*s/rad]
     stalled : True where the deployment stalls [-]
     stall_angle : angle of the stall [rad], ignored where not stalled
@@ -148,7 +264,9 @@ def margin_over_travel(
     """
     angles = as_float(breakpoint_angles)
     torques = as_float(spring_torques)
-    f = as_float(friction)
+    fecd = as_float(ecd_friction)
+    fs = as_float(system_friction)
+    f = as_float(fecd + fs)
     b = as_float(damping_rate)
     stop = np.asarray(stalled, dtype=bool)
     # The stall point: spring torque equal to the friction, at the stall angle.
@@ -162,12 +280,22 @@ def margin_over_travel(
     else:
         speed = as_float(np.full(drive.shape, settings.damping_speed))
     resistive: dict[str, FloatArray] = {
-        "friction": as_float(np.broadcast_to(f, drive.shape)),
-        "damping": as_float(b * speed),
+        "ecd_friction": as_float(np.broadcast_to(fecd, drive.shape)),
+        "system_friction": as_float(np.broadcast_to(fs, drive.shape)),
+        "damping": as_float(np.broadcast_to(b * speed, drive.shape)),
     }
     for kind, torque in settings.allowances.items():
         resistive[kind] = as_float(np.full(drive.shape, torque))
     margin = torque_margin(drive, resistive, settings.factors)
     valid = np.ones(margin.shape, dtype=bool)
     valid[-1] = np.broadcast_to(stop, margin.shape[1:])
-    return MarginOverTravel(angle=as_float(angles), margin=margin, valid=valid)
+    return MarginOverTravel(
+        angle=as_float(angles),
+        drive=as_float(drive),
+        resistive=resistive,
+        factored=as_float(
+            np.broadcast_to(factored_resistance(resistive, settings.factors), drive.shape)
+        ),
+        margin=margin,
+        valid=valid,
+    )

@@ -38,7 +38,11 @@ def requirements_table(result: SearchResult) -> Table:
             factors if m.factors_applied else "none applied (all 1)",
         ]
     )
-    speed = "deployment's own speed" if m.damping_speed is None else f"{m.damping_speed:g} rad/s"
+    speed = {
+        "deployment": "deployment's own speed",
+        "none": "none (speed 0)",
+        "fixed": f"{m.damping_speed or 0.0:g} rad/s",
+    }[m.damping_mode]
     rows.append(["damping torque in margin at", speed])
     return "Requirements", ["requirement", "limit"], rows
 
@@ -66,7 +70,7 @@ def candidates_table(result: SearchResult) -> Table:
                     str(c.rank),
                     label,
                     "error",
-                    format_number(c.candidate.mass),
+                    format_number(c.candidate.mass, none="unknown"),
                     c.error,
                     "",
                     "",
@@ -81,7 +85,7 @@ def candidates_table(result: SearchResult) -> Table:
                 str(c.rank),
                 label,
                 "yes" if c.passed else "no",
-                format_number(c.candidate.mass),
+                format_number(c.candidate.mass, none="unknown"),
                 percent(c.margin),
                 " / ".join(format_number(t) for t in c.deployment_time),
                 format_number(c.spread),
@@ -89,7 +93,10 @@ def candidates_table(result: SearchResult) -> Table:
                 f"{angle:.0f}, {format_number(c.torque_margin_temperature)}",
             ]
         )
-    title = "Candidates, ranked: passing first, then mass, worst margin, time spread"
+    title = (
+        "Candidates, ranked: passing first, then mass (unknown after known), worst margin, "
+        "time spread"
+    )
     return title, headers, rows
 
 
@@ -98,15 +105,49 @@ def checks_table(candidate: CandidateResult) -> Table:
     rows = [
         [
             o.label,
-            "pass" if o.passed else "FAIL",
+            o.result,
             percent(o.margin),
-            f"{format_number(o.value)} {o.unit}",
+            "-" if o.cannot_start else f"{format_number(o.value)} {o.unit}",
             format_number(o.temperature_C),
         ]
         for o in candidate.checks
     ]
     title = f"Requirements for #{candidate.rank} {candidate.candidate.label}"
     return title, ["requirement", "result", "margin", "value (worst)", "at T [degC]"], rows
+
+
+# Column headings of the resistive torques, in the order of margin.RESISTIVE_TYPES.
+_KIND_HEADERS = {
+    "ecd_friction": "FECD",
+    "system_friction": "FS",
+    "damping": "damping",
+    "inertia": "inertia",
+    "spring": "spring",
+    "harness": "harness",
+}
+
+
+def torque_margin_table(candidate: CandidateResult) -> Table:
+    """The torque margin at each temperature with its terms (docs/sizing.md section 5).
+
+    Every torque is in N*m at the ECD input, unfactored, at the angle where the margin is
+    smallest; ``sum f*R`` is the factored sum the drive is divided by.
+    """
+    kinds = [k for k in _KIND_HEADERS if any(k in m.resistive for m in candidate.torque_margins)]
+    headers = ["T [degC]", "at [deg]", "drive"]
+    headers += [_KIND_HEADERS[k] for k in kinds] + ["sum f*R", "TM"]
+    rows = []
+    for m in candidate.torque_margins:
+        row = [format_number(m.temperature_C), f"{math.degrees(m.angle):.0f}"]
+        row += [format_number(m.drive)]
+        row += [format_number(m.resistive.get(k, 0.0)) for k in kinds]
+        row += [format_number(m.factored), format_number(m.margin)]
+        rows.append(row)
+    title = (
+        f"Torque margin TM = drive / sum(f*R) - 1 of #{candidate.rank} "
+        f"{candidate.candidate.label} [N*m at the ECD input]"
+    )
+    return title, headers, rows
 
 
 def intervals_table(intervals: RatioIntervals) -> Table:

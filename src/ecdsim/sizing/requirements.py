@@ -125,6 +125,18 @@ class Requirements:
         """The SI requirements of a validated ``[requirements]`` section."""
         tm = spec.torque_margin
         allowances = {k: v for k, v in tm.allowances.model_dump().items() if v != 0.0}
+        given = tm.factors
+        # `friction` is the factor of both Coulomb kinds unless one is given on its own.
+        ecd = given.friction if given.ecd_friction is None else given.ecd_friction
+        system = given.friction if given.system_friction is None else given.system_friction
+        factors = {
+            "ecd_friction": ecd,
+            "system_friction": system,
+            "damping": given.damping,
+            "inertia": given.inertia,
+            "spring": given.spring,
+            "harness": given.harness,
+        }
         return cls(
             temperatures=spec.all_temperatures(),
             min_deployment_time=spec.min_deployment_time,
@@ -135,7 +147,7 @@ class Requirements:
             no_stall=spec.no_stall,
             ratio_range=(float(spec.ratio_range[0]), float(spec.ratio_range[1])),
             margin=MarginSettings(
-                factors=tm.factors.model_dump(),
+                factors=factors,
                 allowances=allowances,
                 damping_speed=tm.damping_speed,
             ),

@@ -30,7 +30,7 @@ from ecdsim.model import (
 )
 from ecdsim.physics.assembly import damper_torque
 from ecdsim.sizing.catalogue import ILLUSTRATIVE, Catalogue, DamperEntry, GearboxEntry
-from ecdsim.sizing.margin import margin_over_travel
+from ecdsim.sizing.margin import TorqueMarginTerms, margin_over_travel
 from ecdsim.sizing.requirements import (
     Requirements,
     max_time_margin,
@@ -151,6 +151,9 @@ class Check:
     values : the checked quantity, shape (n_candidates, n_temperatures)
     margins : its margin (>= 0 is met; docs/sizing.md), same shape
     applicable : False for candidates without this limit, shape (n_candidates,)
+    cannot_start : True where the mechanism cannot start, so that a torque check has no
+        running torque to check (``values`` then holds the torque the ECD holds at rest,
+        which keeps the margin continuous in N); None for checks this does not concern
     """
 
     name: str
@@ -159,6 +162,7 @@ class Check:
     values: FloatArray
     margins: FloatArray
     applicable: BoolArray
+    cannot_start: BoolArray | None = None
 
     def worst(self) -> FloatArray:
         """Smallest margin over the temperatures, per candidate; +inf where not applicable."""
@@ -180,21 +184,27 @@ class Evaluation:
     temperatures : T [degC], shape (n_temperatures,)
     prediction : the exact deployment of every candidate at every temperature
     checks : the requirements and catalogue limits, with margins
-    input_torque : peak ECD reaction at its input shaft, FECD_T + BECD_T * omega_max [N*m]
+    input_torque : peak ECD reaction at its input shaft, FECD_T + BECD_T * omega_max [N*m];
+        where the mechanism cannot start, the torque it holds at rest, max(T_s - FS_T, 0)
+    cannot_start : True where the spring cannot start the deployment (stall at angle 0)
     damper_shaft_speed : peak damper shaft speed, N * omega_max [rad/s]
     damper_shaft_torque : peak damper torque at its shaft, BD_T * omega_d + FD + FL_T [N*m]
     torque_margin : smallest torque margin over the travel [-]
     torque_margin_angle : deployed angle where it occurs [rad]
+    torque_margin_terms : every term of that smallest margin (drive, resistive torques
+        by kind, factored sum), each of shape (n_candidates, n_temperatures)
     """
 
     temperatures: FloatArray
     prediction: Prediction
     checks: tuple[Check, ...]
     input_torque: FloatArray
+    cannot_start: BoolArray
     damper_shaft_speed: FloatArray
     damper_shaft_torque: FloatArray
     torque_margin: FloatArray
     torque_margin_angle: FloatArray
+    torque_margin_terms: TorqueMarginTerms
 
     def check(self, name: str) -> Check:
         """The check called ``name``."""
@@ -236,20 +246,37 @@ def evaluate(
     time = full(solution.deployment_time)
     end_speed = full(solution.end_speed)
     peak = full(solution.max_speed)
-    input_torque = full(state.ecd_friction + state.ecd_damping_rate * peak)
+    # A mechanism that cannot start (stall at the first angle) has no running input
+    # torque: the ECD then holds what the spring applies beyond the system friction, never
+    # its own friction capacity FECD_T (which can exceed the spring torque). That held
+    # torque equals FECD_T + BECD_T * 0 at the start boundary, so the margin stays
+    # continuous in N; the outputs say "cannot start" instead of a value.
+    stall_angle = np.broadcast_to(solution.stall_angle, shape)
+    cannot_start = np.broadcast_to(solution.stalled, shape) & (stall_angle <= problem.angles[0])
+    held = np.maximum(problem.torques[0] - prediction.system_friction, 0.0)
+    running = state.ecd_friction + state.ecd_damping_rate * peak
+    input_torque = full(np.where(cannot_start, held, running))
     shaft_speed = full(peak * state.gear_ratio)
     eddy = full(damper_torque(state.damper_damping_rate, shaft_speed))
     shaft_torque = full(eddy + state.damper_friction + state.lubrication_friction)
-    margin = margin_over_travel(
+    terms = margin_over_travel(
         problem.angles,
         problem.torques,
-        problem.friction,
-        problem.damping_rate,
-        solution.stalled,
-        solution.stall_angle,
-        requirements.margin,
+        ecd_friction=state.ecd_friction,
+        system_friction=prediction.system_friction,
+        damping_rate=problem.damping_rate,
+        stalled=solution.stalled,
+        stall_angle=solution.stall_angle,
+        settings=requirements.margin,
+    ).at_minimum()
+    terms = TorqueMarginTerms(
+        margin=full(terms.margin),
+        angle=full(terms.angle),
+        drive=full(terms.drive),
+        resistive={kind: full(torque) for kind, torque in terms.resistive.items()},
+        factored=full(terms.factored),
     )
-    torque_margin, torque_margin_angle = margin.minimum()
+    torque_margin, torque_margin_angle = terms.margin, terms.angle
     everyone = np.ones(shape[0], dtype=bool)
     r = requirements
     checks: list[Check] = []
@@ -268,7 +295,9 @@ def evaluate(
     if r.max_input_torque is not None:
         label = f"ECD input torque <= {r.max_input_torque:g} N*m"
         margins = upper_limit_margin(input_torque, r.max_input_torque)
-        checks.append(Check("max_input_torque", label, "N*m", input_torque, margins, everyone))
+        checks.append(
+            Check("max_input_torque", label, "N*m", input_torque, margins, everyone, cannot_start)
+        )
     if r.no_stall:
         net = full(np.min(problem.torques, axis=0) - problem.friction)
         margins = full(stall_margin(problem.torques, problem.friction))
@@ -293,16 +322,19 @@ def evaluate(
             given = np.broadcast_to(np.isfinite(limit), (shape[0],))
             if np.any(given):
                 margins = full(upper_limit_margin(values, as_float(limit).reshape(-1, 1)))
-                checks.append(Check(name, label, unit, values, margins, np.array(given)))
+                held = cannot_start if unit == "N*m" else None
+                checks.append(Check(name, label, unit, values, margins, np.array(given), held))
     return Evaluation(
         temperatures=temps,
         prediction=prediction,
         checks=tuple(checks),
         input_torque=input_torque,
+        cannot_start=np.asarray(cannot_start),
         damper_shaft_speed=shaft_speed,
         damper_shaft_torque=shaft_torque,
-        torque_margin=full(torque_margin),
-        torque_margin_angle=full(torque_margin_angle),
+        torque_margin=torque_margin,
+        torque_margin_angle=torque_margin_angle,
+        torque_margin_terms=terms,
     )
 
 
@@ -316,10 +348,31 @@ class Candidate:
 
     @property
     def mass(self) -> float | None:
-        """Damper plus gearbox mass [kg]; None if either is not given."""
-        if self.damper.mass is None or self.gearbox.mass is None:
-            return None
-        return self.damper.mass + self.gearbox.mass
+        """Damper plus gearbox mass [kg]; None (unknown) if either is not known.
+
+        A damper whose catalogue mass includes a gearbox (``mass_includes_gearbox``, an
+        assembly mass) has that mass with that gearbox, and an unknown mass with any other.
+        """
+        return self._mass()[0]
+
+    @property
+    def mass_note(self) -> str | None:
+        """Why the mass is unknown, or what an assembly mass includes; None otherwise."""
+        return self._mass()[1]
+
+    def _mass(self) -> tuple[float | None, str | None]:
+        d, g = self.damper, self.gearbox
+        if d.mass_includes_gearbox is not None:
+            if d.mass_includes_gearbox == g.name:
+                return d.mass, f"assembly mass of {d.name!r} with {g.name!r}"
+            return None, (
+                f"unknown: {d.name!r} has only an assembly mass (with {d.mass_includes_gearbox!r})"
+            )
+        if d.mass is not None and g.mass is not None:
+            return d.mass + g.mass, None
+        missing = [f"{kind} {e.name!r}" for kind, e in (("damper", d), ("gearbox", g))
+                   if e.mass is None]  # fmt: skip
+        return None, "unknown: no mass for " + " and ".join(missing)
 
     @property
     def illustrative(self) -> bool:
@@ -353,6 +406,9 @@ class CheckOutcome:
     temperature_C : temperature of the smallest margin [degC]
     value : the checked quantity there, in ``unit``
     unit : unit of ``value``
+    cannot_start : True if the mechanism cannot start at that temperature: a torque
+        check then has no running torque ("cannot start"; ``value`` is the torque held
+        at rest, and JSON gives null)
     """
 
     name: str
@@ -362,6 +418,14 @@ class CheckOutcome:
     temperature_C: float
     value: float
     unit: str
+    cannot_start: bool = False
+
+    @property
+    def result(self) -> str:
+        """``"pass"``, ``"FAIL"`` or ``"cannot start"``."""
+        if self.cannot_start:
+            return "cannot start"
+        return "pass" if self.passed else "FAIL"
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (infinite numbers become null)."""
@@ -370,9 +434,44 @@ class CheckOutcome:
             "label": self.label,
             "margin": _optional(self.margin),
             "passed": self.passed,
+            "cannot_start": self.cannot_start,
             "temperature_C": self.temperature_C,
-            "value": _optional(self.value),
+            "value": None if self.cannot_start else _optional(self.value),
             "unit": self.unit,
+        }
+
+
+@dataclass(frozen=True)
+class TorqueMarginAt:
+    """The torque margin at one temperature, with its terms (docs/sizing.md section 5).
+
+    Every torque is at the ECD's input shaft, at the angle where the margin is smallest.
+
+    Attributes
+    ----------
+    temperature_C : T [degC]
+    margin : TM = drive / factored - 1 [-]
+    angle : deployed angle where it is smallest [rad]
+    drive : spring torque there [N*m]
+    resistive : unfactored resistive torque by kind there [N*m]
+    factored : sum of the factored resistive torques [N*m]
+    """
+
+    temperature_C: float
+    margin: float
+    angle: float
+    drive: float
+    resistive: dict[str, float]
+    factored: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (infinite numbers become null)."""
+        return {
+            "margin": _optional(self.margin),
+            "angle_rad": self.angle,
+            "drive_Nm": self.drive,
+            "resistive_Nm": dict(self.resistive),
+            "factored_resistance_Nm": self.factored,
         }
 
 
@@ -395,6 +494,8 @@ class CandidateResult:
     damping_rate : BECD_T at each T [N*m*s/rad]
     friction : FECD_T at each T [N*m]
     stalled : stall flag at each T
+    cannot_start : True at each T where the spring cannot start the deployment
+    torque_margins : the torque margin at each T with its terms
     torque_margin : smallest torque margin over travel and temperature [-]
     torque_margin_angle : where it occurs [rad]
     torque_margin_temperature : where it occurs [degC]
@@ -415,6 +516,8 @@ class CandidateResult:
     damping_rate: tuple[float, ...] = ()
     friction: tuple[float, ...] = ()
     stalled: tuple[bool, ...] = ()
+    cannot_start: tuple[bool, ...] = ()
+    torque_margins: tuple[TorqueMarginAt, ...] = ()
     torque_margin: float | None = None
     torque_margin_angle: float | None = None
     torque_margin_temperature: float | None = None
@@ -433,6 +536,8 @@ class CandidateResult:
             "gearbox_source": c.gearbox.source,
             "illustrative": c.illustrative,
             "mass_kg": c.mass,
+            "mass_known": c.mass is not None,
+            "mass_note": c.mass_note,
             "passed": self.passed,
             "margin": self.margin,
             "deployment_time_spread_s": _optional(self.spread),
@@ -444,19 +549,23 @@ class CandidateResult:
                     "temperature_C": t,
                     "deployment_time_s": _optional(time),
                     "end_speed_rad_s": speed,
-                    "input_torque_Nm": torque,
+                    "input_torque_Nm": None if held else torque,
+                    "cannot_start": held,
                     "damping_rate_Nms_per_rad": b,
                     "friction_Nm": f,
                     "stalled": stalled,
+                    "torque_margin": margin.to_dict(),
                 }
-                for t, time, speed, torque, b, f, stalled in zip(
+                for t, time, speed, torque, held, b, f, stalled, margin in zip(
                     self.temperatures,
                     self.deployment_time,
                     self.end_speed,
                     self.input_torque,
+                    self.cannot_start,
                     self.damping_rate,
                     self.friction,
                     self.stalled,
+                    self.torque_margins,
                     strict=True,
                 )
             ],
@@ -509,9 +618,7 @@ class SearchResult:
                     "factors_applied": r.margin.factors_applied,
                     "allowances_Nm": dict(r.margin.allowances),
                     "damping_speed_rad_s": r.margin.damping_speed,
-                    "damping_speed_mode": (
-                        "deployment" if r.margin.damping_speed is None else "fixed"
-                    ),
+                    "damping_speed_mode": r.margin.damping_mode,
                 },
             },
             "candidates": [c.to_dict() for c in self.candidates],
@@ -550,6 +657,7 @@ def _results(
     state = evaluation.prediction.ecd
     shape = evaluation.prediction.problem.batch_shape
     overall = evaluation.overall()
+    terms = evaluation.torque_margin_terms
     time = np.broadcast_to(solution.deployment_time, shape)
     stalled = np.broadcast_to(solution.stalled, shape)
     flags = _flags(evaluation)
@@ -561,6 +669,7 @@ def _results(
                 continue
             j = int(check.worst_index()[i])
             margin = float(check.margins[i, j])
+            held = check.cannot_start is not None and bool(check.cannot_start[i, j])
             outcomes.append(
                 CheckOutcome(
                     check.name,
@@ -570,6 +679,7 @@ def _results(
                     float(temps[j]),
                     float(check.values[i, j]),
                     check.unit,
+                    held,
                 )
             )
         spread = float(np.max(time[i]) - np.min(time[i])) if not np.any(stalled[i]) else np.inf
@@ -589,6 +699,18 @@ def _results(
             ),
             "friction": tuple(float(x) for x in np.broadcast_to(state.ecd_friction, shape)[i]),
             "stalled": tuple(bool(x) for x in stalled[i]),
+            "cannot_start": tuple(bool(x) for x in evaluation.cannot_start[i]),
+            "torque_margins": tuple(
+                TorqueMarginAt(
+                    temperature_C=float(t),
+                    margin=float(terms.margin[i, j]),
+                    angle=float(terms.angle[i, j]),
+                    drive=float(terms.drive[i, j]),
+                    resistive={kind: float(v[i, j]) for kind, v in terms.resistive.items()},
+                    factored=float(terms.factored[i, j]),
+                )
+                for j, t in enumerate(temps)
+            ),
             "torque_margin": _optional(float(tm[k])),
             "torque_margin_angle": float(evaluation.torque_margin_angle[i, k]),
             "torque_margin_temperature": float(temps[k]),
@@ -603,14 +725,16 @@ def _results(
     return out
 
 
-def rank_key(result: CandidateResult) -> tuple[bool, bool, float, float, float, str]:
-    """Sort key: valid and passing first, then by mass, margin (larger first), spread."""
+def rank_key(result: CandidateResult) -> tuple[bool, bool, bool, float, float, float, str]:
+    """Sort key: valid and passing first, then by mass (unknown after every known one),
+    margin (larger first), spread."""
     mass = result.candidate.mass
     margin = result.margin if result.margin is not None else -np.inf
     return (
         result.error is not None,
         not result.passed,
-        np.inf if mass is None else mass,
+        mass is None,
+        0.0 if mass is None else mass,
         -margin,
         result.spread,
         result.candidate.label,
@@ -683,6 +807,7 @@ __all__ = [
     "Limits",
     "SearchResult",
     "StackedTemperatureLaw",
+    "TorqueMarginAt",
     "catalogue_candidates",
     "deployment_time_curves",
     "evaluate",
