@@ -8,13 +8,16 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 from ecdsim import __version__
 from ecdsim.cli.app import app
 from tests import hand
-from tests.conftest import PAPER_CONFIG
+from tests.conftest import PAPER_CONFIG, SavedFigures
+from tests.helptext import assert_options, read_help, run_example
+from tests.test_characterize_synthetic import paper_trace
 
 runner = CliRunner()
 
@@ -116,13 +119,58 @@ def test_bad_arguments_exit_2(tmp_path: Path) -> None:
     assert "damping_temperature_coefficient" in domain.stderr
 
 
-def test_plots_are_written(tmp_path: Path) -> None:
+PAPER_TITLE = "CDA Cc-16 test deployment (paper section 6)"  # examples/paper_cc16.toml
+METHOD_LABELS = {"paper": "paper (Eq. 8-13)", "exact": "exact quasi-static"}
+
+
+def assert_deployment_plots(figures: SavedFigures) -> None:
+    """The two deploy plots of the paper example show the paper's numbers, by hand."""
+    (angle,) = figures.axes("angle_vs_time.png")
+    assert " ".join(angle.get_title().split()) == f"{PAPER_TITLE}: angle against time"
+    assert angle.get_xlabel() == "time since release [s]"
+    assert angle.get_ylabel() == "deployed angle [deg]"
+    temperatures = (-40.0, 25.0, 100.0)
+    assert figures.legend(angle) == [
+        f"{t:g} degC, {METHOD_LABELS[m]}" for m in ("paper", "exact") for t in temperatures
+    ]
+    lines = {str(line.get_label()): line for line in angle.get_lines()}
+    for t in temperatures:
+        times, degrees = (
+            np.asarray(v) for v in lines[f"{t:g} degC, exact quasi-static"].get_data()
+        )
+        # The axis runs to 1.1 times the slowest deployment (exact, -40 degC, by hand).
+        assert times[-1] == pytest.approx(1.1 * hand.exact_time(-40.0), rel=1e-12)
+        # The exact curve is the closed form phi(t) = (a/k)(1 - exp(-k t/B)), by hand;
+        # 1e-9 covers the evaluation of the same formula in another arrangement.
+        expected = np.degrees(paper_trace(t, times))
+        np.testing.assert_allclose(degrees, expected, rtol=1e-9, atol=1e-9)
+        assert degrees[-1] == pytest.approx(np.degrees(hand.TRAVEL), rel=1e-12)  # latched
+    (torque,) = figures.axes("torque_vs_speed.png")
+    assert " ".join(torque.get_title().split()) == f"{PAPER_TITLE}: ECD torque against speed"
+    assert torque.get_xlabel() == "input shaft speed [rad/s]"
+    assert torque.get_ylabel() == "ECD reaction torque [N*m]"
+    assert figures.legend(torque) == [
+        f"{t:g} degC: BECD {hand.becd(t):.3g} N*m*s/rad, FECD {hand.fecd(t):.3g} N*m"
+        for t in temperatures
+    ]
+    for line in torque.get_lines():
+        if str(line.get_label()).startswith("_"):  # the operating-range markers
+            continue
+        t = float(str(line.get_label()).split(" degC")[0])
+        speed, reaction = (np.asarray(v) for v in line.get_data())
+        # Eq. 5 inverted, T = FECD_T + BECD_T omega (Eq. 1-4 by hand): rounding only.
+        np.testing.assert_allclose(reaction, hand.fecd(t) + hand.becd(t) * speed, rtol=1e-12)
+
+
+def test_plots_are_written(tmp_path: Path, saved_figures: SavedFigures) -> None:
     result = runner.invoke(app, ["deploy", str(PAPER_CONFIG), "--plot", str(tmp_path / "p")])
     assert result.exit_code == 0, result.output
     for name in ("angle_vs_time.png", "torque_vs_speed.png"):
         data = (tmp_path / "p" / name).read_bytes()
         assert data.startswith(b"\x89PNG")
     assert not list((tmp_path / "p").glob(".*.tmp"))  # no temporary file left behind
+    assert sorted(saved_figures.figures) == ["angle_vs_time.png", "torque_vs_speed.png"]
+    assert_deployment_plots(saved_figures)
 
 
 def test_plot_to_unwritable_place_exits_2(tmp_path: Path) -> None:
@@ -133,21 +181,51 @@ def test_plot_to_unwritable_place_exits_2(tmp_path: Path) -> None:
     assert "cannot write plots" in result.stderr
 
 
-def test_demo_writes_plots(tmp_path: Path) -> None:
+def test_demo_writes_plots(tmp_path: Path, saved_figures: SavedFigures) -> None:
     result = runner.invoke(app, ["demo", "--out", str(tmp_path / "demo")])
     assert result.exit_code == 0, result.output
-    assert (tmp_path / "demo" / "angle_vs_time.png").exists()
+    assert (tmp_path / "demo" / "angle_vs_time.png").read_bytes().startswith(b"\x89PNG")
     assert f"{hand.exact_time(100.0):.4g}" in result.stdout
+    # The demo is the paper example: the same two figures, the same hand numbers.
+    assert_deployment_plots(saved_figures)
 
 
-def test_help_and_version() -> None:
-    top = runner.invoke(app, ["--help"])
-    assert top.exit_code == 0
-    assert "Example:" in top.stdout
-    for command in ("deploy", "demo"):
-        sub = runner.invoke(app, [command, "--help"])
-        assert sub.exit_code == 0
-        assert "Example:" in sub.stdout
+def test_help_and_version(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # The commands and options of the README and docs/config.md, each described, and each
+    # screen's example run exactly as printed.
+    top = read_help(runner, app, [])
+    assert set(top.commands) == {
+        "deploy",
+        "demo",
+        "size",
+        "compare-fluid",
+        "montecarlo",
+        "report",
+        "app",
+        "fit",
+    }
+    assert_options(top, {"--version": None, "--help": None})
+    run_example(runner, app, top, tmp_path / "top", monkeypatch)
+    assert (tmp_path / "top" / "plots" / "angle_vs_time.png").is_file()
+    deploy = read_help(runner, app, ["deploy"])
+    assert_options(
+        deploy,
+        {
+            "--json": None,
+            "--plot": None,
+            "--temperature": "-T",
+            "--method": "-m",
+            "--timeseries": None,
+            "--help": None,
+        },
+    )
+    assert "paper, exact, dynamic" in deploy.options["--method"]  # every registered solver
+    shown = json.loads(run_example(runner, app, deploy, tmp_path / "deploy", monkeypatch).stdout)
+    assert [c["temperature_C"] for c in shown["cases"]] == [-40.0, 25.0, 100.0]
+    demo = read_help(runner, app, ["demo"])
+    assert_options(demo, {"--out": None, "--help": None})
+    run_example(runner, app, demo, tmp_path / "demo", monkeypatch)
+    assert (tmp_path / "demo" / "ecdsim-demo" / "angle_vs_time.png").is_file()
     version = runner.invoke(app, ["--version"])
     assert version.stdout.strip() == f"ecdsim {__version__}"
 
