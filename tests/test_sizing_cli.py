@@ -6,13 +6,15 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 from ecdsim import __version__
 from ecdsim.cli.app import app
 from tests import hand
-from tests.conftest import PAPER_CONFIG, ROOT
+from tests.conftest import PAPER_CONFIG, ROOT, SavedFigures
+from tests.helptext import assert_options, read_help, run_example
 
 runner = CliRunner()
 SIZING = ROOT / "examples" / "sizing.toml"
@@ -48,7 +50,7 @@ def test_size_json_structure() -> None:
     assert intervals["catalogue_ratios"] == [{"ratio": 380.0, "feasible": True}]
 
 
-def test_size_tables_and_plots(tmp_path: Path) -> None:
+def test_size_tables_and_plots(tmp_path: Path, saved_figures: SavedFigures) -> None:
     out = tmp_path / "plots"
     result = runner.invoke(
         app, ["size", str(SIZING), "--catalog", str(CATALOGUE), "--plot", str(out)]
@@ -61,9 +63,31 @@ def test_size_tables_and_plots(tmp_path: Path) -> None:
     assert f"{hand.exact_time(-40.0):.4g}" in result.stdout  # Cc-16 at -40 degC: 48.13 s
     for name in ("sizing_time_vs_temperature.png", "ratio_margins.png"):
         assert (out / name).read_bytes().startswith(b"\x89PNG")
+    (times,) = saved_figures.axes("sizing_time_vs_temperature.png")
+    assert times.get_title() == "Deployment time over temperature, best-ranked candidates"
+    assert times.get_xlabel() == "temperature [degC]"
+    assert times.get_ylabel() == "exact deployment time [s]"
+    legend = saved_figures.legend(times)
+    assert "#3 CDA Cc-16 damper + CDA Cc-16 gearbox 380:1" in legend  # vendor data: no tag
+    demo = [entry for entry in legend if "Demo" in entry]
+    assert demo
+    assert all(entry.endswith("(illustrative, not vendor data)") for entry in demo)
+    (cc16,) = [line for line in times.get_lines() if "CDA Cc-16 gearbox" in str(line.get_label())]
+    temperature, seconds = (np.asarray(v, dtype=float) for v in cc16.get_data())
+    # The requirements' range, and the paper's example at every temperature by hand.
+    assert (temperature[0], temperature[-1]) == (-40.0, 100.0)
+    expected = [hand.exact_time(float(t)) for t in temperature]
+    np.testing.assert_allclose(seconds, expected, rtol=1e-12)  # the same closed form
+    (margins,) = saved_figures.axes("ratio_margins.png")
+    assert margins.get_xlabel() == "gear ratio N [-]"
+    assert margins.get_ylabel() == "margin (clipped to +-1.5) [-]"
+    assert margins.get_title().endswith(": margins against ratio")
+    assert {"min_deployment_time", "max_deployment_time", "no_stall"} <= set(
+        saved_figures.legend(margins)
+    )
 
 
-def test_compare_fluid_json_and_plot(tmp_path: Path) -> None:
+def test_compare_fluid_json_and_plot(tmp_path: Path, saved_figures: SavedFigures) -> None:
     out = tmp_path / "plots"
     result = runner.invoke(app, ["compare-fluid", str(FLUID), "--json", "--plot", str(out)])
     assert result.exit_code == 0, result.output
@@ -82,6 +106,21 @@ def test_compare_fluid_json_and_plot(tmp_path: Path) -> None:
     assert case["ecd"]["damped_time_s"] == pytest.approx(hand.exact_time(-40.0), rel=1e-12)
     assert (out / "ecd_vs_fluid.png").read_bytes().startswith(b"\x89PNG")
     assert "wrote" in result.stderr
+    top, bottom = saved_figures.axes("ecd_vs_fluid.png")
+    assert top.get_title() == "ECD against a fluid damper matched at 25 degC"
+    assert top.get_ylabel() == "deployment time [s]"
+    assert bottom.get_xlabel() == "temperature [degC]"
+    assert saved_figures.legend(top) == ["ECD", document["fluid_damper"]["name"]]
+    # Units in the legend: the two dampings have different units when n != 1.
+    assert saved_figures.legend(bottom) == ["ECD: BECD_T [N*m*s/rad]", "fluid: c(T) (n = 1)"]
+    ecd_time, ecd_damping = top.get_lines()[0], bottom.get_lines()[0]
+    temperature = np.asarray(ecd_time.get_xdata(), dtype=float)
+    assert (temperature[0], temperature[-1]) == (-40.0, 100.0)
+    # The ECD side is the paper's example: Eq. 1-3 and the exact time by hand.
+    exact = np.array([hand.exact_time(float(t)) for t in temperature])
+    np.testing.assert_allclose(np.asarray(ecd_time.get_ydata(), dtype=float), exact, rtol=1e-12)
+    becd = np.array([hand.becd(float(t)) for t in temperature])
+    np.testing.assert_allclose(np.asarray(ecd_damping.get_ydata(), dtype=float), becd, rtol=1e-12)
 
 
 def test_compare_fluid_table() -> None:
@@ -139,8 +178,28 @@ def test_plot_to_unwritable_place_exits_2(tmp_path: Path) -> None:
     assert "cannot write plots" in message
 
 
-@pytest.mark.parametrize("command", ["size", "compare-fluid"])
-def test_help_has_an_example(command: str) -> None:
-    result = runner.invoke(app, [command, "--help"])
-    assert result.exit_code == 0
-    assert "Example:" in result.stdout
+@pytest.mark.parametrize(
+    ("command", "options"),
+    [
+        (
+            "size",
+            {
+                "--catalog": None,
+                "--json": None,
+                "--plot": None,
+                "--damper": None,
+                "--gearbox": None,
+                "--help": None,
+            },
+        ),
+        ("compare-fluid", {"--json": None, "--plot": None, "--help": None}),
+    ],
+)
+def test_help_has_an_example(
+    command: str, options: dict[str, str | None], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The documented options (docs/sizing.md), each described; the example runs as printed.
+    screen = read_help(runner, app, [command])
+    assert_options(screen, options)
+    assert screen.example[0] == command
+    run_example(runner, app, screen, tmp_path, monkeypatch)
