@@ -203,3 +203,42 @@ def test_help_has_an_example(
     assert_options(screen, options)
     assert screen.example[0] == command
     run_example(runner, app, screen, tmp_path, monkeypatch)
+
+
+def test_size_shows_torque_margin_per_temperature_and_unknown_masses() -> None:
+    # The shipped example (damping at 0.005 rad/s, no factors): the Cc-16's torque margin
+    # at each temperature, by hand at the end of travel, TM = Te / (FECD + FS + BECD w) - 1:
+    # 0.06348 at -40 degC, 0.407 at 25, 1.243 at 100 (docs/sizing.md section 5).
+    result = runner.invoke(app, ["size", str(SIZING), "--catalog", str(CATALOGUE), *CC16])
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("Torque margin TM"))
+    rows = [line for line in lines[start:] if line.startswith("│")][:3]
+    for row, t in zip(rows, (-40.0, 25.0, 100.0), strict=True):
+        cells = [c.strip() for c in row.strip("│").split("│")]
+        speed = 0.005
+        expected = hand.TE / (hand.fecd(t) + hand.fs(t) + hand.becd(t) * speed) - 1.0
+        assert float(cells[0]) == t
+        assert cells[1] == "90"  # the end of travel, 1.57 rad
+        assert float(cells[3]) == pytest.approx(hand.fecd(t), rel=5e-4)  # 4 digits printed
+        assert float(cells[4]) == pytest.approx(hand.fs(t), rel=5e-4)
+        assert float(cells[-1]) == pytest.approx(expected, rel=5e-4)
+    assert "│ unknown " in result.stdout  # a Cc-16 part with a Demo part: no mass known
+    document = json.loads(
+        runner.invoke(
+            app, ["size", str(SIZING), "--catalog", str(CATALOGUE), "--json", *CC16]
+        ).stdout
+    )
+    (cc16,) = [c for c in document["candidates"] if c["damper"] == "CDA Cc-16 damper" and
+               c["gearbox"] == "CDA Cc-16 gearbox"]  # fmt: skip
+    case = cc16["cases"][0]
+    assert case["cannot_start"] is False
+    assert case["torque_margin"]["resistive_Nm"]["ecd_friction"] == pytest.approx(
+        hand.fecd(-40.0), rel=1e-12
+    )
+    assert case["torque_margin"]["margin"] == pytest.approx(
+        hand.TE / (hand.fecd(-40.0) + hand.fs(-40.0) + hand.becd(-40.0) * 0.005) - 1.0, rel=1e-12
+    )
+    masses = [c["mass_kg"] for c in document["candidates"] if c["passed"]]
+    assert masses[-1] is None  # the unknown mass ranks after the known ones
+    assert all(m is not None for m in masses[:-1])

@@ -130,6 +130,7 @@ class Requirements:
         ecd = given.friction if given.ecd_friction is None else given.ecd_friction
         system = given.friction if given.system_friction is None else given.system_friction
         factors = {
+            "friction": given.friction,  # kept for the JSON's keys; the two below override it
             "ecd_friction": ecd,
             "system_friction": system,
             "damping": given.damping,
