@@ -40,12 +40,12 @@ from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
 from ecdsim.config import load_config, parse_config  # noqa: E402
+from ecdsim.methods import SOLVERS  # noqa: E402
 from ecdsim.montecarlo import DaskExecutor, InProcess, Plan, build_plan  # noqa: E402
 from ecdsim.montecarlo import run as run_study  # noqa: E402
 from ecdsim.montecarlo.run import Executor, output_column  # noqa: E402
 from ecdsim.montecarlo.stats import summarize  # noqa: E402
 from ecdsim.montecarlo.store import ChunkReader  # noqa: E402
-from ecdsim.solvers import SOLVERS  # noqa: E402
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "paper_cc16_tolerances.toml"
 EXACT_SAMPLES = 10_000_000

@@ -182,11 +182,11 @@ def test_one_temperature_failing_is_reported_and_the_rest_fitted(tmp_path: Path)
         ),
         (
             ["fit", "drop-test", str(EXAMPLE), "--reference-temperature", "-300"],
-            "--reference-temperature -300",
+            "--reference-temperature: '-300 degC' is below absolute zero",
         ),
         (
             ["fit", "trace", str(TRACE), "--config", str(PAPER_CONFIG), "-T", "-400"],
-            "--temperature -400",
+            "--temperature: '-400 degC' is below absolute zero",
         ),
     ],
 )

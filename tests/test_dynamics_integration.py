@@ -22,8 +22,8 @@ from ecdsim.dynamics import (
     dynamic_problem,
     solve_dynamic,
 )
-from ecdsim.dynamics.method import DynamicSolution
-from ecdsim.solvers import DYNAMIC, SOLVERS
+from ecdsim.dynamics.method import DYNAMIC, DynamicSolution
+from ecdsim.methods import SOLVERS
 from tests import hand
 from tests.conftest import PAPER_CONFIG, ROOT, paper_system
 from tests.dynamics_reference import assert_energy_closes, linear_deploy

@@ -28,6 +28,7 @@ from typer.testing import CliRunner
 from ecdsim.cli.app import app
 from ecdsim.config import load_config
 from ecdsim.deployment import predict
+from ecdsim.methods import SOLVERS
 from ecdsim.montecarlo import (
     DaskExecutor,
     InProcess,
@@ -39,7 +40,6 @@ from ecdsim.montecarlo import (
 from ecdsim.montecarlo import apply as apply_values
 from ecdsim.montecarlo.run import LARGE_RUN_SAMPLES, chunk_values, output_column
 from ecdsim.montecarlo.store import MANIFEST, SUMMARY, ChunkReader, chunk_path, read_manifest
-from ecdsim.solvers import SOLVERS
 from tests import hand
 from tests.test_montecarlo_config import PAPER_TEXT, write_config
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats as scipy_stats
 
-from ecdsim.montecarlo import repeatability, stats
+from ecdsim.montecarlo import intervals, repeatability, stats
 
 
 def binomial_cdf(k: int, n: int, p: float) -> float:
@@ -32,7 +32,7 @@ def test_percentiles_are_order_statistics_and_inf_stays_inf() -> None:
 
 @pytest.mark.parametrize(("n", "p"), [(100, 0.5), (1000, 0.01), (250, 0.95), (20, 0.05)])
 def test_percentile_interval_ranks_cover_95_percent(n: int, p: float) -> None:
-    low, high = stats.confidence_ranks(n, p)
+    low, high = intervals.confidence_ranks(n, p)
     # 1-based ranks r = low + 1, s = high + 1; coverage P(r <= B <= s - 1), by hand.
     r = 1 if low is None else low + 1
     s = n + 1 if high is None else high + 1
@@ -58,14 +58,14 @@ def test_small_samples_cannot_bound_extreme_percentiles() -> None:
 
 def test_clopper_pearson_against_closed_forms() -> None:
     # k = 0: upper = 1 - 0.025^(1/n); k = n: lower = 0.025^(1/n) (beta quantiles, by hand).
-    low, high = stats.proportion_interval(0, 100)
+    low, high = intervals.proportion_interval(0, 100)
     assert low == 0.0
     assert high == pytest.approx(1.0 - 0.025 ** (1 / 100), rel=1e-10)
-    low, high = stats.proportion_interval(50, 50)
+    low, high = intervals.proportion_interval(50, 50)
     assert low == pytest.approx(0.025 ** (1 / 50), rel=1e-10)
     assert high == 1.0
     # Interior: the bounds are where the binomial tails equal 2.5 % (definition).
-    low, high = stats.proportion_interval(7, 40)
+    low, high = intervals.proportion_interval(7, 40)
     assert binomial_cdf(6, 40, low) == pytest.approx(0.975, abs=1e-9)
     assert binomial_cdf(7, 40, high) == pytest.approx(0.025, abs=1e-9)
 
@@ -88,7 +88,7 @@ def test_stall_counts_and_interval() -> None:
     found = stats.stall(np.array([True, False, False, False]))
     assert found["count"] == 1
     assert found["probability"] == 0.25
-    assert found["interval95"] == list(stats.proportion_interval(1, 4))
+    assert found["interval95"] == list(intervals.proportion_interval(1, 4))
 
 
 def test_src_against_a_least_squares_reference(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -9,14 +9,16 @@ check the page writer and the exit code of ``python -m validation``.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from ecdsim.config import load_config
 from validation.__main__ import main
-from validation.cases import CASES, DASSL_RANGE_FRACTION, REFERENCES
+from validation.cases import CASES, CONFIGS, DASSL_RANGE_FRACTION, REFERENCES
 from validation.checks import CaseResult, Check
 from validation.report import render
 from validation.scipy_reference import SpinDown, damped_mass
@@ -132,3 +134,41 @@ def test_main_exits_one_on_a_failing_check(
     captured = capsys.readouterr()
     assert "FAIL broken: q" in captured.err
     assert "1 failed" in captured.out
+
+
+def test_brake_config_is_the_modelica_model_mapped() -> None:
+    # The runnable config (validation/configs/) against the parameters read from the
+    # Modelica source, through the mapping stated in the reference file.
+    data = tomllib.loads(
+        (REFERENCES / "msl_rotational_eddy_current_brake.toml").read_text(encoding="utf-8")
+    )
+    m = data["model"]
+    config = load_config(CONFIGS / "msl_eddy_current_brake.toml")
+    damper = config.system.ecd.damper
+    dynamics = config.spec.dynamics()
+    assert dynamics is not None
+    assert dynamics.rolloff is not None
+    assert dynamics.thermal is not None
+    # Kloss peak torque = BD * peak_speed / 2 (docs/dynamics.md) must be tau_nominal.
+    assert damper.damping_rate * dynamics.rolloff.peak_speed / 2.0 == m["tau_nominal"]
+    assert dynamics.rolloff.peak_speed == m["w_nominal"]
+    assert dynamics.rolloff.resistivity_coefficient == pytest.approx(m["alpha20"], rel=1e-15)
+    assert damper.reference_temperature == pytest.approx(m["reference_temperature"])
+    assert dynamics.thermal.heat_capacity == m["heat_capacity"]
+    assert math.isinf(float(dynamics.thermal.thermal_resistance))
+    assert dynamics.load_inertia == m["inertia"]
+    assert dynamics.rotor_inertia == 0.0
+    assert dynamics.gearbox_inertia == 0.0
+    assert dynamics.initial_speed == m["initial_speed"]
+    assert dynamics.stop_time == m["stop_time"]
+    assert len(config.temperatures) == 1
+    assert config.temperatures[0] == pytest.approx(m["initial_temperature"])
+    assert float(config.system.ecd.gearbox.ratio) == 1.0
+    ecd = config.system.ecd.at(m["initial_temperature"])
+    assert float(ecd.ecd_friction) == 0.0
+    assert float(ecd.gearbox_damping_rate) == 0.0
+    angles, torques = config.system.load.spring.breakpoints(config.system.load.travel, 20.0)
+    assert np.all(torques == 0.0)
+    assert float(np.max(angles)) > 10 * m["initial_speed"] * m["inertia"] / (
+        2 * m["tau_nominal"] / m["w_nominal"]
+    )  # travel far beyond the linear-damping coast-down distance J w0 / B

@@ -172,7 +172,8 @@ def test_undamped_case_through_the_cli(tmp_path: Path) -> None:
 def test_quasi_static_solvers_flag_zero_damping_in_a_batch() -> None:
     # A batch mixing damped and undamped cases: only the undamped ones are unsolved and
     # the damped one keeps its hand-computed exact time.
-    from ecdsim.solvers import SOLVERS, QuasiStaticProblem
+    from ecdsim.methods import SOLVERS
+    from ecdsim.solvers import QuasiStaticProblem
 
     problem = QuasiStaticProblem(
         angles=np.array([0.0, hand.TRAVEL]),

@@ -24,7 +24,7 @@ import numpy as np
 
 from ecdsim.config import load_config
 from ecdsim.deployment import Prediction, predict
-from ecdsim.dynamics import DynamicParameters, Rolloff, Thermal
+from ecdsim.dynamics import DynamicParameters, Thermal
 from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.dynamics.result import DynamicResult
 from ecdsim.model import (
@@ -41,6 +41,7 @@ from validation.scipy_reference import PaperSystem, SpinDown, damped_mass
 HERE = Path(__file__).resolve().parent
 REFERENCES = HERE / "references"
 EXAMPLES = HERE.parent / "examples"
+CONFIGS = HERE / "configs"
 
 # The Modelica reference results were computed by Dymola's DASSL at relative tolerance 1e-6
 # (each folder's creation.txt). A local-error tolerance of 1e-6 lets the global error grow to
@@ -120,22 +121,15 @@ def msl_eddy_current_brake() -> CaseResult:
     """MSL Rotational EddyCurrentBrake: a free spin-down with roll-off and self-heating."""
     data = _read("msl_rotational_eddy_current_brake.toml")
     m = data["model"]
-    system = _input_shaft_system(
-        damping=2.0 * m["tau_nominal"] / m["w_nominal"],
-        friction=0.0,
-        start_torque=0.0,
-        end_torque=0.0,
-        travel=100.0,
-        reference_temperature=m["reference_temperature"],
+    # The ecdsim side is a configuration file a user can run (validation/configs/); the
+    # tests check that its values are the Modelica model's, mapped as the reference says.
+    config = load_config(CONFIGS / "msl_eddy_current_brake.toml")
+    prediction = predict(
+        config.system,
+        list(config.temperatures),
+        list(config.methods),
+        dynamics=config.spec.dynamics(),
     )
-    dynamics = DynamicParameters(
-        load_inertia=m["inertia"],
-        initial_speed=m["initial_speed"],
-        rolloff=Rolloff(peak_speed=m["w_nominal"], resistivity_coefficient=m["alpha20"]),
-        thermal=Thermal(heat_capacity=m["heat_capacity"]),
-        stop_time=m["stop_time"],
-    )
-    prediction = predict(system, m["initial_temperature"], ["dynamic"], dynamics=dynamics)
     points = data["points"]
     times = np.array([p["time"] for p in points])
     series = _dynamic_result(prediction).sample(times)

@@ -16,12 +16,12 @@ import numpy as np
 
 from ecdsim._types import ArrayLike, BoolArray, FloatArray
 from ecdsim._version import __version__
-from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.dynamics.params import DynamicParameters
 from ecdsim.dynamics.problem import DynamicDomainError, dynamic_problem
+from ecdsim.methods import SOLVERS
 from ecdsim.model import DeploymentSystem, EcdState
 from ecdsim.physics.assembly import damper_torque
-from ecdsim.solvers import SOLVERS, DeploymentSolution, QuasiStaticProblem, Trajectory
+from ecdsim.solvers import DeploymentSolution, QuasiStaticProblem, Trajectory
 
 DEFAULT_METHODS = ("paper", "exact")
 
@@ -92,9 +92,8 @@ class Prediction:
     def trajectory(self, method: str, times: ArrayLike) -> Trajectory:
         """Angle and speed against time [s] by one method."""
         solution = self.solutions.get(method)
-        if isinstance(solution, DynamicSolution):  # reuse the solved segments
-            return solution.trajectory(times)
-        return SOLVERS[method].trajectory(self.problem, times)
+        kept = solution.trajectory(times) if solution is not None else None
+        return kept if kept is not None else SOLVERS[method].trajectory(self.problem, times)
 
     def time_difference(self, method: str = "paper", reference: str = "exact") -> FloatArray:
         """Deployment time by ``method`` minus that by ``reference`` [s]; NaN-free.
@@ -172,8 +171,7 @@ class Prediction:
                 "stalled": stalled,
                 "stall_angle_rad": at(solution.stall_angle) if stalled else None,
             }
-            if isinstance(solution, DynamicSolution):
-                case[name].update(solution.case_fields(i))
+            case[name].update(solution.case_fields(i))
         if "paper" in self.solutions and "exact" in self.solutions:
             paper_t = case["paper"]["deployment_time_s"]
             exact_t = case["exact"]["deployment_time_s"]
@@ -212,9 +210,10 @@ def predict(
 ) -> Prediction:
     """Predict the deployment at each temperature [degC] by each named method.
 
-    ``dynamics`` (inertia, stiction, end stop, ...) is needed by the ``dynamic`` method;
-    when given, every method solves the same :class:`~ecdsim.dynamics.DynamicProblem`
-    (the quasi-static methods use its quasi-static part). Raises
+    ``dynamics`` (inertia, stiction, end stop, ...) is needed by every method whose solver
+    ``needs_dynamics`` (the ``dynamic`` method); when given, every method solves the same
+    :class:`~ecdsim.dynamics.DynamicProblem` (the quasi-static methods use its
+    quasi-static part). Raises
     :class:`ModelDomainError` where the damping law gives a non-positive damping rate
     (the model has no meaning there) or a dynamic parameter is out of its domain, and
     ``KeyError`` for an unknown method.
@@ -231,11 +230,11 @@ def predict(
             problem = dynamic_problem(system, ecd, temps, problem, fs, dynamics)
         except DynamicDomainError as exc:
             raise ModelDomainError(exc.key, exc.message) from None
-    elif "dynamic" in methods:
+    elif needing := [m for m in methods if SOLVERS[m].needs_dynamics]:
         raise ModelDomainError(
             "load.inertia",
-            "missing; the dynamic method needs the load's moment of inertia about the ECD "
-            "input shaft, e.g. inertia = '5 kg*m^2' in [load]",
+            f"missing; the {needing[0]} method needs the load's moment of inertia about the "
+            "ECD input shaft, e.g. inertia = '5 kg*m^2' in [load]",
         )
     solutions = {name: SOLVERS[name].solve(problem) for name in methods}
     prediction = Prediction(
@@ -312,11 +311,11 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
         found.extend(_unsolved_warnings(prediction, name, solution))
         found.extend(_stall_warnings(prediction, name, solution))
         found.extend(_linear_range_warnings(prediction, name, solution))
-        if isinstance(solution, DynamicSolution):
+        own = solution.findings()
+        if own:
             flat_temps = np.ravel(np.broadcast_to(temps, solution.deployment_time.shape))
             found.extend(
-                ModelWarning(code, message, float(flat_temps[i]), name)
-                for code, message, i in solution.findings()
+                ModelWarning(code, message, float(flat_temps[i]), name) for code, message, i in own
             )
     return found
 

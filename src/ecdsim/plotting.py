@@ -13,7 +13,7 @@ import numpy as np
 
 from ecdsim.atomic import write_with
 from ecdsim.deployment import Prediction
-from ecdsim.solvers import SOLVERS
+from ecdsim.methods import SOLVERS
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

@@ -1,18 +1,22 @@
 """``ecdsim``: the command-line entry point.
 
-Commands import the library lazily so that ``ecdsim --help`` starts fast. User errors
-(bad config, bad arguments, a model asked outside its domain) print one line per
-problem on stderr and exit with code 2, with no traceback.
+It defines ``deploy`` and ``demo`` and registers the other commands from their modules
+(``fit``, ``size``, ``montecarlo``, ``report``); what they all share (``fail``, loading a
+config with its overrides, predicting) is in :mod:`ecdsim.cli.common`. Commands import
+the library lazily so that ``ecdsim --help`` starts fast. User errors (bad config, bad
+arguments, a model asked outside its domain) print one line per problem on stderr and
+exit with code 2, with no traceback.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, NoReturn
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from ecdsim._version import __version__
+from ecdsim.cli.common import USER_ERROR, echo_warnings, fail, load_run, predict_run
 from ecdsim.cli.fit import fit_app
 from ecdsim.cli.montecarlo import EPILOG as MONTECARLO_EPILOG
 from ecdsim.cli.montecarlo import montecarlo
@@ -20,10 +24,9 @@ from ecdsim.cli.report import APP_EPILOG, REPORT_EPILOG, explore, report
 from ecdsim.cli.size import FLUID_EPILOG, SIZE_EPILOG, compare_fluid, size
 
 if TYPE_CHECKING:
-    from ecdsim.config import Config
     from ecdsim.deployment import Prediction
 
-USER_ERROR = 2
+__all__ = ["USER_ERROR", "app", "main"]
 
 app = typer.Typer(
     name="ecdsim",
@@ -56,76 +59,19 @@ def _root(
     """Model, size and verify eddy current dampers in spring-driven deployments."""
 
 
-def fail(problems: list[str]) -> NoReturn:
-    """Print user errors on stderr, one line each, and exit with code 2."""
-    for problem in problems:
-        typer.echo(f"error: {problem}", err=True)
-    raise typer.Exit(USER_ERROR)
-
-
-def _load(config_path: Path, temperatures: list[str] | None, methods: list[str] | None) -> Config:
-    from dataclasses import replace
-
-    from ecdsim.config import ConfigError, load_config
-    from ecdsim.config.units import TEMPERATURE, QuantityError
-    from ecdsim.solvers import SOLVERS
-
-    try:
-        config = load_config(config_path)
-    except ConfigError as exc:
-        fail(str(exc).splitlines())
-    problems: list[str] = []
-    temps = config.temperatures
-    if temperatures:
-        parsed = []
-        for text in temperatures:
-            # A bare number on the command line means degC, the field's convention.
-            value = text if any(c.isalpha() for c in text) else f"{text} degC"
-            try:
-                parsed.append(TEMPERATURE.parse(value))
-            except QuantityError as exc:
-                problems.append(f"--temperature: {exc}")
-        temps = tuple(parsed)
-    chosen = config.methods
-    if methods:
-        unknown = [m for m in methods if m not in SOLVERS]
-        problems += [
-            f"--method: {m!r} is not a method; expected one of {sorted(SOLVERS)}" for m in unknown
-        ]
-        chosen = tuple(methods)
-    if problems:
-        fail(problems)
-    return replace(config, temperatures=temps, methods=chosen)
-
-
-def _predict(config: Config) -> Prediction:
-    from ecdsim.deployment import ModelDomainError, predict
-
-    try:
-        return predict(
-            config.system, config.temperatures, config.methods, dynamics=config.spec.dynamics()
-        )
-    except ModelDomainError as exc:
-        fail([f"{config.source}: {exc}"])
-
-
 def _write_timeseries(prediction: Prediction, path: Path, as_json: bool) -> None:
-    from ecdsim.dynamics.method import DynamicSolution
+    from ecdsim.atomic import write_text
 
-    solution = prediction.solutions.get("dynamic")
-    if not isinstance(solution, DynamicSolution):
+    # The first method, in the order asked, whose solution records a time series.
+    recorded = (s.time_series_csv() for s in prediction.solutions.values())
+    text = next((csv for csv in recorded if csv is not None), None)
+    if text is None:
         fail(["--timeseries needs the dynamic method (--method dynamic, or in [analysis])"])
     try:
-        solution.result.to_csv(path)
+        write_text(path, text)
     except OSError as exc:
         fail([f"--timeseries {path}: cannot write ({exc.strerror or exc})"])
     typer.echo(f"wrote {path}", err=as_json)
-
-
-def _warn(prediction: Prediction) -> None:
-    for warning in prediction.warnings:
-        where = f"[{warning.method}] " if warning.method else ""
-        typer.echo(f"warning: {where}{warning.message}", err=True)
 
 
 def _render(prediction: Prediction, as_json: bool, plot_dir: Path | None) -> None:
@@ -144,7 +90,7 @@ def _render(prediction: Prediction, as_json: bool, plot_dir: Path | None) -> Non
         typer.echo(render.to_json(prediction))
     else:
         render.print_tables(prediction)
-    _warn(prediction)
+    echo_warnings(prediction)
     for path in written:
         typer.echo(f"wrote {path}", err=as_json)
 
@@ -194,8 +140,8 @@ def deploy(
     timeseries: TimeseriesOpt = None,
 ) -> None:
     """Predict deployment time, speeds and stall at each temperature (paper Eq. 1-13)."""
-    loaded = _load(config, temperature, method)
-    prediction = _predict(loaded)
+    loaded = load_run(config, temperature, method)
+    prediction = predict_run(loaded)
     if timeseries is not None:
         _write_timeseries(prediction, timeseries, as_json)
     _render(prediction, as_json, plot)
@@ -212,9 +158,9 @@ def demo(
 
     resource = files("ecdsim") / "data" / "paper_cc16.toml"
     with as_file(resource) as path:
-        loaded = _load(path, None, None)
+        loaded = load_run(path, None, None)
     typer.echo(f"{loaded.system.name}\n(config: examples/paper_cc16.toml)")
-    _render(_predict(loaded), False, out)
+    _render(predict_run(loaded), False, out)
 
 
 # Registered after deploy and demo so that --help lists the commands in the order users

@@ -13,9 +13,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any, NoReturn
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+
+from ecdsim.cli.common import fail, temperature_option
 
 if TYPE_CHECKING:
     from ecdsim.characterize.droptest import DropTestResult, FailedTemperature
@@ -52,10 +54,10 @@ OutputOpt = Annotated[
     ),
 ]
 ReferenceOpt = Annotated[
-    float,
+    str,
     typer.Option(
         "--reference-temperature",
-        help="Reference temperature T_ref of the damping laws, degC.",
+        help="Reference temperature T_ref of the damping laws (bare numbers are degC).",
         metavar="DEGC",
     ),
 ]
@@ -65,12 +67,6 @@ StrictOpt = Annotated[
         "--strict", help="Exit with code 2 if any row is excluded or any temperature fails."
     ),
 ]
-
-
-def _fail(problems: list[str]) -> NoReturn:
-    from ecdsim.cli.app import fail
-
-    fail(problems)
 
 
 def _fmt(value: float | None, digits: int = 4) -> str:
@@ -85,23 +81,13 @@ def _ci(estimate: Estimate, digits: int = 4) -> str:
     return f"[{estimate.ci95[0]:.{digits}g}, {estimate.ci95[1]:.{digits}g}]"
 
 
-def _check_reference(reference_temperature: float) -> None:
-    if not reference_temperature > -273.15 or not math.isfinite(reference_temperature):
-        _fail(
-            [
-                f"--reference-temperature {reference_temperature:g}: expected a temperature in "
-                "degC above absolute zero"
-            ]
-        )
-
-
 def _load_config(path: Path) -> Config:
     from ecdsim.config import ConfigError, load_config
 
     try:
         return load_config(path)
     except ConfigError as exc:
-        _fail([f"--config: {line}" for line in str(exc).splitlines()])
+        fail([f"--config: {line}" for line in str(exc).splitlines()])
 
 
 def _report(
@@ -125,9 +111,9 @@ def _check_fitted(
     """Fail where no ``what`` could be fitted, or with ``--strict`` where any data had problems."""
     problems = [*bad_rows, *(f"not fitted: {f.message()}" for f in failed)]
     if not fitted:
-        _fail([*problems, f"no {what} could be fitted"])
+        fail([*problems, f"no {what} could be fitted"])
     if strict and problems:
-        _fail([*problems, "--strict: the data have problems (listed above)"])
+        fail([*problems, "--strict: the data have problems (listed above)"])
 
 
 def _fitted_ecd(
@@ -143,7 +129,7 @@ def _fitted_ecd(
     try:
         return fitted_ecd(temperatures, damping, friction, laws)
     except ExportError as exc:
-        _fail([f"-o {output}: {exc}"])
+        fail([f"-o {output}: {exc}"])
 
 
 def _write_outputs(
@@ -157,15 +143,15 @@ def _write_outputs(
         try:
             written_file = str(write_parameter_file(output, text))
         except ExportError as exc:
-            _fail([f"-o {output}: {exc}"])
+            fail([f"-o {output}: {exc}"])
         except OSError as exc:
-            _fail([f"-o {output}: cannot write ({exc.strerror or exc})"])
+            fail([f"-o {output}: cannot write ({exc.strerror or exc})"])
     plots: list[str] = []
     if plot is not None:
         try:
             plots = [str(p) for p in plotter(plot)]
         except OSError as exc:
-            _fail([f"--plot {plot}: cannot write plots ({exc.strerror or exc})"])
+            fail([f"--plot {plot}: cannot write plots ({exc.strerror or exc})"])
     return written_file, plots
 
 
@@ -221,7 +207,7 @@ def drop_test(
             metavar="FILE",
         ),
     ] = None,
-    reference_temperature: ReferenceOpt = 25.0,
+    reference_temperature: ReferenceOpt = "25",
     strict: StrictOpt = False,
 ) -> None:
     """Fit BECD and FECD per temperature from drop tests, then laws over temperature."""
@@ -229,12 +215,12 @@ def drop_test(
     from ecdsim.characterize.export import fitted_parameter_text, largest_torque, provenance
     from ecdsim.config import ConfigError
 
-    _check_reference(reference_temperature)
+    reference = temperature_option("--reference-temperature", reference_temperature)
     loaded = _load_config(config) if config is not None else None
     try:
-        result = fit_drop_test(data, reference_temperature)
+        result = fit_drop_test(data, reference)
     except ConfigError as exc:
-        _fail(str(exc).splitlines())
+        fail(str(exc).splitlines())
     bad_rows = [b.message() for b in result.table.bad_rows]
     _check_fitted(bool(result.fits), "temperature", bad_rows, result.failed, strict)
     warnings = list(result.warnings)
@@ -404,15 +390,15 @@ def trace(
         ),
     ] = False,
     temperature: Annotated[
-        float | None,
+        str | None,
         typer.Option(
             "--temperature",
             "-T",
-            help="Temperature of a file without a temperature column, degC.",
+            help="Temperature of a file without a temperature column (bare numbers are degC).",
             metavar="DEGC",
         ),
     ] = None,
-    reference_temperature: ReferenceOpt = 25.0,
+    reference_temperature: ReferenceOpt = "25",
     strict: StrictOpt = False,
 ) -> None:
     """Fit recorded deployments (angle against time) against the exact solution."""
@@ -424,20 +410,19 @@ def trace(
     from ecdsim.characterize.tracefit import fit_traces
     from ecdsim.config import ConfigError
 
-    _check_reference(reference_temperature)
-    if temperature is not None and not (math.isfinite(temperature) and temperature > -273.15):
-        _fail([f"--temperature {temperature:g}: expected degC above absolute zero"])
+    reference = temperature_option("--reference-temperature", reference_temperature)
+    at = None if temperature is None else temperature_option("--temperature", temperature)
     loaded = _load_config(config)
     try:
         result = fit_traces(
             data,
             loaded,
             "spring" if fit_spring else "damper",
-            temperature,
-            reference_temperature,
+            at,
+            reference,
         )
     except ConfigError as exc:
-        _fail(str(exc).splitlines())
+        fail(str(exc).splitlines())
     bad_rows = [b.message() for b in result.table.bad_rows]
     fitted = bool(result.fits) or result.spring is not None
     _check_fitted(fitted, "trace", bad_rows, result.failed, strict)

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from ecdsim.cli.common import fail, load_run
 from ecdsim.formatting import format_number
 
 if TYPE_CHECKING:
@@ -93,7 +94,6 @@ def montecarlo(
     ] = True,
 ) -> None:
     """Monte Carlo tolerance study: percentiles, stall probability, sensitivities."""
-    from ecdsim.cli.app import _load, fail
     from ecdsim.config import ConfigError
     from ecdsim.deployment import ModelDomainError
     from ecdsim.montecarlo import (
@@ -105,7 +105,7 @@ def montecarlo(
         run,
     )
 
-    loaded = _load(config, temperature, None)
+    loaded = load_run(config, temperature, None)
     folder = out if out is not None else Path(f"{config.stem}-montecarlo")
     try:
         plan = build_plan(

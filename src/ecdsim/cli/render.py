@@ -8,7 +8,7 @@ from typing import Any
 
 from ecdsim.deployment import Prediction
 from ecdsim.formatting import format_number
-from ecdsim.solvers import SOLVERS
+from ecdsim.methods import SOLVERS
 
 
 def to_json(prediction: Prediction) -> str:

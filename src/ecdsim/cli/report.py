@@ -1,7 +1,7 @@
 """``ecdsim report`` (one self-contained HTML file, optional PDF) and ``ecdsim app`` (explorer).
 
-Both reuse the ``deploy`` command's loading and prediction (``_load``, ``_predict`` in
-:mod:`ecdsim.cli.app`), imported lazily inside the commands, so the numbers are those of
+Both reuse the ``deploy`` command's loading and prediction (``load_run``,
+``predict_run`` in :mod:`ecdsim.cli.common`), so the numbers are those of
 ``ecdsim deploy --json``. FastAPI and uvicorn (the ``app`` extra) are imported only by
 ``ecdsim app``. User errors print ``error: ...`` lines and exit with code 2.
 """
@@ -12,6 +12,8 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+
+from ecdsim.cli.common import echo_warnings, fail, load_run, predict_run
 
 REPORT_EPILOG = "Example: [bold]ecdsim report examples/paper_cc16.toml -o report.html --pdf[/bold]"
 APP_EPILOG = (
@@ -43,18 +45,17 @@ def report(
     ] = None,
 ) -> None:
     """Write a self-contained HTML report: inputs, components, deployment, plots, warnings."""
-    from ecdsim.cli.app import _load, _predict, _warn, fail
     from ecdsim.report import write_report
     from ecdsim.report.pdf import PdfUnavailable, html_to_pdf
 
-    loaded = _load(config, temperature, method)
-    prediction = _predict(loaded)
+    loaded = load_run(config, temperature, method)
+    prediction = predict_run(loaded)
     text = config.read_text(encoding="utf-8")
     try:
         written = write_report(loaded, prediction, text, output)
     except OSError as exc:
         fail([f"--output {output}: cannot write ({exc.strerror or exc})"])
-    _warn(prediction)
+    echo_warnings(prediction)
     typer.echo(f"wrote {written}")
     if pdf:
         target = output.with_suffix(".pdf")
@@ -78,8 +79,6 @@ def explore(
     port: Annotated[int, typer.Option("--port", help="TCP port.")] = 8765,
 ) -> None:
     """Start the local explorer (web app + JSON API with OpenAPI docs at /docs)."""
-    from ecdsim.cli.app import _load, fail
-
     try:
         import uvicorn
 
@@ -93,7 +92,7 @@ def explore(
         )
     text = None
     if config is not None:
-        _load(config, None, None)  # validate first: errors exit 2 like every command
+        load_run(config, None, None)  # validate first: errors exit 2 like every command
         text = config.read_text(encoding="utf-8")
     application = create_app(text)
     typer.echo(f"ecdsim explorer on http://{host}:{port}/ (Ctrl-C stops it)")

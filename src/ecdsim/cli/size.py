@@ -45,7 +45,7 @@ FLUID_EPILOG = "Example: [bold]ecdsim compare-fluid examples/fluid.toml --plot p
 
 
 def _fail(problems: list[str]) -> NoReturn:
-    from ecdsim.cli.app import fail
+    from ecdsim.cli.common import fail
 
     fail(problems)
 

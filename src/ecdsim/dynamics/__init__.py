@@ -1,14 +1,11 @@
 """Full deployment dynamics: inertia, stick-slip, lost motion, end stop, roll-off, heating.
 
-The ``dynamic`` method (registered in :data:`ecdsim.solvers.SOLVERS`) solves the
+The ``dynamic`` method (registered in :data:`ecdsim.methods.SOLVERS`) solves the
 deployment as an event-driven sequence of segments: closed form where the dynamics are
 linear (:mod:`ecdsim.dynamics.linear`), numerically where the damping rolls off or the
 damper heats (:mod:`ecdsim.dynamics.integrate`). See ``docs/dynamics.md``.
 """
 
-# The solver registry imports this package's method module; loading the registry first
-# keeps a single import order (ecdsim.solvers -> ecdsim.dynamics.*) whichever is imported.
-import ecdsim.solvers  # noqa: F401  # isort: skip
 from ecdsim.dynamics.params import DynamicParameters, Rolloff, Thermal
 from ecdsim.dynamics.problem import DynamicProblem, dynamic_problem
 from ecdsim.dynamics.result import DynamicResult, EnergyBalance, EventLog, TimeSeries

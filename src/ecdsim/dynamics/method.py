@@ -89,6 +89,10 @@ class DynamicSolution(DeploymentSolution):
         )
         return {key: summary[key] for key in keys}
 
+    def time_series_csv(self) -> str:
+        """The time series, one block per case (:meth:`DynamicResult.timeseries_csv`)."""
+        return self.result.timeseries_csv()
+
     def findings(self) -> list[tuple[str, str, int]]:
         """Noteworthy outcomes as (code, message, flat case index)."""
         return list(self.notes)
@@ -104,6 +108,7 @@ class DynamicMethod:
 
     name: str = "dynamic"
     label: str = "dynamic (inertia, stiction, end stop)"
+    needs_dynamics: bool = True
 
     def solve(self, problem: QuasiStaticProblem) -> DynamicSolution:
         """Solve every case; ``problem`` must be a :class:`DynamicProblem`."""

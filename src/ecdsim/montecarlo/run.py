@@ -96,7 +96,7 @@ class Plan:
     system : the nominal deployment system (from the config)
     tolerances : the resolved tolerances and their correlation
     temperatures : analysis temperatures [degC]
-    method : solver name (a key of ecdsim.solvers.SOLVERS)
+    method : solver name (a key of ecdsim.methods.SOLVERS)
     samples : N, number of samples (parameter sets), each solved at every temperature
     chunk_size : samples per chunk (the last chunk may hold fewer)
     seed : the study's seed (>= 0)
@@ -202,7 +202,7 @@ def build_plan(
     Raises :class:`ecdsim.config.ConfigError` or :class:`RunError` on bad input.
     """
     from ecdsim.config.tolerance_schema import DEFAULT_CHUNK_SIZE, SAMPLING_METHODS
-    from ecdsim.solvers import SOLVERS
+    from ecdsim.methods import SOLVERS
 
     tolerances = resolve(config)
     spec = config.spec.tolerances

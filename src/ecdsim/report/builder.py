@@ -25,7 +25,7 @@ from ecdsim.atomic import write_text
 from ecdsim.config.units import Kind
 from ecdsim.deployment import Prediction, predict
 from ecdsim.formatting import format_number
-from ecdsim.solvers import SOLVERS
+from ecdsim.methods import SOLVERS
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

@@ -1,12 +1,12 @@
-"""Deployment solvers, by name: each maps a quasi-static problem to a solution.
+"""Quasi-static deployment solvers: each maps a quasi-static problem to a solution.
 
-``SOLVERS`` is the registry that the CLI, the report and later methods share; adding a
-method is adding an entry, never an if/elif ladder.
+The paper's method (:data:`PAPER`) and the exact solution (:data:`EXACT`), with the
+problem, the answer and the :class:`Solver` protocol they share. The registry of every
+method by name, the dynamic one included, is :data:`ecdsim.methods.SOLVERS`: it sits
+above this package and :mod:`ecdsim.dynamics`, so that neither imports the other's
+upper layer.
 """
 
-# The dynamic method needs a DynamicProblem (a QuasiStaticProblem with inertia etc.),
-# which ecdsim.deployment.predict builds when given dynamics= (docs/dynamics.md).
-from ecdsim.dynamics.method import DYNAMIC
 from ecdsim.solvers.base import (
     DeploymentSolution,
     QuasiStaticProblem,
@@ -16,13 +16,9 @@ from ecdsim.solvers.base import (
 from ecdsim.solvers.exact import EXACT
 from ecdsim.solvers.paper import PAPER
 
-SOLVERS: dict[str, Solver] = {PAPER.name: PAPER, EXACT.name: EXACT, DYNAMIC.name: DYNAMIC}
-
 __all__ = [
-    "DYNAMIC",
     "EXACT",
     "PAPER",
-    "SOLVERS",
     "DeploymentSolution",
     "QuasiStaticProblem",
     "Solver",

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -124,6 +124,30 @@ class DeploymentSolution:
         assert self.solved is not None  # set in __post_init__
         return np.broadcast_to(self.solved, self.stalled.shape)
 
+    # Hooks through which a method adds what only it knows. Callers (predict, the JSON,
+    # the CLI) use them for every method alike; a method overrides those it needs.
+
+    def case_fields(self, index: int) -> dict[str, Any]:
+        """The method's own JSON fields of one case (flat index), beyond the common ones."""
+        return {}
+
+    def findings(self) -> list[tuple[str, str, int]]:
+        """The method's own noteworthy outcomes as (code, message, flat case index)."""
+        return []
+
+    def trajectory(self, times: ArrayLike) -> Trajectory | None:
+        """The solved angle and speed at ``times`` [s], if this solution keeps them.
+
+        None here: the solver recomputes them from the problem
+        (:meth:`Solver.trajectory`). A method whose solution keeps its time history
+        returns it, so that it is not solved twice.
+        """
+        return None
+
+    def time_series_csv(self) -> str | None:
+        """The method's recorded time series as CSV text; None if it records none."""
+        return None
+
 
 @dataclass(frozen=True)
 class Trajectory:
@@ -154,6 +178,17 @@ class Solver(Protocol):
     @property
     def label(self) -> str:
         """Human label for tables and plots."""
+        ...
+
+    @property
+    def needs_dynamics(self) -> bool:
+        """True if the method needs the dynamic parameters (inertia, stiction, end stop).
+
+        :func:`ecdsim.deployment.predict` then builds a
+        :class:`~ecdsim.dynamics.DynamicProblem` (from its ``dynamics=`` argument), and
+        the config asks for ``[load] inertia``; otherwise a
+        :class:`QuasiStaticProblem` is all the method reads.
+        """
         ...
 
     def solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:

@@ -54,6 +54,7 @@ class ExactMethod:
 
     name: str = "exact"
     label: str = "exact quasi-static"
+    needs_dynamics: bool = False
 
     def solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
         """Deployment time, start, end and peak speed for every case of the batch.

@@ -117,6 +117,7 @@ class PaperMethod:
 
     name: str = "paper"
     label: str = "paper (Eq. 8-13)"
+    needs_dynamics: bool = False
 
     def solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
         """Eq. 8-11 for every case; stalled cases get +inf and the stall angle.

@@ -1,0 +1,110 @@
+"""What every command shares: user errors, temperature options, loading and predicting.
+
+The subcommand modules (:mod:`ecdsim.cli.fit`, ``montecarlo``, ``report``, ``size``) and
+:mod:`ecdsim.cli.app` import these from here, never from each other, so the command
+line has no import cycle. Only typer is imported at start-up; the library is imported
+inside the functions, so that ``ecdsim --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, NoReturn
+
+import typer
+
+if TYPE_CHECKING:
+    from ecdsim.config import Config
+    from ecdsim.deployment import Prediction
+
+USER_ERROR = 2
+
+
+def fail(problems: list[str]) -> NoReturn:
+    """Print user errors on stderr, one line each, and exit with code 2."""
+    for problem in problems:
+        typer.echo(f"error: {problem}", err=True)
+    raise typer.Exit(USER_ERROR)
+
+
+def parse_temperature(text: str) -> float:
+    """A temperature option's value [degC]; a bare number is degC, the field's convention.
+
+    Any temperature unit pint knows may be given ("233.15 K", "-40 degF"). The value is
+    read by :func:`ecdsim.config.units.parse_temperature`, under the config file's rule,
+    so the command line refuses what the file refuses (a temperature at or below
+    absolute zero among them): raises :class:`~ecdsim.config.units.QuantityError`
+    naming the value and the expected unit.
+    """
+    from ecdsim.config.units import parse_temperature as parse
+
+    return parse(text if any(c.isalpha() for c in text) else f"{text} degC")
+
+
+def temperature_option(option: str, text: str) -> float:
+    """:func:`parse_temperature`, or exit with code 2 and one line naming ``option``."""
+    from ecdsim.config.units import QuantityError
+
+    try:
+        return parse_temperature(text)
+    except QuantityError as exc:
+        fail([f"{option}: {exc}"])
+
+
+def load_run(
+    config_path: Path, temperatures: list[str] | None, methods: list[str] | None
+) -> Config:
+    """The config file, with the ``--temperature`` and ``--method`` overrides applied.
+
+    Every problem (the file's, each bad temperature, each unknown method) is reported at
+    once, one line each, with exit code 2.
+    """
+    from dataclasses import replace
+
+    from ecdsim.config import ConfigError, load_config
+    from ecdsim.config.units import QuantityError
+    from ecdsim.methods import SOLVERS
+
+    try:
+        config = load_config(config_path)
+    except ConfigError as exc:
+        fail(str(exc).splitlines())
+    problems: list[str] = []
+    temps = config.temperatures
+    if temperatures:
+        parsed = []
+        for text in temperatures:
+            try:
+                parsed.append(parse_temperature(text))
+            except QuantityError as exc:
+                problems.append(f"--temperature: {exc}")
+        temps = tuple(parsed)
+    chosen = config.methods
+    if methods:
+        unknown = [m for m in methods if m not in SOLVERS]
+        problems += [
+            f"--method: {m!r} is not a method; expected one of {sorted(SOLVERS)}" for m in unknown
+        ]
+        chosen = tuple(methods)
+    if problems:
+        fail(problems)
+    return replace(config, temperatures=temps, methods=chosen)
+
+
+def predict_run(config: Config) -> Prediction:
+    """:func:`ecdsim.deployment.predict` on a loaded config; a domain error exits 2."""
+    from ecdsim.deployment import ModelDomainError, predict
+
+    try:
+        return predict(
+            config.system, config.temperatures, config.methods, dynamics=config.spec.dynamics()
+        )
+    except ModelDomainError as exc:
+        fail([f"{config.source}: {exc}"])
+
+
+def echo_warnings(prediction: Prediction) -> None:
+    """Print the prediction's findings on stderr, one ``warning:`` line each."""
+    for warning in prediction.warnings:
+        where = f"[{warning.method}] " if warning.method else ""
+        typer.echo(f"warning: {where}{warning.message}", err=True)
