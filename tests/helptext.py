@@ -36,8 +36,10 @@ class HelpScreen:
     example: list[str]  # the example's arguments after ``ecdsim``
 
 
-def read_help(runner: CliRunner, app: Typer, args: list[str]) -> HelpScreen:
-    """Run ``ecdsim <args> --help`` and parse the screen."""
+def read_help(
+    runner: CliRunner, app: Typer, args: list[str], *, has_example: bool = True
+) -> HelpScreen:
+    """Run ``ecdsim <args> --help`` and parse the screen (``has_example``: it must show one)."""
     result = runner.invoke(app, [*args, "--help"], env=WIDE)
     assert result.exit_code == 0, result.output
     text = result.stdout
@@ -63,6 +65,8 @@ def read_help(runner: CliRunner, app: Typer, args: list[str]) -> HelpScreen:
             break
         example.append(line.strip())
     words = shlex.split(" ".join(example).split(", then")[0])
+    if not has_example:
+        return HelpScreen(text, options, short, commands, [])
     assert words[:1] == ["ecdsim"], f"no 'Example: ecdsim ...' on the help of {args}"
     return HelpScreen(text, options, short, commands, words[1:])
 

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import csv
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -13,8 +16,9 @@ from ecdsim import __version__
 from ecdsim.characterize.droptest import fit_drop_test
 from ecdsim.characterize.plots import plot_parameters, plot_torque_speed
 from ecdsim.cli.app import USER_ERROR, app
-from tests.conftest import PAPER_CONFIG, ROOT
-from tests.test_characterize_synthetic import Truth, drop_csv, drop_points
+from tests.conftest import PAPER_CONFIG, ROOT, SavedFigures
+from tests.helptext import assert_options, read_help, run_example
+from tests.test_characterize_synthetic import G, Truth, drop_csv, drop_points, paper_trace
 
 runner = CliRunner()
 EXAMPLE = ROOT / "examples" / "drop_test.csv"
@@ -33,14 +37,25 @@ def write(tmp_path: Path, lines: list[str]) -> Path:
     return path
 
 
-def test_fit_help_lists_both_commands() -> None:
-    result = runner.invoke(app, ["fit", "--help"])
-    assert result.exit_code == 0
-    assert "drop-test" in result.stdout
-    assert "trace" in result.stdout
+def test_fit_help_lists_both_commands(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # The commands and options of docs/characterize.md, each described; each example
+    # runs as printed.
+    group = read_help(runner, app, ["fit"], has_example=False)  # each command shows one
+    assert set(group.commands) == {"drop-test", "trace"}
+    common = {"--json": None, "--plot": None, "--output": "-o", "--reference-temperature": None}
+    common |= {"--strict": None, "--help": None}
+    drop = read_help(runner, app, ["fit", "drop-test"])
+    assert_options(drop, {**common, "--config": None})
+    run_example(runner, app, drop, tmp_path / "drop", monkeypatch)
+    assert (tmp_path / "drop" / "plots" / "torque_vs_speed_fit.png").is_file()
+    trace = read_help(runner, app, ["fit", "trace"])
+    assert_options(trace, {**common, "--config": None, "--fit-spring": None, "--temperature": "-T"})
+    run_example(runner, app, trace, tmp_path / "trace", monkeypatch)
 
 
-def test_the_example_drop_test_fits_with_tables_and_plots(tmp_path: Path) -> None:
+def test_the_example_drop_test_fits_with_tables_and_plots(
+    tmp_path: Path, saved_figures: SavedFigures
+) -> None:
     result = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "--plot", str(tmp_path)])
     assert result.exit_code == 0, result.output
     assert "BECD [N*m*s/rad]" in result.stdout
@@ -53,6 +68,36 @@ def test_the_example_drop_test_fits_with_tables_and_plots(tmp_path: Path) -> Non
     ]
     for path in tmp_path.iterdir():
         assert path.read_bytes()[:8] == PNG
+    temperatures = (-40.0, 25.0, 100.0)
+    (torque,) = saved_figures.axes("torque_vs_speed_fit.png")
+    assert (torque.get_xlabel(), torque.get_ylabel()) == ("speed [rad/s]", "drive torque [N*m]")
+    assert torque.get_title() == "Drop test: torque against speed"
+    legend = saved_figures.legend(torque)
+    assert [entry.split(": BECD ")[0] for entry in legend] == [f"{t:g} degC" for t in temperatures]
+    assert all(entry.endswith(" N*m") and " N*m*s/rad, FECD " in entry for entry in legend)
+    # The points' torques are the CSV's m g r - rig friction, by hand (grams, millimetres).
+    with EXAMPLE.open(encoding="utf-8") as stream:
+        rows = list(csv.DictReader(stream))
+    points = [line for line in torque.get_lines() if str(line.get_label()).startswith("_")]
+    assert len(points) == 3
+    for t, line in zip(temperatures, points, strict=True):
+        drive = [
+            float(r["mass [g]"]) / 1000 * G * float(r["radius [mm]"]) / 1000 - 0.02
+            for r in rows
+            if float(r["temperature [degC]"]) == t
+        ]
+        np.testing.assert_allclose(np.asarray(line.get_ydata(), float), drive, rtol=1e-12)
+    (residuals,) = saved_figures.axes("drop_test_residuals.png")
+    assert residuals.get_ylabel() == "residual torque [N*m]"
+    assert saved_figures.legend(residuals) == [f"{t:g} degC" for t in temperatures]
+    for line in residuals.get_lines()[:3]:
+        # Least-squares residuals of a line with an intercept sum to zero (normal equations).
+        assert abs(float(np.sum(np.asarray(line.get_ydata(), float)))) < 1e-12
+    damping, friction = saved_figures.axes("parameters_vs_temperature.png")
+    assert damping.get_ylabel() == "BECD [N*m*s/rad]"
+    assert (friction.get_xlabel(), friction.get_ylabel()) == ("temperature [degC]", "FECD [N*m]")
+    assert saved_figures.legend(damping) == ["linear law", "resistivity law", "per temperature"]
+    assert saved_figures.legend(friction) == ["line", "per temperature"]
 
 
 def test_json_output(tmp_path: Path) -> None:
@@ -205,7 +250,7 @@ def test_an_unwritable_parameter_file_exits_2(tmp_path: Path) -> None:
     assert f"error: -o {folder}: cannot write" in result.stderr
 
 
-def test_trace_command(tmp_path: Path) -> None:
+def test_trace_command(tmp_path: Path, saved_figures: SavedFigures) -> None:
     args = ["fit", "trace", str(TRACE), "--config", str(PAPER_CONFIG)]
     result = runner.invoke(app, [*args, "--plot", str(tmp_path)])
     assert result.exit_code == 0, result.output
@@ -215,6 +260,29 @@ def test_trace_command(tmp_path: Path) -> None:
         "trace_fit.png",
         "trace_residuals.png",
     ]
+    temperatures = (-40.0, 25.0, 100.0)
+    (fitted,) = saved_figures.axes("trace_fit.png")
+    assert (fitted.get_xlabel(), fitted.get_ylabel()) == ("time since release [s]", "angle [deg]")
+    legend = [f"{t:g} degC, fitted (exact solution)" for t in temperatures]
+    assert saved_figures.legend(fitted) == legend
+    for line in fitted.get_lines():
+        if str(line.get_label()) in legend:
+            t = float(str(line.get_label()).split(" degC")[0])
+            times = np.asarray(line.get_xdata(), float)
+            truth = np.degrees(paper_trace(t, times))
+            # The example is the paper's deployment plus 0.1 deg noise: a least-squares
+            # curve lies within 5 noise sigmas of the truth (no fitted value's standard
+            # error exceeds the noise's, as no leverage exceeds 1).
+            assert np.max(np.abs(np.asarray(line.get_ydata(), float) - truth)) < 0.5
+    (residuals,) = saved_figures.axes("trace_residuals.png")
+    assert residuals.get_ylabel() == "residual angle [deg]"
+    assert saved_figures.legend(residuals) == [f"{t:g} degC" for t in temperatures]
+    values = np.concatenate(
+        [np.asarray(line.get_ydata(), float) for line in residuals.get_lines()[:3]]
+    )
+    # Their rms is the 0.1 deg noise: relative standard error 1/sqrt(2 dof), dof = n - 6.
+    rms = float(np.sqrt(np.mean(values**2)))
+    assert rms == pytest.approx(0.1, rel=5.0 / math.sqrt(2 * (values.size - 6)))
     document = json.loads(runner.invoke(app, [*args, "--json", "--fit-spring"]).stdout)
     assert document["mode"] == "spring"
     assert (
