@@ -41,6 +41,7 @@ from ecdsim.montecarlo import apply as apply_values
 from ecdsim.montecarlo.run import LARGE_RUN_SAMPLES, chunk_values, output_column
 from ecdsim.montecarlo.store import MANIFEST, SUMMARY, ChunkReader, chunk_path, read_manifest
 from tests import hand
+from tests.conftest import SavedFigures
 from tests.test_montecarlo_config import PAPER_TEXT, write_config
 
 runner = CliRunner()
@@ -328,7 +329,25 @@ def test_cli_both_workers_and_scheduler_exit_2(tmp_path: Path) -> None:
     assert result.stderr.strip() == "error: give either --workers or --scheduler, not both"
 
 
-def test_cli_json_summary_progress_and_plots(tmp_path: Path) -> None:
+def hand_times(out: Path, temperature: float) -> np.ndarray:
+    """Each sample's exact deployment time for the QUANTITIES study, independently.
+
+    The sampled inputs read back with pyarrow; Eq. 1-4 and the exact solution
+    t = (B/k) ln(a / (a - k L)) typed here (tests/hand.py), not ecdsim's solver.
+    """
+    table = pa.concat_tables([pq.read_table(path) for path in chunk_files(out)])
+    bd = table.column("damper.damping_rate").to_numpy()
+    te = table.column("load.end_torque").to_numpy()
+    fs_0c = table.column("load.system_friction.at_0C").to_numpy()
+    # BECD is proportional to BD (BG = 0.26 BD); FS_T = -0.0044 T + at_0C.
+    damping = hand.becd(temperature) * bd / hand.BD
+    net_start = hand.TS - hand.fecd(temperature) - (-0.0044 * temperature + fs_0c)
+    k = (hand.TS - te) / hand.TRAVEL
+    times: np.ndarray = damping / k * np.log(net_start / (net_start - k * hand.TRAVEL))
+    return times
+
+
+def test_cli_json_summary_progress_and_plots(tmp_path: Path, saved_figures: SavedFigures) -> None:
     config = write_config(tmp_path, QUANTITIES, SETTINGS)
     out = tmp_path / "out"
     result = runner.invoke(
@@ -356,11 +375,46 @@ def test_cli_json_summary_progress_and_plots(tmp_path: Path) -> None:
     case = document["cases"][0]
     assert set(case["deployment_time_s"]["percentiles"]) == {"P1", "P5", "P50", "P95", "P99"}
     assert {"end_speed_rad_s", "stall", "sensitivity", "repeatability"} <= set(case)
-    assert [r["key"] for r in case["sensitivity"]["inputs"]] != []
+    keys = {"damper.damping_rate", "load.end_torque", "load.system_friction.at_0C"}
+    assert {r["key"] for r in case["sensitivity"]["inputs"]} == keys
     assert "samples/s" in result.stderr  # the progress bar's rate column
     assert "ETA" in result.stderr
     for name in ("time_histogram", "time_cdf", "end_speed_histogram", "tornado"):
         assert (out / "plots" / f"{name}.png").read_bytes()[:4] == b"\x89PNG"
+    title = "CDA Cc-16 test deployment (paper section 6): 3,000 samples, exact method"
+    for name, quantity in (
+        ("time_histogram.png", "deployment time [s]"),
+        ("time_cdf.png", "deployment time [s]"),
+        ("end_speed_histogram.png", "end (latch) speed [rad/s]"),
+    ):
+        (axes,) = saved_figures.axes(name)
+        assert (axes.get_title(), axes.get_xlabel()) == (title, quantity)
+        assert saved_figures.legend(axes) == ["25 degC"]  # no stall: no stall share shown
+    (cdf,) = saved_figures.axes("time_cdf.png")
+    assert cdf.get_ylabel() == "cumulative probability [-]"
+    # The empirical CDF: level (r + 1)/n at the r-th smallest time, times by hand.
+    step = cdf.get_lines()[0]
+    levels = np.asarray(step.get_ydata(), float)
+    ranks = np.rint(levels * 3000).astype(int) - 1
+    ordered = np.sort(hand_times(out, 25.0))[ranks]
+    np.testing.assert_allclose(np.asarray(step.get_xdata(), float), ordered, rtol=1e-12)
+    assert levels[-1] == 1.0
+    (tornado,) = saved_figures.axes("tornado.png")
+    assert tornado.get_xlabel() == "standardised regression coefficient of deployment time [-]"
+    assert tornado.get_title().endswith("sensitivity (exact method)")
+    from matplotlib.patches import Rectangle
+
+    rectangles = [patch for patch in tornado.patches if isinstance(patch, Rectangle)]
+    bars = {
+        label.get_text(): patch.get_width()
+        for label, patch in zip(tornado.get_yticklabels(), rectangles, strict=True)
+    }
+    # Signs by the physics of Eq. 1-11: more damping or more friction is slower, a
+    # stronger spring end torque is faster.
+    assert set(bars) == keys
+    assert bars["damper.damping_rate"] > 0.0
+    assert bars["load.system_friction.at_0C"] > 0.0
+    assert bars["load.end_torque"] < 0.0
 
 
 def test_cli_table_output(tmp_path: Path) -> None:
@@ -374,11 +428,6 @@ def test_cli_table_output(tmp_path: Path) -> None:
     # pyarrow, each sample's time from the paper's Eq. 1-4 and the exact solution typed
     # here, and the percentiles as order statistics by numpy ("inverted_cdf": the
     # ceil(p n)-th smallest, the definition in docs/montecarlo.md).
-    table = pa.concat_tables([pq.read_table(path) for path in chunk_files(out)])
-    bd = table.column("damper.damping_rate").to_numpy()
-    te = table.column("load.end_torque").to_numpy()
-    fs_0c = table.column("load.system_friction.at_0C").to_numpy()
-    assert bd.size == 2000
     rows = {}
     for line in result.stdout.split("End (latch) speed")[0].splitlines():
         cells = [c.strip() for c in line.split("│")[1:-1]]
@@ -386,10 +435,8 @@ def test_cli_table_output(tmp_path: Path) -> None:
             rows[float(cells[0])] = cells
     assert sorted(rows) == [-40.0, 25.0, 100.0]
     for t, cells in rows.items():
-        damping = hand.becd(t) * bd / hand.BD  # BECD is proportional to BD (BG = 0.26 BD)
-        net_start = hand.TS - hand.fecd(t) - (-0.0044 * t + fs_0c)
-        k = (hand.TS - te) / hand.TRAVEL
-        times = damping / k * np.log(net_start / (net_start - k * hand.TRAVEL))
+        times = hand_times(out, t)
+        assert times.size == 2000
         assert np.all(np.isfinite(times))  # no sample stalls: the P50 column is a number
         percentiles = np.percentile(times, [1, 5, 50, 95, 99], method="inverted_cdf")
         # Columns: T, nominal, P1, P5, P50, P95, P99, mean, std (4 significant digits).
