@@ -214,6 +214,8 @@ class LoadSpec(_Section):
     # Every load has mass, and the dynamic method divides by it: > 0, unlike the torques.
     inertia: PositiveInertia | None = None
     restitution: Restitution = 0.0
+    # Breakaway over kinetic FS_T (dynamic method); None = [damper] static_friction_factor.
+    static_friction_factor: StaticFactor | None = None
 
     @model_validator(mode="after")
     def _one_spring(self) -> LoadSpec:
@@ -353,6 +355,7 @@ class ConfigSpec(_Section):
             rotor_inertia=damper.rotor_inertia,
             gearbox_inertia=self.gearbox.inertia,
             static_friction_factor=damper.static_friction_factor,
+            system_static_friction_factor=self.load.static_friction_factor,
             restitution=self.load.restitution,
             initial_angle=self.initial.angle,
             initial_speed=self.initial.speed,

@@ -71,7 +71,9 @@ class DynamicParameters:
         to the input as ``J * N**2``
     gearbox_inertia : the gear train's inertia referred to the high-speed shaft, like the
         paper's BG and FG [kg*m^2]; reflected as ``J * N**2``
-    static_friction_factor : breakaway over kinetic Coulomb friction [-], >= 1
+    static_friction_factor : breakaway over kinetic Coulomb friction of the ECD, FECD_T
+        [-], >= 1; also of the system friction FS_T unless
+        ``system_static_friction_factor`` is given
     restitution : coefficient of restitution at the end of travel [-]; 0 is a latch
         (plastic stop), 0 < e < 1 a rebounding hard stop
     initial_angle : deployed angle at release [rad], 0 <= angle < travel
@@ -86,6 +88,9 @@ class DynamicParameters:
     integrator : ``"RODAS4"`` (vectorised over the batch, the default), or ``"Radau"``,
         ``"BDF"``, ``"LSODA"`` (scipy ``solve_ivp``, one call per segment)
     max_events : safety limit on the number of events per run (impacts, stops, ...)
+    system_static_friction_factor : breakaway over kinetic system friction FS_T (hinge,
+        harness) [-], >= 1; None (the default) = ``static_friction_factor``, one factor
+        for both frictions as before the two were separated
     """
 
     load_inertia: Param
@@ -101,9 +106,18 @@ class DynamicParameters:
     rtol: float = 1e-8
     integrator: str = "RODAS4"
     max_events: int = 10_000
+    system_static_friction_factor: Param | None = None
 
     def __post_init__(self) -> None:
+        system_factor = (
+            1.0 if self.system_static_friction_factor is None
+            else self.system_static_friction_factor
+        )  # fmt: skip
         checks = [
+            (
+                np.asarray(system_factor, dtype=float) >= 1.0,
+                "system_static_friction_factor must be >= 1",
+            ),
             (np.asarray(self.load_inertia, dtype=float) > 0.0, "load_inertia must be > 0"),
             (np.asarray(self.rotor_inertia, dtype=float) >= 0.0, "rotor_inertia must be >= 0"),
             (

@@ -29,6 +29,7 @@ _CASE_FIELDS = (
     "ecd_friction",
     "system_friction",
     "static_friction_factor",
+    "system_static_friction_factor",
     "restitution",
     "lost_motion",
     "initial_angle",
@@ -65,7 +66,8 @@ class DynamicProblem(QuasiStaticProblem):
     damper_inertia : J_D, damper rotor and gearbox reflected to the input [kg*m^2]
     ecd_friction : FECD_T (Eq. 4) [N*m]
     system_friction : FS_T [N*m]
-    static_friction_factor : breakaway over kinetic friction [-]
+    static_friction_factor : breakaway over kinetic friction of the ECD, FECD_T [-]
+    system_static_friction_factor : breakaway over kinetic system friction FS_T [-]
     restitution : end-stop coefficient of restitution [-]
     lost_motion : gear lost motion at the input shaft [rad]
     initial_angle : deployed angle at release [rad]
@@ -88,6 +90,7 @@ class DynamicProblem(QuasiStaticProblem):
     ecd_friction: FloatArray
     system_friction: FloatArray
     static_friction_factor: FloatArray
+    system_static_friction_factor: FloatArray
     restitution: FloatArray
     lost_motion: FloatArray
     initial_angle: FloatArray
@@ -206,6 +209,12 @@ def dynamic_problem(
         ecd_friction=np.asarray(ecd.ecd_friction, dtype=float),
         system_friction=np.asarray(system_friction, dtype=float),
         static_friction_factor=np.asarray(params.static_friction_factor, dtype=float),
+        system_static_friction_factor=np.asarray(
+            params.static_friction_factor
+            if params.system_static_friction_factor is None
+            else params.system_static_friction_factor,
+            dtype=float,
+        ),
         restitution=np.asarray(params.restitution, dtype=float),
         lost_motion=np.asarray(gearbox.lost_motion, dtype=float),
         initial_angle=start,

@@ -180,6 +180,7 @@ class TrajectoryData:
     ecd_friction: FloatArray
     system_friction: FloatArray
     factor: FloatArray
+    system_factor: FloatArray
     ratio: FloatArray
     gearbox_damping: FloatArray
     eddy: EddyLaw
@@ -332,7 +333,9 @@ class DynamicResult:
         kinetic = np.where(
             s.engaged, data.ecd_friction + data.system_friction, data.system_friction
         )
-        static = mechanics.static_friction(kinetic, data.factor)
+        static = mechanics.static_friction(data.system_friction, data.system_factor) + np.where(
+            s.engaged, mechanics.static_friction(data.ecd_friction, data.factor), 0.0
+        )
         holding = -np.clip(spring, -static, static)
         friction = np.where(s.speed != 0.0, -np.sign(s.speed) * kinetic, holding)
         shaft = data.ratio * s.speed

@@ -59,6 +59,7 @@ class _Cases:
     ecd_friction: FloatArray
     system_friction: FloatArray
     factor: FloatArray
+    system_factor: FloatArray
     restitution: FloatArray
     gap: FloatArray
     angle0: FloatArray
@@ -91,6 +92,7 @@ def _flatten(problem: DynamicProblem) -> _Cases:
         ecd_friction=flat(problem.ecd_friction),
         system_friction=flat(problem.system_friction),
         factor=flat(problem.static_friction_factor),
+        system_factor=flat(problem.system_static_friction_factor),
         restitution=flat(problem.restitution),
         gap=flat(problem.lost_motion),
         angle0=flat(problem.initial_angle),
@@ -286,6 +288,7 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
             ecd_friction=c.ecd_friction,
             system_friction=c.system_friction,
             factor=c.factor,
+            system_factor=c.system_factor,
             ratio=c.ratio,
             gearbox_damping=c.gearbox_damping,
             eddy=c.eddy,
@@ -330,12 +333,15 @@ def _stick_or_break(
 ) -> None:
     """At rest: stick for good if the spring cannot beat static friction, else break away."""
     piece = _piece(c, resting, s.phi[resting], np.ones(resting.size, dtype=bool))
-    kinetic = np.where(
+    # Each friction breaks away at its own factor: the ECD's (when engaged) and the
+    # system's FS_T (hinge, harness), which is not the damper's breakaway.
+    static = mechanics.static_friction(
+        c.system_friction[resting], c.system_factor[resting]
+    ) + np.where(
         s.engaged[resting],
-        c.ecd_friction[resting] + c.system_friction[resting],
-        c.system_friction[resting],
+        mechanics.static_friction(c.ecd_friction[resting], c.factor[resting]),
+        0.0,
     )
-    static = mechanics.static_friction(kinetic, c.factor[resting])
     drive = piece.torque
     holds = np.abs(drive) <= static + _STICK_MARGIN * np.maximum(np.abs(drive), static)
     sticking = resting[holds]
