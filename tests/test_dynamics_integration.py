@@ -25,7 +25,7 @@ from ecdsim.dynamics import (
 from ecdsim.dynamics.method import DYNAMIC, DynamicSolution
 from ecdsim.methods import SOLVERS
 from tests import hand
-from tests.conftest import PAPER_CONFIG, ROOT, paper_system
+from tests.conftest import PAPER_CONFIG, ROOT, SavedFigures, paper_system
 from tests.dynamics_reference import assert_energy_closes, linear_deploy
 
 runner = CliRunner()
@@ -307,10 +307,35 @@ def test_warnings_for_stop_time_and_rolloff() -> None:
     assert all(w.method == "dynamic" and w.temperature_C == -40.0 for w in prediction.warnings)
 
 
-def test_plots_accept_the_dynamic_method(tmp_path: Path) -> None:
+def test_plots_accept_the_dynamic_method(tmp_path: Path, saved_figures: SavedFigures) -> None:
     result = runner.invoke(app, ["deploy", str(DYNAMIC_CONFIG), "--plot", str(tmp_path)])
     assert result.exit_code == 0, result.output
-    assert (tmp_path / "angle_vs_time.png").stat().st_size > 0
+    assert (tmp_path / "angle_vs_time.png").read_bytes().startswith(b"\x89PNG")
+    (angle,) = saved_figures.axes("angle_vs_time.png")
+    assert angle.get_title().replace("\n", " ").endswith("full dynamics: angle against time")
+    assert (angle.get_xlabel(), angle.get_ylabel()) == (
+        "time since release [s]",
+        "deployed angle [deg]",
+    )
+    label = "dynamic (inertia, stiction, end stop)"
+    temperatures = (-40.0, 25.0, 100.0)
+    assert saved_figures.legend(angle)[-3:] == [f"{t:g} degC, {label}" for t in temperatures]
+    curves = {str(line.get_label()): line for line in angle.get_lines()}
+    for t in temperatures:
+        times, degrees = (np.asarray(v, float) for v in curves[f"{t:g} degC, {label}"].get_data())
+        friction = hand.fecd(t) + hand.fs(t)
+        ref = linear_deploy(EXAMPLE_INERTIA, hand.becd(t), friction, hand.TS, hand.TE, hand.TRAVEL)
+        moving = times < ref.time
+        expected = np.degrees([ref.solution(float(x))[0] for x in times[moving]])
+        # Radau's dense output at rtol 1e-10 (tests/dynamics_reference.py): 1e-6 deg is
+        # 1e-8 of the travel, the accuracy the deployment times are held to.
+        np.testing.assert_allclose(degrees[moving], expected, rtol=0.0, atol=1e-6)
+        assert np.all(degrees[~moving] == pytest.approx(math.degrees(hand.TRAVEL), rel=1e-12))
+    (torque,) = saved_figures.axes("torque_vs_speed.png")
+    assert (torque.get_xlabel(), torque.get_ylabel()) == (
+        "input shaft speed [rad/s]",
+        "ECD reaction torque [N*m]",
+    )
 
 
 def test_large_nonlinear_batches_recompute_their_time_series(
