@@ -93,10 +93,7 @@ def candidates_table(result: SearchResult) -> Table:
                 f"{angle:.0f}, {format_number(c.torque_margin_temperature)}",
             ]
         )
-    title = (
-        "Candidates, ranked: passing first, then mass (unknown after known), worst margin, "
-        "time spread"
-    )
+    title = "Candidates, ranked: pass, then mass (unknown last), worst margin, time spread"
     return title, headers, rows
 
 
