@@ -39,12 +39,14 @@ def test_table_law_validation() -> None:
 
 
 def test_linear_law_scalar_1d_2d() -> None:
-    assert float(laws.linear_in_temperature(25.0, -0.0044, 0.58)) == pytest.approx(0.47)
+    # Every check here repeats the law's one multiply-add by hand: rounding only (1e-12).
+    assert float(laws.linear_in_temperature(25.0, -0.0044, 0.58)) == pytest.approx(0.47, rel=1e-12)
     temps = np.array([[-40.0], [100.0]])
     slopes = np.array([-0.0044, -0.004, 0.0])
     out = laws.linear_in_temperature(temps, slopes, 0.58)
     assert out.shape == (2, 3)
-    assert out[0, 0] == pytest.approx(-0.0044 * -40.0 + 0.58)
+    assert out[0, 0] == pytest.approx(-0.0044 * -40.0 + 0.58, rel=1e-12)
+    assert out[1, 2] == 0.58  # slope 0: the value at 0 degC, exactly
 
 
 def test_table_extrapolation_warning_in_prediction() -> None:
@@ -83,7 +85,8 @@ def test_negative_friction_is_flagged_not_hidden() -> None:
     prediction = predict(paper_system(), [140.0])
     codes = {w.code for w in prediction.warnings}
     assert "negative_friction" in codes
-    assert float(prediction.system_friction[0]) == pytest.approx(-0.0044 * 140.0 + 0.58)
+    # The same multiply-add by hand: rounding only.
+    assert float(prediction.system_friction[0]) == pytest.approx(-0.0044 * 140.0 + 0.58, rel=1e-12)
 
 
 def test_damping_law_out_of_domain_is_a_clear_error() -> None:
@@ -105,7 +108,7 @@ def test_spring_temperature_coefficient() -> None:
     system = DeploymentSystem(base.ecd, Load(spring, 1.57, base.load.system_friction))
     prediction = predict(system, [-40.0])
     factor = 1.0 + -2e-4 * (-40.0 - 25.0)  # 1.013
-    assert prediction.problem.torques[0, 0] == pytest.approx(3.73 * factor)
+    assert prediction.problem.torques[0, 0] == pytest.approx(3.73 * factor, rel=1e-12)  # rounding
     expected = hand.exact_time(-40.0, ts=3.73 * factor, te=1.58 * factor)
     assert prediction.solutions["exact"].deployment_time[0] == pytest.approx(expected, rel=1e-12)
 
