@@ -311,7 +311,7 @@ def test_config_damping_speed_and_friction_factors() -> None:
     (line,) = raised.value.problems
     assert "requirements.torque_margin.damping_speed" in line
     assert "must be >= 0" in line
-    assert "rad/s" in line
+    assert "expected an angular speed in rad/s" in line
 
 
 def test_torque_margin_is_exact_between_breakpoints_with_split_frictions() -> None:

@@ -64,7 +64,10 @@ def _deployment_or_speed(value: object) -> float | None:
         raise PydanticCustomError(
             "quantity",
             "{detail}",
-            {"detail": f'{value!r} must be >= 0 (0 = no damping torque; or "deployment")'},
+            {
+                "detail": f'{value!r} must be >= 0 (0 = no damping torque; or "deployment"); '
+                f"{SPEED.expected}"
+            },
         )
     return number
 
