@@ -16,6 +16,7 @@ from typer.testing import CliRunner
 from ecdsim.cli.app import app as cli
 from ecdsim.config import parse_config
 from ecdsim.webapp.server import create_app
+from tests import hand
 from tests.conftest import PAPER_CONFIG, ROOT
 
 DYNAMIC_CONFIG = ROOT / "examples" / "paper_cc16_dynamic.toml"
@@ -51,7 +52,8 @@ def test_curves_reach_the_end_of_travel_and_sweep_the_range() -> None:
     # The time axis runs past every deployment, so each curve ends at the travel 1.57 rad.
     assert [curve[-1] for curve in exact] == pytest.approx([1.57] * 3, rel=1e-9)
     sweep = body["sweep"]
-    assert sweep["temperature_C"] == pytest.approx([-40.0, -5.0, 30.0, 65.0, 100.0])
+    # Five evenly spaced points from -40 to 100 degC; linspace rounding only.
+    assert sweep["temperature_C"] == pytest.approx([-40.0, -5.0, 30.0, 65.0, 100.0], abs=1e-12)
     swept = sweep["methods"]["exact"]["deployment_time_s"]
     # The sweep's ends are the configured cold and hot cases: the same numbers.
     cases = body["prediction"]["cases"]
@@ -81,6 +83,16 @@ def test_report_endpoint_returns_the_html_report() -> None:
     assert response.status_code == 200
     assert response.headers["content-type"].startswith("text/html")
     assert 'id="ecdsim-data"' in response.text
+    # The report's machine-readable block carries the paper example's numbers, by hand.
+    start = response.text.index('id="ecdsim-data">') + len('id="ecdsim-data">')
+    block = response.text[start : response.text.index("</script>", start)].replace("<\\/", "</")
+    cases = json.loads(block)["prediction"]["cases"]
+    assert [c["temperature_C"] for c in cases] == [-40.0, 25.0, 100.0]
+    for case in cases:
+        t = case["temperature_C"]
+        # Eq. 1-4 and 8-11 and the exact solution typed in tests/hand.py: rounding only.
+        assert case["exact"]["deployment_time_s"] == pytest.approx(hand.exact_time(t), rel=1e-12)
+        assert case["paper"]["deployment_time_s"] == pytest.approx(hand.paper_time(t), rel=1e-12)
 
 
 def test_parse_endpoint_reads_toml() -> None:
