@@ -92,8 +92,12 @@ class SavedFigures:
         self.figures: dict[str, Figure] = {}
 
     def record(self, target: object, figure: Figure) -> None:
-        # ecdsim.atomic writes to ".<name>.<random>.tmp" beside the target, then renames.
-        name = Path(str(getattr(target, "name", target))).name
+        # ecdsim.atomic writes to ".<name>.<random>.tmp" beside the target, then renames;
+        # an in-memory buffer (an inline report figure) is named by its order.
+        if isinstance(target, str | Path) or hasattr(target, "name"):
+            name = Path(str(getattr(target, "name", target))).name
+        else:
+            name = f"buffer {len(self.figures) + 1}"
         if name.startswith(".") and name.endswith(".tmp"):
             name = name[1:].rsplit(".", 2)[0]
         self.figures[name] = figure

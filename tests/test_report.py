@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 from ecdsim.cli.app import app
 from ecdsim.report.builder import DATA_ELEMENT_ID, lookup
 from tests import hand
-from tests.conftest import PAPER_CONFIG, ROOT
+from tests.conftest import PAPER_CONFIG, ROOT, SavedFigures
 
 runner = CliRunner()
 DYNAMIC_CONFIG = ROOT / "examples" / "paper_cc16_dynamic.toml"
@@ -111,9 +111,27 @@ def test_visible_cells_are_the_papers_quantities(tmp_path: Path) -> None:
     assert bg == pytest.approx(0.26 * 1.3e-4, rel=CELL_REL)
 
 
-def test_report_is_self_contained_with_provenance(tmp_path: Path) -> None:
+def test_report_is_self_contained_with_provenance(
+    tmp_path: Path, saved_figures: SavedFigures
+) -> None:
     out = tmp_path / "report.html"
     parsed = _report(PAPER_CONFIG, out)
+    # The three inline figures, as drawn: what each shows, in which units.
+    shown = [
+        (" ".join(axes.get_title().split()), axes.get_xlabel(), axes.get_ylabel())
+        for figure in saved_figures.figures.values()
+        for axes in figure.axes
+    ]
+    system = "CDA Cc-16 test deployment (paper section 6)"
+    assert shown == [
+        (f"{system}: angle against time", "time since release [s]", "deployed angle [deg]"),
+        (f"{system}: speed against time", "time since release [s]", "input shaft speed [rad/s]"),
+        (
+            f"{system}: ECD torque against speed",
+            "input shaft speed [rad/s]",
+            "ECD reaction torque [N*m]",
+        ),
+    ]
     html = out.read_text(encoding="utf-8")
     # Nothing to fetch: every src/href is inline data or an in-page anchor.
     assert parsed.refs, "the report should contain inline figures"
