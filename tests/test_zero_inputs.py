@@ -58,8 +58,12 @@ def undamped_config() -> str:
 
 
 def test_zero_torque_and_zero_damping_are_accepted() -> None:
-    parse_config(spin_down_config())
-    parse_config(undamped_config())
+    # Accepted and kept as zero (not replaced by a default or a floor).
+    load = parse_config(spin_down_config()).system.load
+    _, torques = load.spring.breakpoints(load.travel, 25.0)
+    assert np.all(np.asarray(torques) == 0.0)
+    undamped = parse_config(undamped_config()).system
+    assert float(undamped.ecd.at(25.0).ecd_damping_rate) == 0.0
 
 
 @pytest.mark.parametrize(
