@@ -265,15 +265,16 @@ def test_trace_command(tmp_path: Path, saved_figures: SavedFigures) -> None:
     assert (fitted.get_xlabel(), fitted.get_ylabel()) == ("time since release [s]", "angle [deg]")
     legend = [f"{t:g} degC, fitted (exact solution)" for t in temperatures]
     assert saved_figures.legend(fitted) == legend
-    for line in fitted.get_lines():
-        if str(line.get_label()) in legend:
-            t = float(str(line.get_label()).split(" degC")[0])
-            times = np.asarray(line.get_xdata(), float)
-            truth = np.degrees(paper_trace(t, times))
-            # The example is the paper's deployment plus 0.1 deg noise: a least-squares
-            # curve lies within 5 noise sigmas of the truth (no fitted value's standard
-            # error exceeds the noise's, as no leverage exceeds 1).
-            assert np.max(np.abs(np.asarray(line.get_ydata(), float) - truth)) < 0.5
+    curves = [line for line in fitted.get_lines() if str(line.get_label()) in legend]
+    assert len(curves) == 3
+    for line in curves:
+        t = float(str(line.get_label()).split(" degC")[0])
+        times = np.asarray(line.get_xdata(), float)
+        truth = np.degrees(paper_trace(t, times))
+        # The example is the paper's deployment plus 0.1 deg noise: a least-squares curve
+        # lies within 5 noise sigmas of the truth (no fitted value's standard error
+        # exceeds the noise's, as no leverage exceeds 1).
+        assert np.max(np.abs(np.asarray(line.get_ydata(), float) - truth)) < 0.5
     (residuals,) = saved_figures.axes("trace_residuals.png")
     assert residuals.get_ylabel() == "residual angle [deg]"
     assert saved_figures.legend(residuals) == [f"{t:g} degC" for t in temperatures]

@@ -154,9 +154,10 @@ def assert_deployment_plots(figures: SavedFigures) -> None:
         f"{t:g} degC: BECD {hand.becd(t):.3g} N*m*s/rad, FECD {hand.fecd(t):.3g} N*m"
         for t in temperatures
     ]
-    for line in torque.get_lines():
-        if str(line.get_label()).startswith("_"):  # the operating-range markers
-            continue
+    # One line per temperature; the "_"-labelled ones mark the operating range.
+    reaction_lines = [line for line in torque.get_lines() if str(line.get_label())[:1] != "_"]
+    assert len(reaction_lines) == 3
+    for line in reaction_lines:
         t = float(str(line.get_label()).split(" degC")[0])
         speed, reaction = (np.asarray(v) for v in line.get_data())
         # Eq. 5 inverted, T = FECD_T + BECD_T omega (Eq. 1-4 by hand): rounding only.
