@@ -5,8 +5,12 @@ The package is layered (see ``docs/architecture.md``):
 * :mod:`ecdsim.physics` holds the published models as pure, vectorised functions of SI
   floats or NumPy arrays (temperatures in degC);
 * :mod:`ecdsim.model` holds thin frozen dataclasses that group parameters and delegate;
-* :mod:`ecdsim.solvers` and :mod:`ecdsim.deployment` turn a system into result objects;
-* :mod:`ecdsim.config`, :mod:`ecdsim.plotting` and :mod:`ecdsim.cli` sit at the edge.
+* :mod:`ecdsim.solvers` (quasi-static) and :mod:`ecdsim.dynamics` (full dynamics) solve a
+  deployment; :mod:`ecdsim.methods` lists them by name; :mod:`ecdsim.deployment` turns
+  a system into result objects;
+* :mod:`ecdsim.config`, :mod:`ecdsim.plotting` and :mod:`ecdsim.cli` sit at the edge,
+  with the studies (:mod:`ecdsim.characterize`, :mod:`ecdsim.sizing`,
+  :mod:`ecdsim.montecarlo`), :mod:`ecdsim.report` and :mod:`ecdsim.webapp` between.
 
 Importing :mod:`ecdsim` itself is cheap: it imports nothing heavy.
 """
