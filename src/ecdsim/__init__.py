@@ -8,9 +8,10 @@ The package is layered (see ``docs/architecture.md``):
 * :mod:`ecdsim.solvers` (quasi-static) and :mod:`ecdsim.dynamics` (full dynamics) solve a
   deployment; :mod:`ecdsim.methods` lists them by name; :mod:`ecdsim.deployment` turns
   a system into result objects;
-* :mod:`ecdsim.config`, :mod:`ecdsim.plotting` and :mod:`ecdsim.cli` sit at the edge,
-  with the studies (:mod:`ecdsim.characterize`, :mod:`ecdsim.sizing`,
-  :mod:`ecdsim.montecarlo`), :mod:`ecdsim.report` and :mod:`ecdsim.webapp` between.
+* :mod:`ecdsim.config`, :mod:`ecdsim.plotting` and :mod:`ecdsim.cli` sit at the edge;
+  the studies (:mod:`ecdsim.characterize`, :mod:`ecdsim.sizing`,
+  :mod:`ecdsim.montecarlo`), :mod:`ecdsim.report` and :mod:`ecdsim.webapp` build on
+  the layers below and are used by the CLI.
 
 Importing :mod:`ecdsim` itself is cheap: it imports nothing heavy.
 """
