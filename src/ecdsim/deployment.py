@@ -222,7 +222,9 @@ def predict(
     if unknown:
         raise KeyError(f"unknown method(s) {unknown}; known: {sorted(SOLVERS)}")
     temps = np.asarray(temperatures, dtype=float)
-    ecd = system.ecd.at(temps)
+    with np.errstate(over="ignore"):  # an overflow is reported by _check_finite
+        ecd = system.ecd.at(temps)
+    _check_finite(ecd)
     _check_damping_positive(ecd)
     problem, fs = build_problem(system, ecd, temps)
     if dynamics is not None:
@@ -247,6 +249,36 @@ def predict(
     )
     prediction.warnings.extend(collect_warnings(prediction))
     return prediction
+
+
+def _check_finite(ecd: EcdState) -> None:
+    # An input large enough to overflow a derived quantity (ratio = 1e200 squares to inf in
+    # Eq. 3) would give an infinite result that no output can carry: name the input.
+    derived = {
+        "BECD_T (Eq. 3)": ecd.ecd_damping_rate,
+        "FECD_T (Eq. 4)": ecd.ecd_friction,
+    }
+    for label, values in derived.items():
+        values = np.asarray(values, dtype=float)
+        if np.all(np.isfinite(values)):
+            continue
+        ratio = float(np.max(np.abs(ecd.gear_ratio)))
+        gearbox = float(np.max(np.abs(ecd.gearbox_damping_rate)))
+        damper = float(np.max(np.abs(ecd.damper_damping_rate)))
+        if not np.isfinite(ratio * ratio):
+            key = "gearbox.ratio"
+        elif label.startswith("FECD"):
+            key = "damper.coulomb_friction"
+        elif gearbox > damper:
+            key = "gearbox.damping_fraction"
+        else:
+            key = "damper.damping_rate"
+        raise ModelDomainError(
+            key,
+            f"the inputs make {label} overflow to infinity (gear ratio {ratio:.4g}, BD_T "
+            f"{damper:.4g} N*m*s/rad, BG {gearbox:.4g} N*m*s/rad); check their magnitudes "
+            "and units",
+        )
 
 
 def _check_damping_positive(ecd: EcdState) -> None:
@@ -328,8 +360,8 @@ def _unsolved_warnings(
         ModelWarning(
             "not_solved",
             f"the {name} method cannot solve the case at {t:g} degC: the ECD's damping rate "
-            "BECD_T is 0, so its quasi-static equation gives an infinite speed; use the "
-            "dynamic method (give [load] inertia)",
+            "BECD_T is 0 (or so small that the speed overflows), so its quasi-static "
+            "equation gives an infinite speed; use the dynamic method (give [load] inertia)",
             t,
             name,
         )

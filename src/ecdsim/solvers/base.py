@@ -74,6 +74,17 @@ class QuasiStaticProblem:
         net = np.maximum(self.net_torques, 0.0)
         return np.asarray(net.max(axis=0) / self.damping_rate, dtype=np.float64)
 
+    def peak_speed_reached(self, stalled: BoolArray, stall_angle: FloatArray) -> FloatArray:
+        """:attr:`peak_speed` over the part of the travel actually covered [rad/s].
+
+        A stalled case never reaches the breakpoints beyond its stall angle, so their
+        speeds are left out: a rising spring that cannot start has a peak speed of 0, not
+        the Eq. 5 speed at a breakpoint it never gets to.
+        """
+        covered = ~stalled | (self.angles <= np.where(stalled, stall_angle, np.inf))
+        net = np.where(covered, np.maximum(self.net_torques, 0.0), 0.0)
+        return np.asarray(net.max(axis=0) / self.damping_rate, dtype=np.float64)
+
     @property
     def batch_shape(self) -> tuple[int, ...]:
         """Broadcast shape of one result."""
@@ -201,7 +212,7 @@ class Solver(Protocol):
 
 
 def undamped_cases(problem: QuasiStaticProblem) -> tuple[QuasiStaticProblem, BoolArray]:
-    """Split off the cases a quasi-static method cannot solve: BECD_T = 0.
+    """Split off the cases a quasi-static method cannot solve: BECD_T = 0 (or tiny).
 
     ``B * dphi/dt = T(phi) - F`` gives an infinite speed where B = 0 and the net torque is
     positive, so the quasi-static methods have no answer there (the dynamic method, with
@@ -209,7 +220,14 @@ def undamped_cases(problem: QuasiStaticProblem) -> tuple[QuasiStaticProblem, Boo
     1 N*m*s/rad, so that the solver's arithmetic stays finite, and the mask of the
     replaced cases, which :func:`mark_unsolved` then reports as not solved.
     """
-    undamped = ~(problem.damping_rate > 0.0)
+    rate = problem.damping_rate
+    # A damping rate so small that the Eq. 5 speed overflows (a gear ratio of 1e-160
+    # squares to a subnormal) is no more solvable than zero.
+    with np.errstate(over="ignore"):
+        speed_bound = np.maximum(problem.net_torques, 0.0).max(axis=0) / np.where(
+            rate > 0.0, rate, 1.0
+        )
+    undamped = ~(rate > 0.0) | ~np.isfinite(speed_bound)
     if not np.any(undamped):
         return problem, undamped
     safe = replace(problem, damping_rate=np.where(undamped, 1.0, problem.damping_rate))

@@ -76,7 +76,7 @@ class ExactMethod:
             deployment_time=np.where(stalled, np.inf, arrival),
             start_speed=np.broadcast_to(moving_net[0] / b, shape).astype(float),
             end_speed=np.broadcast_to(np.where(stalled, 0.0, net[-1] / b), shape).astype(float),
-            max_speed=problem.peak_speed,
+            max_speed=problem.peak_speed_reached(stalled, stall_angle),
             stalled=np.broadcast_to(stalled, shape).copy(),
             stall_angle=np.broadcast_to(stall_angle, shape).astype(float),
         )

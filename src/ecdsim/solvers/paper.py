@@ -143,7 +143,7 @@ class PaperMethod:
             end_speed=np.broadcast_to(np.where(stalled, 0.0, omega_e), shape).astype(float),
             # The linear-range check is physical, not the method's: the peak speed is taken
             # over every breakpoint (a tabulated spring may peak mid-travel), as in exact.
-            max_speed=problem.peak_speed,
+            max_speed=problem.peak_speed_reached(stalled, stall_angle),
             stalled=np.broadcast_to(stalled, shape).copy(),
             stall_angle=np.broadcast_to(stall_angle, shape).astype(float),
         )
