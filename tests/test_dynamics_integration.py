@@ -236,7 +236,21 @@ def test_result_object_outputs(tmp_path: Path) -> None:
     written = result.to_csv(tmp_path / "out.csv", n_points=11)
     assert len(written.read_text(encoding="utf-8").splitlines()) == 1 + 2 * 11
     figure = result.plot()
-    assert len(figure.axes) == 3
+    angle, speed, heat = figure.axes
+    assert angle.get_title() == "dynamic deployment"
+    assert [a.get_ylabel() for a in figure.axes] == [
+        "deployed angle [deg]",
+        "speed [rad/s]",
+        "damper temperature [degC]",
+    ]
+    assert heat.get_xlabel() == "time since release [s]"
+    assert [str(line.get_label()) for line in angle.get_lines()] == [
+        "case 0, -40 degC",
+        "case 1, 25 degC",
+    ]
+    # No heat capacity configured: the damper stays at each ambient temperature.
+    for line, ambient in zip(heat.get_lines(), (-40.0, 25.0), strict=True):
+        assert np.all(np.asarray(line.get_ydata(), float) == ambient)
     trajectory = prediction.trajectory("dynamic", np.linspace(0.0, 60.0, 5))
     assert trajectory.angle.shape == (5, 2)
     assert np.all(trajectory.angle[-1] == 1.57)  # latched by 60 s at both temperatures
