@@ -64,7 +64,8 @@ def read_help(
         if not line.strip() or line.startswith("╭"):
             break
         example.append(line.strip())
-    words = shlex.split(" ".join(example).split(", then")[0])
+    # The command ends where prose starts: ", then ..." or a "(...)" remark.
+    words = shlex.split(" ".join(example).split(", then")[0].split(" (")[0])
     if not has_example:
         return HelpScreen(text, options, short, commands, [])
     assert words[:1] == ["ecdsim"], f"no 'Example: ecdsim ...' on the help of {args}"

@@ -15,7 +15,7 @@ from typer.testing import CliRunner
 from ecdsim import __version__
 from ecdsim.cli.app import app
 from tests import hand
-from tests.conftest import PAPER_CONFIG, SavedFigures
+from tests.conftest import PAPER_CONFIG, ROOT, SavedFigures
 from tests.helptext import assert_options, read_help, run_example
 from tests.test_characterize_synthetic import paper_trace
 
@@ -230,6 +230,56 @@ def test_help_and_version(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> No
     assert (tmp_path / "demo" / "ecdsim-demo" / "angle_vs_time.png").is_file()
     version = runner.invoke(app, ["--version"])
     assert version.stdout.strip() == f"ecdsim {__version__}"
+
+
+MONTECARLO_OPTIONS: dict[str, str | None] = {
+    "--samples": "-n",
+    "--method": "-m",
+    "--workers": None,
+    "--scheduler": None,
+    "--out": None,
+    "--resume": None,
+    "--json": None,
+    "--seed": None,
+    "--sampling": None,
+    "--chunk-size": None,
+    "--temperature": "-T",
+    "--plot": None,
+    "--progress": None,
+    "--help": None,
+}
+
+
+@pytest.mark.parametrize(
+    ("command", "options", "example"),
+    [
+        (
+            "montecarlo",
+            MONTECARLO_OPTIONS,
+            ["montecarlo", "examples/paper_cc16_tolerances.toml", "--samples", "100000"],
+        ),
+        (
+            "report",
+            {"--output": "-o", "--pdf": None, "--temperature": "-T", "--method": "-m"}
+            | {"--help": None},
+            ["report", "examples/paper_cc16.toml", "-o", "report.html", "--pdf"],
+        ),
+        (
+            "app",
+            {"--host": None, "--port": None, "--help": None},
+            ["app", "examples/paper_cc16.toml"],
+        ),
+    ],
+)
+def test_help_of_the_other_commands(
+    command: str, options: dict[str, str | None], example: list[str]
+) -> None:
+    # Their examples are not run here: a 100 000-sample study, a PDF through Chromium and
+    # a server are exercised by test_montecarlo_run, test_report and test_webapp_e2e.
+    screen = read_help(runner, app, [command])
+    assert_options(screen, options)
+    assert screen.example == example
+    assert all((ROOT / word).is_file() for word in example if word.startswith("examples/"))
 
 
 def installed_command() -> Path:
