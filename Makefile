@@ -55,6 +55,7 @@ bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_dynamic.py
 	$(BIN)/python benchmarks/bench_webapp.py
 	$(BIN)/python benchmarks/bench_montecarlo.py
+	$(BIN)/python benchmarks/bench_csv.py
 
 # The validation suite against independent references (validation/); writes docs/validation.md
 # and exits non-zero if any check fails.
