@@ -36,7 +36,7 @@ RANK_TOLERANCE = 1e-10
 EXACT_FIT_RESOLUTION = 1e-11
 
 
-def t_quantile(dof: int, confidence: float = CONFIDENCE) -> float:
+def t_quantile(dof: float, confidence: float = CONFIDENCE) -> float:
     """Two-sided Student-t critical value: ``t`` with ``P(|T_dof| <= t) = confidence``.
 
     >>> round(t_quantile(1), 4)
@@ -146,9 +146,9 @@ class Scatter:
 
     A fit's standard errors are ``s * sqrt(u)`` with ``u`` the unscaled variance (known
     from the design) and ``s**2`` the residual variance, itself an estimate with ``dof``
-    degrees of freedom. Fits that share one noise level pool their ``s**2``
-    (:func:`pooled_variance`), which gives the combined estimate an exact Student-t
-    interval.
+    degrees of freedom. Combining fits (the laws over temperature) needs both: an
+    error's own degrees of freedom, and the pooled ``s**2`` of fits that share one noise
+    level (:func:`pooled_variance`).
 
     Attributes
     ----------

@@ -13,30 +13,40 @@ Two damping laws are offered, as a registry (:data:`DAMPING_LAWS`):
 FECD(T) is fitted as a line ``slope * T + at_0C`` (the paper's form for FL_T, section 2.3;
 :func:`ecdsim.physics.laws.linear_in_temperature`).
 
-Each law is fitted by weighted least squares to the per-temperature estimates, with
-weights ``1 / se**2``. How the intervals are built depends on what is known about those
-standard errors:
+Each law is fitted by weighted least squares to the per-temperature estimates. How the
+weights and intervals are built depends on what is known about their standard errors:
 
-* **Pooled scatter** (``scatter`` given, as the drop test does). Each per-temperature
-  standard error is ``s_i * sqrt(u_i)``: ``u_i`` follows from the design (the speeds)
-  and is known, ``s_i**2`` is the line's residual variance with only ``n_i - 2`` degrees
-  of freedom (3 for five masses). Taking such ``se_i`` as known and using the normal
-  quantile makes the intervals far too short (coverage 80-86 % at a nominal 95 % with
-  five masses per temperature, measured; docs/characterize.md section 2). Instead the
-  residual variances of all temperatures are pooled, ``s**2 = sum(nu_i s_i**2) / nu``
-  with ``nu = sum(n_i - 2)`` (one noise level for the whole campaign, as a one-stage fit
-  of all drops would assume), every ``se_i`` is recomputed as ``s * sqrt(u_i)``, and the
-  intervals use Student t with ``nu`` degrees of freedom. Under Gaussian noise this is
-  exact for the laws linear in their parameters: the weighted estimate is normal with
-  covariance ``sigma**2 (D^T U^-1 D)^-1``, and ``nu s**2 / sigma**2`` is an independent
-  chi-square. The misfit statistic ``chi2 / (temperatures - 2)`` is then a ratio of two
-  independent variance estimates and is tested against Fisher's F with
-  ``(temperatures - 2, nu)`` degrees of freedom, so it raises 1 % false alarms at the
-  1 % level.
+* **Per-temperature scatter** (``scatter`` given, as the drop test does). Each
+  standard error is ``se_i = s_i * sqrt(u_i)``: ``u_i`` follows from the design (the
+  speeds) and is known, ``s_i**2`` is the line's residual variance with only
+  ``nu_i = n_i - 2`` degrees of freedom (3 for five masses). Taking such ``se_i`` as
+  known, with the normal quantile, makes the intervals far too short (coverage 81-85 %
+  at a nominal 95 % with five masses per temperature, measured; docs/characterize.md
+  section 2), and weights ``1 / se_i**2`` favour the temperatures whose scatter came
+  out small by chance. Instead:
+
+  - weights: ``1 / (s**2 u_i)`` with the pooled ``s**2 = sum(nu_i s_i**2) / nu``,
+    ``nu = sum(nu_i)``: they depend on the design only, so the estimate is unbiased
+    whatever the scatter (and efficient where it is the same at every temperature);
+  - errors: the estimate is linear in the values, ``theta = sum_i h_i y_i`` (linearised
+    for a non-linear law), so its covariance is ``sum_i h_i h_i^T se_i**2``, each
+    temperature with its own scatter, and a combination ``g . theta`` (a parameter, the
+    law at some T) has Student-t intervals with the Welch-Satterthwaite degrees of
+    freedom ``(sum_i c_i**2)**2 / sum_i (c_i**4 / nu_i)``, ``c_i = (g . h_i) se_i``
+    (F. E. Satterthwaite, Biometrics Bulletin 2, 1946, 110-114, doi:10.2307/3002019);
+    these lie between the smallest ``nu_i`` and ``nu``. This keeps 95 % where the noise
+    differs between temperatures, where one pooled variance would not;
+  - misfit: ``chi2 = sum((y_i - law_i)**2 / (s**2 u_i))``, and ``chi2 / (temperatures -
+    2)`` is a ratio of two independent variance estimates (about the law, and of the
+    drops about their lines): it is tested against Fisher's F with
+    ``(temperatures - 2, nu)`` degrees of freedom, the lack-of-fit test against pure
+    error (Draper and Smith, section 2.1), exact where the noise is the same at every
+    temperature.
+
 * **Known errors** (no ``scatter``, as the trace fit, whose traces have tens of samples
-  each): the standard errors are taken as known, covariance ``(D^T W D)^-1``, the normal
-  quantile 1.96, and the misfit test is chi-square with (temperatures - 2) degrees of
-  freedom. This is the large-sample limit of the pooled case (nu -> infinity).
+  each): weights ``1 / se_i**2``, covariance ``(D^T W D)^-1``, the normal quantile 1.96,
+  and a chi-square misfit test with (temperatures - 2) degrees of freedom: the limit of
+  the above for ``nu_i -> infinity``.
 
 Where the misfit test fails at the 1 % level (the scatter about the law is larger than
 the per-temperature errors explain: the law or the errors are incomplete) the covariance
@@ -61,6 +71,7 @@ import numpy as np
 
 from ecdsim._types import ArrayLike, FloatArray, as_float
 from ecdsim.characterize.stats import (
+    CONFIDENCE,
     EXACT_FIT_RESOLUTION,
     Estimate,
     Scatter,
@@ -229,7 +240,9 @@ class LawFit:
     reference_temperature : T_ref [degC]
     parameters : the two parameters with uncertainty (units in ``law.keys``)
     covariance : their covariance; None where it cannot be estimated
-    quantile : the critical value used for the 95 % intervals; None with no covariance
+    quantile : the critical value used for the 95 % intervals; None with no covariance,
+        and with per-temperature scatter (each combination has its own, from
+        ``effective_dof``)
     temperatures : the temperatures fitted [degC]
     values : the per-temperature values fitted [N*m*s/rad or N*m]
     sigma : their standard errors used as weights (1 for an unweighted fit)
@@ -239,6 +252,11 @@ class LawFit:
     scatter_dof : degrees of freedom of the pooled per-temperature scatter the weights
         were scaled by (nu, module docstring); None where the errors were taken as known
         or the fit is unweighted
+    error_components : with per-temperature scatter, each temperature's contribution to
+        the parameters' errors, shape (temperatures, 2): row i is ``se_i`` times the
+        derivative of the parameters with respect to value i [units in ``law.keys``];
+        the covariance is ``error_components.T @ error_components``. None otherwise
+    component_dof : degrees of freedom of each row's ``se_i`` (n_i - 2); None with it
     p_value : goodness-of-fit p-value (weighted fits with dof > 0), else None: Fisher's
         F of ``chi_square / dof`` with (dof, scatter_dof) degrees of freedom, or
         chi-square with dof where the errors were taken as known
@@ -262,6 +280,8 @@ class LawFit:
     p_value: float | None
     scaled: bool
     aic: float
+    error_components: FloatArray | None = None
+    component_dof: FloatArray | None = None
 
     @property
     def parameter_values(self) -> FloatArray:
@@ -275,13 +295,26 @@ class LawFit:
 
     def band(self, temperature: ArrayLike) -> tuple[FloatArray, FloatArray] | None:
         """95 % confidence band (low, high) of the law at T [degC] (delta method)."""
-        if self.covariance is None or self.quantile is None:
+        if self.covariance is None:
             return None
         t = np.atleast_1d(as_float(temperature))
         g = self.law.jacobian(t, self.parameter_values, self.reference_temperature)
-        spread = self.quantile * np.sqrt(np.maximum(np.sum((g @ self.covariance) * g, 1), 0.0))
+        errors = combination_errors(
+            g, self.covariance, self.quantile, self.error_components, self.component_dof
+        )
+        if errors is None:
+            return None
+        se, quantile = errors
         centre = np.atleast_1d(self(t))
-        return centre - spread, centre + spread
+        return centre - quantile * se, centre + quantile * se
+
+    @property
+    def effective_dof(self) -> list[float] | None:
+        """Welch-Satterthwaite degrees of freedom of each parameter's interval; None
+        where the intervals do not use per-temperature scatter."""
+        if self.error_components is None or self.component_dof is None:
+            return None
+        return [float(d) for d in _satterthwaite(self.error_components.T, self.component_dof)]
 
     def residuals(self) -> FloatArray:
         """Per-temperature value minus law [unit of the values]."""
@@ -302,6 +335,7 @@ class LawFit:
             chi_square=self.chi_square,
             dof=self.dof,
             scatter_dof=self.scatter_dof,
+            effective_dof=self.effective_dof,
             p_value=self.p_value,
             covariance_scaled=self.scaled,
             aic=finite_or_none(self.aic),
@@ -327,9 +361,9 @@ def fit_law(
     values : the estimate at each temperature (value and standard error)
     reference_temperature : T_ref of the law [degC]
     scatter : the residual variance each standard error was scaled by, one per
-        temperature; given (and none None), the variances are pooled and the intervals
-        use Student t with the pooled degrees of freedom (module docstring). None: the
-        standard errors are taken as known.
+        temperature; given (and none None), the weights use the pooled variance and the
+        intervals each temperature's own, with Welch-Satterthwaite degrees of freedom
+        (module docstring). None: the standard errors are taken as known.
     """
     from scipy.optimize import least_squares
 
@@ -365,6 +399,8 @@ def fit_law(
     dof = stats.dof
     reduced = chi_square / dof if dof > 0 else math.nan
     covariance: FloatArray | None
+    components: FloatArray | None = None
+    component_dof: FloatArray | None = None
     if weighted:
         p_value = _misfit_p_value(chi_square, dof, pooled)
         scaled = p_value is not None and p_value < MISFIT_LEVEL
@@ -372,8 +408,14 @@ def fit_law(
         quantile: float | None
         if scaled:
             quantile = t_quantile(dof)
-        elif pooled is not None:
-            quantile = t_quantile(pooled.dof)
+        elif pooled is not None and scatter is not None:
+            # Welch-Satterthwaite: each temperature's error with its own scatter.
+            design = -jacobian(p)  # rows: d law / d parameters / sigma_i
+            influence = stats.unscaled_covariance @ design.T / sigma  # d params / d y_i
+            components = as_float((influence * np.array(errors, dtype=float)).T)
+            component_dof = np.array([s.dof for s in scatter if s is not None], dtype=float)
+            covariance = components.T @ components
+            quantile = None
         else:
             quantile = normal_quantile()
         aic = chi_square + 2.0 * 2
@@ -387,7 +429,7 @@ def fit_law(
     return LawFit(
         law=law,
         reference_temperature=reference_temperature,
-        parameters=estimates(p, covariance, quantile),
+        parameters=_parameter_estimates(p, covariance, quantile, components, component_dof),
         covariance=covariance,
         quantile=quantile if covariance is not None else None,
         temperatures=t,
@@ -400,6 +442,68 @@ def fit_law(
         p_value=p_value,
         scaled=scaled,
         aic=aic,
+        error_components=components,
+        component_dof=component_dof,
+    )
+
+
+def _satterthwaite(contributions: FloatArray, dof: FloatArray) -> FloatArray:
+    """Welch-Satterthwaite dof of sums of independent variance terms, shape (m, k):
+    ``(sum c_i**2)**2 / sum(c_i**4 / nu_i)`` over each row (Satterthwaite 1946,
+    Biometrics Bulletin 2, 110-114, doi:10.2307/3002019)."""
+    squares = np.atleast_2d(contributions) ** 2
+    total = np.sum(squares, axis=1)
+    spread = np.sum(squares**2 / dof, axis=1)
+    safe = np.where(spread > 0.0, spread, 1.0)
+    return as_float(np.where(spread > 0.0, total**2 / safe, np.sum(dof)))
+
+
+def combination_errors(
+    gradient: FloatArray,
+    covariance: FloatArray,
+    quantile: float | None,
+    components: FloatArray | None,
+    component_dof: FloatArray | None,
+) -> tuple[FloatArray, FloatArray] | None:
+    """Standard error and 95 % critical value of combinations ``g . parameters``.
+
+    ``gradient`` has one row per combination. With per-temperature error components
+    the variance is ``sum_i (g . c_i)**2`` and the critical value Student t with the
+    Welch-Satterthwaite dof of those terms; otherwise ``g C g^T`` and ``quantile``.
+    None where no critical value is known.
+    """
+    from scipy import stats as scipy_stats
+
+    g = np.atleast_2d(np.asarray(gradient, dtype=float))
+    if components is not None and component_dof is not None:
+        contributions = g @ components.T
+        se = np.sqrt(np.sum(contributions**2, axis=1))
+        dof = _satterthwaite(contributions, component_dof)
+        return se, as_float(scipy_stats.t.ppf(0.5 + CONFIDENCE / 2.0, dof))
+    if quantile is None:
+        return None
+    se = np.sqrt(np.maximum(np.sum((g @ covariance) * g, axis=1), 0.0))
+    return se, np.full(se.shape, quantile)
+
+
+def _parameter_estimates(
+    values: FloatArray,
+    covariance: FloatArray | None,
+    quantile: float | None,
+    components: FloatArray | None,
+    component_dof: FloatArray | None,
+) -> tuple[Estimate, ...]:
+    """Each parameter with its standard error and 95 % interval."""
+    if covariance is None or components is None:
+        return estimates(values, covariance, quantile)
+    errors = combination_errors(
+        np.eye(values.size), covariance, quantile, components, component_dof
+    )
+    assert errors is not None  # components given: a critical value always exists
+    se, q = errors
+    return tuple(
+        Estimate(float(v), float(e), (float(v - k * e), float(v + k * e)))
+        for v, e, k in zip(values, se, q, strict=True)
     )
 
 
