@@ -61,6 +61,14 @@ class _Cells(HTMLParser):
             self.data = (self.data or "") + data
 
 
+def _data_block(html: str) -> str:
+    """The report's machine-readable JSON block."""
+    parser = _Cells()
+    parser.feed(html)
+    assert parser.data is not None
+    return parser.data
+
+
 def _report(config: Path, out: Path, *extra: str) -> _Cells:
     result = runner.invoke(app, ["report", str(config), "-o", str(out), *extra])
     assert result.exit_code == 0, result.output
@@ -205,12 +213,18 @@ def test_report_summarises_montecarlo_when_tolerances_are_configured(tmp_path: P
 
 
 def test_report_lists_warnings(tmp_path: Path) -> None:
-    # At 300 degC the linear damping law still holds (1 - 0.004 * 275 = -0.1 < 0 fails),
-    # so use 150 degC: the friction tables' linear laws give FS = 0.58 - 0.66 < 0 there.
+    # At 150 degC the paper's FS_T = 0.58 - 0.0044 * 150 = -0.08 N*m < 0 (a warning; BD_T
+    # = BD (1 - 0.004 * 125) is still positive, so the case is solved, not an error).
     out = tmp_path / "report.html"
     _report(PAPER_CONFIG, out, "-T", "150")
     html = out.read_text(encoding="utf-8")
     assert 'data-code="negative_friction"' in html
+    assert html.count('data-code="negative_friction"') == 1  # one case, one warning
+    data = json.loads(_data_block(html))
+    assert [w["code"] for w in data["prediction"]["warnings"]] == ["negative_friction"]
+    assert data["prediction"]["cases"][0]["system_friction_Nm"] == pytest.approx(
+        0.58 - 0.0044 * 150.0, rel=1e-12
+    )  # by hand: one multiply-add
 
 
 def test_report_bad_config_exits_2(tmp_path: Path) -> None:
