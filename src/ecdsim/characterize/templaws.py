@@ -299,12 +299,13 @@ class LawFit:
             return None
         t = np.atleast_1d(as_float(temperature))
         g = self.law.jacobian(t, self.parameter_values, self.reference_temperature)
-        errors = combination_errors(
-            g, self.covariance, self.quantile, self.error_components, self.component_dof
-        )
-        if errors is None:
+        if self.error_components is not None and self.component_dof is not None:
+            se, quantile = _component_errors(g, self.error_components, self.component_dof)
+        elif self.quantile is not None:
+            se = np.sqrt(np.maximum(np.sum((g @ self.covariance) * g, axis=1), 0.0))
+            quantile = np.full(se.shape, self.quantile)
+        else:
             return None
-        se, quantile = errors
         centre = np.atleast_1d(self(t))
         return centre - quantile * se, centre + quantile * se
 
@@ -458,32 +459,21 @@ def _satterthwaite(contributions: FloatArray, dof: FloatArray) -> FloatArray:
     return as_float(np.where(spread > 0.0, total**2 / safe, np.sum(dof)))
 
 
-def combination_errors(
-    gradient: FloatArray,
-    covariance: FloatArray,
-    quantile: float | None,
-    components: FloatArray | None,
-    component_dof: FloatArray | None,
-) -> tuple[FloatArray, FloatArray] | None:
+def _component_errors(
+    gradient: FloatArray, components: FloatArray, component_dof: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """Standard error and 95 % critical value of combinations ``g . parameters``.
 
-    ``gradient`` has one row per combination. With per-temperature error components
-    the variance is ``sum_i (g . c_i)**2`` and the critical value Student t with the
-    Welch-Satterthwaite dof of those terms; otherwise ``g C g^T`` and ``quantile``.
-    None where no critical value is known.
+    ``gradient`` has one row per combination; the variance is ``sum_i (g . c_i)**2``
+    over the per-temperature error components and the critical value Student t with the
+    Welch-Satterthwaite dof of those terms.
     """
     from scipy import stats as scipy_stats
 
-    g = np.atleast_2d(np.asarray(gradient, dtype=float))
-    if components is not None and component_dof is not None:
-        contributions = g @ components.T
-        se = np.sqrt(np.sum(contributions**2, axis=1))
-        dof = _satterthwaite(contributions, component_dof)
-        return se, as_float(scipy_stats.t.ppf(0.5 + CONFIDENCE / 2.0, dof))
-    if quantile is None:
-        return None
-    se = np.sqrt(np.maximum(np.sum((g @ covariance) * g, axis=1), 0.0))
-    return se, np.full(se.shape, quantile)
+    contributions = np.atleast_2d(np.asarray(gradient, dtype=float)) @ components.T
+    se = np.sqrt(np.sum(contributions**2, axis=1))
+    dof = _satterthwaite(contributions, component_dof)
+    return se, as_float(scipy_stats.t.ppf(0.5 + CONFIDENCE / 2.0, dof))
 
 
 def _parameter_estimates(
@@ -494,13 +484,9 @@ def _parameter_estimates(
     component_dof: FloatArray | None,
 ) -> tuple[Estimate, ...]:
     """Each parameter with its standard error and 95 % interval."""
-    if covariance is None or components is None:
+    if components is None or component_dof is None:
         return estimates(values, covariance, quantile)
-    errors = combination_errors(
-        np.eye(values.size), covariance, quantile, components, component_dof
-    )
-    assert errors is not None  # components given: a critical value always exists
-    se, q = errors
+    se, q = _component_errors(np.eye(values.size), components, component_dof)
     return tuple(
         Estimate(float(v), float(e), (float(v - k * e), float(v + k * e)))
         for v, e, k in zip(values, se, q, strict=True)
