@@ -275,6 +275,41 @@ def test_friction_line_by_hand() -> None:
     assert (band[0][0], band[1][0]) == pytest.approx(fit.parameters[0].ci95, rel=1e-12)
 
 
+def test_damping_coefficient_by_hand() -> None:
+    # The linear law B_ref (1 + c dT) is the line b0 + b1 dT with B_ref = b0, c = b1 / b0:
+    # the same weighted line as above (weights 1 / (s**2 u_i), u_i = (D_i^T D_i)^-1 [1, 1]),
+    # then c's error by the delta method, gradient (-b1 / b0**2, 1 / b0), each
+    # temperature's contribution (g . h_i) se_i, Welch-Satterthwaite dof as above.
+    rng = np.random.default_rng(8)
+    result = reduce_drop_test(campaign_table(rng, torque_noise=TORQUE_NOISE), TRUTH.t_ref)
+    assert result.laws is not None
+    fit = result.laws.damping["linear"]
+    dt = np.array([f.temperature for f in result.fits]) - TRUTH.t_ref
+    value = np.array([f.line.slope.value for f in result.fits])
+    se = np.array([f.line.slope.standard_error or 0.0 for f in result.fits])
+    nu = np.array([f.line.n_points - 2 for f in result.fits])
+    ssr = np.array([np.sum(f.line.statistics.residuals**2) for f in result.fits])
+    u = []
+    for f in result.fits:
+        design = np.column_stack([np.ones_like(f.speed), f.speed])
+        u.append(float(np.linalg.inv(design.T @ design)[1, 1]))
+    w = 1.0 / (float(np.sum(ssr) / np.sum(nu)) * np.array(u))
+    a = np.column_stack([np.ones_like(dt), dt])
+    h = np.linalg.inv(a.T @ (w[:, None] * a)) @ (a.T * w)
+    b0, b1 = h @ value
+    contribution = ((-b1 / b0**2) * h[0] + (1.0 / b0) * h[1]) * se
+    se_c = math.sqrt(float(np.sum(contribution**2)))
+    dof = float(np.sum(contribution**2) ** 2 / np.sum(contribution**4 / nu))
+    half = float(stats.t.ppf(0.975, dof)) * se_c
+    # The fit's Jacobian at the solution is exact (not differenced): 1e-8 relative.
+    assert fit.parameters[0].value == pytest.approx(b0, rel=1e-9)
+    assert fit.parameters[1].value == pytest.approx(b1 / b0, rel=1e-8)
+    assert fit.parameters[1].standard_error == pytest.approx(se_c, rel=1e-8)
+    assert fit.effective_dof is not None
+    assert fit.effective_dof[1] == pytest.approx(dof, rel=1e-8)
+    assert fit.parameters[1].ci95 == pytest.approx((b1 / b0 - half, b1 / b0 + half), rel=1e-8)
+
+
 def test_scatter_must_match_the_temperatures() -> None:
     values = [Estimate(24.0, 0.1, None), Estimate(20.0, 0.1, None)]
     with pytest.raises(ValueError, match="1 scatter entries for 2 temperatures"):
