@@ -24,9 +24,11 @@ from fastapi import FastAPI, HTTPException, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, Response
 from pydantic import BaseModel, ConfigDict, Field
+from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from ecdsim._version import __version__
 from ecdsim.config import Config, ConfigError, parse_config
+from ecdsim.config.loader import MAX_NESTING, nesting_depth
 from ecdsim.deployment import ModelDomainError, Prediction, predict
 from ecdsim.report.builder import predict_config, render_html
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
@@ -65,11 +67,15 @@ class ConfigBody(BaseModel):
 class DeployBody(ConfigBody):
     """A configuration plus how finely to sample the curves."""
 
-    time_points: int = Field(200, ge=2, le=2000, description="Samples of angle against time.")
+    # strict: JSON true/false or "25" are not counts (pydantic would read false as 0).
+    time_points: int = Field(
+        200, ge=2, le=2000, strict=True, description="Samples of angle against time."
+    )
     sweep_points: int = Field(
         25,
         ge=0,
         le=201,
+        strict=True,
         description="Temperatures of the deployment-time curve, spread between the coldest "
         "and the hottest configured temperature (0: none).",
     )
@@ -110,7 +116,17 @@ class ExampleResponse(BaseModel):
     source: str
 
 
-_ERRORS: dict[int | str, dict[str, Any]] = {422: {"model": ProblemDetail}}
+# Every refusal is JSON, whatever the endpoint's own response type (the report is HTML):
+# say so in the schema, so that the OpenAPI document matches what is sent.
+_PROBLEM_JSON = {
+    "content": {"application/json": {"schema": {"$ref": "#/components/schemas/ProblemDetail"}}}
+}
+_ERRORS: dict[int | str, dict[str, Any]] = {
+    413: {"description": "Request body too large", **_PROBLEM_JSON},
+    422: {"description": "Invalid input, one line per problem", **_PROBLEM_JSON},
+}
+# The largest request body read: a config is a few kB; anything near this is not one.
+MAX_BODY_BYTES = 1_000_000
 
 
 def _refuse(problems: list[str]) -> HTTPException:
@@ -119,6 +135,9 @@ def _refuse(problems: list[str]) -> HTTPException:
 
 def load_body(raw: dict[str, Any]) -> tuple[Config, str]:
     """The validated config and its TOML text; HTTP 422 with every problem if invalid."""
+    if nesting_depth(raw) > MAX_NESTING:
+        # Bounded before anything walks it (to_toml and the TOML reader recurse).
+        raise _refuse([f"config: nested too deeply (at most {MAX_NESTING} levels)"])
     try:
         text = to_toml(raw)
     except UnrepresentableError as exc:
@@ -175,6 +194,69 @@ def curves(
     return {"trajectories": trajectories, "sweep": sweep}
 
 
+class BodyLimit:
+    """ASGI middleware: refuse a request body over ``limit`` bytes with 413 and JSON.
+
+    The body is read (up to the limit) before the app sees it and then replayed, so that
+    a body without a Content-Length header is bounded too.
+    """
+
+    def __init__(self, app: Any, limit: int) -> None:
+        self.app = app
+        self.limit = limit
+
+    async def __call__(self, scope: Any, receive: Any, send: Any) -> None:
+        """Pass the request on with its body read, or answer 413 if it is too large."""
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        chunks: list[bytes] = []
+        size = 0
+        more = True
+        while more:
+            message = await receive()
+            if message["type"] != "http.request":
+                await self.app(scope, _replay([message]), send)
+                return
+            chunk = message.get("body", b"")
+            size += len(chunk)
+            if size > self.limit:
+                await _too_large(self.limit, send)
+                return
+            chunks.append(chunk)
+            more = message.get("more_body", False)
+        body = {"type": "http.request", "body": b"".join(chunks), "more_body": False}
+        await self.app(scope, _replay([body], receive), send)
+
+
+def _replay(messages: list[Any], then: Any = None) -> Any:
+    queue = list(messages)
+
+    async def receive() -> Any:
+        if queue:
+            return queue.pop(0)
+        if then is not None:
+            return await then()
+        return {"type": "http.disconnect"}
+
+    return receive
+
+
+async def _too_large(limit: int, send: Any) -> None:
+    payload = json.dumps({"errors": [f"body: larger than {limit} bytes"]}).encode()
+    await send(
+        {
+            "type": "http.response.start",
+            "status": 413,
+            "headers": [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(payload)).encode()),
+            ],
+        }
+    )
+    await send({"type": "http.response.body", "body": payload})
+
+
 def create_app(config_text: str | None = None) -> FastAPI:
     """The explorer app, starting from ``config_text`` (TOML) or the paper's example."""
     start_text = config_text if config_text is not None else EXAMPLE_CONFIG.read_text("utf-8")
@@ -199,8 +281,21 @@ def create_app(config_text: str | None = None) -> FastAPI:
             problems.append(f"{where}: {error.get('msg', 'invalid')}")
         return JSONResponse(status_code=422, content={"errors": problems})
 
-    @app.exception_handler(HTTPException)
-    async def _refused(request: Request, exc: HTTPException) -> JSONResponse:
+    @app.exception_handler(Exception)
+    async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
+        # A defect, not the user's fault: still a JSON answer that closes the exchange
+        # cleanly, so a kept-alive connection serves its next request.
+        return JSONResponse(
+            status_code=500,
+            content={"errors": [f"internal error ({type(exc).__name__}); please report it"]},
+        )
+
+    app.add_middleware(BodyLimit, limit=MAX_BODY_BYTES)
+
+    # Starlette's class: FastAPI's own refusals (400 for a body that is not JSON, 404,
+    # 405) derive from it, and they too answer with the errors list.
+    @app.exception_handler(StarletteHTTPException)
+    async def _refused(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         raw: Any = exc.detail
         detail = raw if isinstance(raw, list) else [str(raw)]
         return JSONResponse(status_code=exc.status_code, content={"errors": detail})
@@ -251,6 +346,8 @@ def create_app(config_text: str | None = None) -> FastAPI:
             raw = tomllib.loads(body.toml)
         except tomllib.TOMLDecodeError as exc:
             raise _refuse([f"toml: not valid TOML: {exc}"]) from None
+        except RecursionError:
+            raise _refuse([f"toml: nested too deeply (at most {MAX_NESTING} levels)"]) from None
         load_body(raw)
         return {"config": raw, "toml": body.toml, "source": "uploaded"}
 

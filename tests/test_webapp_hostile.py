@@ -1,0 +1,104 @@
+"""The explorer under malformed and hostile requests (issue 12, items 1 to 6).
+
+Every malformed request gets a 4xx with a JSON list of problems, never a 500; the
+OpenAPI document declares what is sent.
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+
+from ecdsim.config.loader import MAX_NESTING
+from ecdsim.webapp.server import MAX_BODY_BYTES, create_app
+from tests.conftest import PAPER_CONFIG
+
+APP = create_app()
+client = TestClient(APP)
+
+
+def _config() -> dict[str, Any]:
+    return tomllib.loads(PAPER_CONFIG.read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize("depth", [MAX_NESTING + 1, 500, 5000])
+def test_deeply_nested_configs_are_refused(depth: int) -> None:
+    # Written by hand: Python's own JSON encoder cannot nest 5000 deep.
+    config = json.dumps(_config())
+    body = f'{{"config": {config[:-1]}, "extra": {{"x": {"[" * depth}1{"]" * depth}}}}}}}'
+    for endpoint in ("/api/deploy", "/api/config.toml", "/api/report"):
+        response = client.post(endpoint, content=body, headers={"content-type": "application/json"})
+        # Past the JSON parser's own limit the body is not JSON to it: 400, else 422.
+        assert response.status_code == (400 if depth > 1000 else 422), endpoint
+        (problem,) = response.json()["errors"]
+        assert "nested too deeply" in problem or "error parsing the body" in problem
+
+
+def test_deeply_nested_toml_is_refused() -> None:
+    text = PAPER_CONFIG.read_text() + "\n[extra]\nx = " + "[" * 5000 + "]" * 5000 + "\n"
+    response = client.post("/api/config/parse", json={"toml": text})
+    assert response.status_code == 422
+    assert "nested too deeply" in response.json()["errors"][0]
+
+
+@pytest.mark.parametrize("value", [False, True, "25", 2.5])
+def test_counts_must_be_integers(value: Any) -> None:
+    response = client.post("/api/deploy", json={"config": _config(), "sweep_points": value})
+    assert response.status_code == 422, response.text
+    assert response.json()["errors"][0].startswith("sweep_points: ")
+
+
+def test_unit_expressions_and_wrong_types_are_422() -> None:
+    config = _config()
+    config["load"]["start_torque"] = "3.73 N*m/0"
+    response = client.post("/api/deploy", json={"config": config})
+    assert response.status_code == 422
+    assert "is not a unit expression" in response.json()["errors"][0]
+    config = _config()
+    config["analysis"]["methods"] = [["exact"]]
+    response = client.post("/api/deploy", json={"config": config})
+    assert response.status_code == 422
+    assert response.json()["errors"][0].startswith("config: analysis.methods[0]")
+
+
+def test_overflowing_inputs_are_422() -> None:
+    config = _config()
+    config["gearbox"]["ratio"] = 1e200
+    response = client.post("/api/deploy", json={"config": config})
+    assert response.status_code == 422
+    assert "gearbox.ratio" in response.json()["errors"][0]
+
+
+def test_a_body_over_the_limit_is_413_with_or_without_a_length() -> None:
+    huge = b'{"config": {"title": "' + b"x" * (MAX_BODY_BYTES + 10) + b'"}}'
+    response = client.post(
+        "/api/deploy", content=huge, headers={"content-type": "application/json"}
+    )
+    assert response.status_code == 413
+    assert response.json() == {"errors": [f"body: larger than {MAX_BODY_BYTES} bytes"]}
+
+    def chunks() -> Any:  # no Content-Length: a streamed body
+        for _ in range(20):
+            yield b"x" * (MAX_BODY_BYTES // 10)
+
+    response = client.post(
+        "/api/deploy", content=chunks(), headers={"content-type": "application/json"}
+    )
+    assert response.status_code == 413
+    # A normal request on the same client still works afterwards.
+    assert client.post("/api/deploy", json={"config": _config()}).status_code == 200
+
+
+def test_report_refusals_are_json_and_declared_so() -> None:
+    config = _config()
+    config["gearbox"]["ratio"] = -1
+    response = client.post("/api/report", json={"config": config})
+    assert response.status_code == 422
+    assert response.headers["content-type"] == "application/json"
+    declared = APP.openapi()["paths"]["/api/report"]["post"]["responses"]
+    assert set(declared["422"]["content"]) == {"application/json"}
+    assert set(declared["200"]["content"]) == {"text/html"}
