@@ -392,6 +392,11 @@ def test_cli_json_summary_progress_and_plots(tmp_path: Path, saved_figures: Save
         assert saved_figures.legend(axes) == ["25 degC"]  # no stall: no stall share shown
     (cdf,) = saved_figures.axes("time_cdf.png")
     assert cdf.get_ylabel() == "cumulative probability [-]"
+    # A density's unit is the inverse of its quantity's.
+    (histogram,) = saved_figures.axes("time_histogram.png")
+    assert histogram.get_ylabel() == "probability density [1/s]"
+    (speeds,) = saved_figures.axes("end_speed_histogram.png")
+    assert speeds.get_ylabel() == "probability density [1/(rad/s)]"
     # The empirical CDF: level (r + 1)/n at the r-th smallest time, times by hand.
     step = cdf.get_lines()[0]
     levels = np.asarray(step.get_ydata(), float)

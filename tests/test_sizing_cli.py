@@ -110,6 +110,7 @@ def test_compare_fluid_json_and_plot(tmp_path: Path, saved_figures: SavedFigures
     assert top.get_title() == "ECD against a fluid damper matched at 25 degC"
     assert top.get_ylabel() == "deployment time [s]"
     assert bottom.get_xlabel() == "temperature [degC]"
+    assert bottom.get_ylabel() == "damping [N*m*(s/rad)^n]"
     assert saved_figures.legend(top) == ["ECD", document["fluid_damper"]["name"]]
     # Units in the legend: the two dampings have different units when n != 1.
     assert saved_figures.legend(bottom) == ["ECD: BECD_T [N*m*s/rad]", "fluid: c(T) (n = 1)"]

@@ -29,6 +29,24 @@ def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
     return Figure(figsize=(width, height), layout="constrained")
 
 
+def density_label(quantity: str) -> str:
+    """The y label of a density of ``quantity``: its unit inverted.
+
+    >>> density_label("deployment time [s]")
+    'probability density [1/s]'
+    >>> density_label("latch speed [rad/s]")
+    'probability density [1/(rad/s)]'
+    """
+    unit = quantity[quantity.rfind("[") + 1 : -1] if quantity.endswith("]") else ""
+    if not unit:
+        return "probability density [1/unit of x]"
+    return (
+        f"probability density [1/({unit})]"
+        if "/" in unit or "*" in unit
+        else (f"probability density [1/{unit}]")
+    )
+
+
 def plot_histogram(
     samples: Mapping[float, FloatArray], quantity: str, title: str, bins: int = 60
 ) -> Figure:
@@ -53,7 +71,7 @@ def plot_histogram(
                 finite, bins=edges.tolist(), histtype="step", color=color, label=label, density=True
             )
     ax.set_xlabel(quantity)
-    ax.set_ylabel("probability density [1/unit]")
+    ax.set_ylabel(density_label(quantity))
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     if samples:

@@ -119,7 +119,8 @@ def plot_fluid_comparison(comparison: FluidComparison) -> Figure:
     bottom.plot(t, comparison.fluid_coefficient, label=f"fluid: c(T) (n = {comparison.exponent:g})")
     bottom.set_yscale("log")
     bottom.set_xlabel("temperature [degC]")
-    bottom.set_ylabel("damping")
+    # One axis for both: the ECD's rate is the n = 1 case of the fluid's c(T).
+    bottom.set_ylabel("damping [N*m*(s/rad)^n]")
     bottom.grid(True, alpha=0.3, which="both")
     bottom.legend(fontsize="small")
     return fig
