@@ -86,7 +86,7 @@ def test_cases_in_a_batch_do_not_influence_each_other() -> None:
     creep, creeps = np.full(3, 1e-12), np.zeros(3, dtype=bool)
     atol, first = np.full((4, 3), 1e-12), np.full(3, 1e-5)
     batch = rosenbrock.integrate_batch(
-        model, y0, length, cap, 1e9, creep, creeps, atol, 1e-9, first, False, 4, 5
+        model, y0, length, cap, 1e9, creep, creeps, atol, 1e-9, first, False, 4
     )
     one = np.array([1])
     alone = rosenbrock.integrate_batch(
@@ -102,7 +102,6 @@ def test_cases_in_a_batch_do_not_influence_each_other() -> None:
         first[one],
         False,
         4,
-        5,
     )
     assert batch.kind[1] == alone.kind[0]
     assert batch.duration[1] == alone.duration[0]

@@ -5,8 +5,12 @@ Two laws, each a thin object delegating to :mod:`ecdsim.physics`:
 * ``linear``: ``BD_T * omega_d`` with BD_T from the paper's Eq. 1 (first term);
 * ``rolloff``: the Kloss form of :mod:`ecdsim.physics.rolloff`.
 
-Both give the torque and its partial derivatives in speed and temperature (for the
-integrator's analytic Jacobian). The gearbox damping BG stays linear in every law and is
+Both scale with an affine temperature factor ``f(T) = 1 + c (T - T_ref)`` (Eq. 1's
+bracket; the Kloss law's resistivity factor of the peak speed) and are written, for the
+integrator, as functions of the speed and that factor: the torque, its partial
+derivatives, and the heating power over the factor, ``p = P / f``, which stays finite
+where f vanishes (the integrator's temperature state is the factor's logarithm, see
+:mod:`ecdsim.physics.thermal`). The gearbox damping BG stays linear in every law and is
 not part of these objects.
 """
 
@@ -34,24 +38,44 @@ class EddyLaw(Protocol):
         """Torque [N*m] at high-speed shaft speed [rad/s] and damper temperature [degC]."""
         ...
 
-    def speed_derivative(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
-        """Partial derivative of the torque in speed [N*m*s/rad]."""
+    @property
+    def reference_temperature(self) -> float | FloatArray:
+        """T_ref, where the temperature factor is 1 [degC]."""
         ...
 
-    def temperature_derivative(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
-        """Partial derivative of the torque in temperature [N*m/K]."""
+    @property
+    def coefficient(self) -> FloatArray:
+        """c, the temperature factor's fractional change per kelvin [1/K]."""
         ...
 
-    def domain_margin(self, temperature: ArrayLike) -> FloatArray:
-        """Positive where the law holds at damper temperature T [degC] (its own unit)."""
+    def factor(self, temperature: ArrayLike) -> FloatArray:
+        """The temperature factor ``f = 1 + c (T - T_ref)`` at damper temperature T [degC]."""
+        ...
+
+    def torque_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """Torque [N*m] at high-speed shaft speed [rad/s] and temperature factor f [-]."""
+        ...
+
+    def speed_derivative_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """Partial derivative of the torque in speed at factor f [N*m*s/rad]."""
+        ...
+
+    def factor_derivative(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """Partial derivative of the torque in the factor f [N*m]."""
+        ...
+
+    def power_per_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """Eddy-current (heating) power over the factor, ``T_eddy omega_d / f`` [W]."""
+        ...
+
+    def power_per_factor_derivatives(
+        self, speed: ArrayLike, factor: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
+        """Partial derivatives of :meth:`power_per_factor` in speed [W*s/rad] and f [W]."""
         ...
 
     def flattened(self, shape: tuple[int, ...]) -> Self:
         """The law with every parameter broadcast to ``shape`` and raveled (1-D)."""
-        ...
-
-    def at(self, index: int) -> Self:
-        """The law of one case of a flattened batch, with float parameters."""
         ...
 
     def take(self, index: NDArray[np.intp]) -> Self:
@@ -78,14 +102,6 @@ class _Broadcastable:
         }
         return replace(self, **values)  # type: ignore[type-var]
 
-    def at(self, index: int) -> Self:
-        """The law of one case of a flattened batch, with float parameters."""
-        values = {
-            f.name: float(np.asarray(getattr(self, f.name)).reshape(-1)[index])
-            for f in fields(self)  # type: ignore[arg-type]
-        }
-        return replace(self, **values)  # type: ignore[type-var]
-
 
 @dataclass(frozen=True)
 class LinearEddy(_Broadcastable):
@@ -107,28 +123,51 @@ class LinearEddy(_Broadcastable):
         """Registry name."""
         return "linear"
 
-    def _rate(self, temperature: ArrayLike) -> FloatArray:
+    @property
+    def coefficient(self) -> FloatArray:
+        """c [1/K]."""
+        return np.asarray(self.temperature_coefficient, dtype=float)
+
+    def factor(self, temperature: ArrayLike) -> FloatArray:
+        """``1 + c (T - T_ref)``, the bracket of Eq. 1 [-]."""
         return assembly.damper_damping_rate(
-            self.damping_rate, temperature, self.reference_temperature, self.temperature_coefficient
+            1.0, temperature, self.reference_temperature, self.temperature_coefficient
         )
 
     def torque(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
         """``BD_T * omega_d`` [N*m] (Eq. 1 and the damper's linear torque)."""
-        return assembly.damper_torque(self._rate(temperature), speed)
+        rate = assembly.damper_damping_rate(
+            self.damping_rate, temperature, self.reference_temperature, self.temperature_coefficient
+        )
+        return assembly.damper_torque(rate, speed)
 
-    def speed_derivative(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
-        """``BD_T`` [N*m*s/rad], broadcast against the speed."""
-        rate = self._rate(temperature)
-        return as_float(rate + np.zeros_like(np.asarray(speed, dtype=float)))
+    def torque_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """``BD f omega_d`` [N*m]."""
+        return assembly.damper_torque(self._rate(factor), speed)
 
-    def domain_margin(self, temperature: ArrayLike) -> FloatArray:
-        """BD_T [N*m*s/rad]: Eq. 1 has no meaning where it is <= 0."""
-        return self._rate(temperature)
+    def speed_derivative_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """``BD f`` [N*m*s/rad], broadcast against the speed."""
+        return as_float(self._rate(factor) + np.zeros_like(np.asarray(speed, dtype=float)))
 
-    def temperature_derivative(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
-        """``BD * c * omega_d`` [N*m/K], the temperature derivative of Eq. 1 times speed."""
-        slope = np.asarray(self.damping_rate, float) * np.asarray(self.temperature_coefficient)
-        return as_float(slope * np.asarray(speed, dtype=float) + 0.0 * np.asarray(temperature))
+    def factor_derivative(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """``BD omega_d`` [N*m], broadcast against the factor."""
+        bd = np.asarray(self.damping_rate, dtype=float)
+        return as_float(bd * np.asarray(speed, dtype=float) + 0.0 * np.asarray(factor, float))
+
+    def power_per_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """``BD omega_d**2`` [W]: the power ``BD_T omega_d**2`` over f (any f)."""
+        w = np.asarray(speed, dtype=float)
+        return as_float(np.asarray(self.damping_rate, dtype=float) * w * w)
+
+    def power_per_factor_derivatives(
+        self, speed: ArrayLike, factor: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
+        """``(2 BD omega_d, 0)`` [W*s/rad, W]."""
+        by_speed = 2.0 * self.factor_derivative(speed, factor)
+        return by_speed, as_float(np.zeros_like(by_speed))
+
+    def _rate(self, factor: ArrayLike) -> FloatArray:
+        return as_float(np.asarray(self.damping_rate, dtype=float) * np.asarray(factor, float))
 
 
 @dataclass(frozen=True)
@@ -162,29 +201,51 @@ class KlossEddy(_Broadcastable):
             self.reference_temperature,
         )
 
-    def domain_margin(self, temperature: ArrayLike) -> FloatArray:
-        """omega_peak(T) [rad/s]: the resistivity law has no meaning where it is <= 0."""
-        return self.peak_speed(temperature)
+    @property
+    def coefficient(self) -> FloatArray:
+        """alpha [1/K]."""
+        return np.asarray(self.resistivity_coefficient, dtype=float)
+
+    def factor(self, temperature: ArrayLike) -> FloatArray:
+        """``omega_peak(T) / omega_peak_ref = 1 + alpha (T - T_ref)`` [-]."""
+        return rolloff.peak_speed_at(
+            temperature, 1.0, self.resistivity_coefficient, self.reference_temperature
+        )
 
     def torque(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
         """Kloss torque [N*m]."""
         return rolloff.kloss_torque(speed, self.peak_torque, self.peak_speed(temperature))
 
-    def speed_derivative(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
-        """Local damping rate of the Kloss curve [N*m*s/rad]."""
-        return rolloff.kloss_speed_derivative(speed, self.peak_torque, self.peak_speed(temperature))
+    def _peak(self, factor: ArrayLike) -> FloatArray:
+        return as_float(np.asarray(self.reference_peak_speed, float) * np.asarray(factor, float))
 
-    def temperature_derivative(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
-        """Temperature sensitivity through omega_peak(T) [N*m/K]."""
-        d_peak = np.asarray(self.reference_peak_speed, float) * np.asarray(
-            self.resistivity_coefficient, float
+    def torque_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """Kloss torque with ``omega_peak = omega_peak_ref f`` [N*m]."""
+        return rolloff.kloss_torque(speed, self.peak_torque, self._peak(factor))
+
+    def speed_derivative_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """Local damping rate of the Kloss curve [N*m*s/rad]."""
+        return rolloff.kloss_speed_derivative(speed, self.peak_torque, self._peak(factor))
+
+    def factor_derivative(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """``dT_d/domega_peak * omega_peak_ref`` [N*m]."""
+        d_peak = rolloff.kloss_peak_speed_derivative(speed, self.peak_torque, self._peak(factor))
+        return as_float(d_peak * np.asarray(self.reference_peak_speed, float))
+
+    def power_per_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """``T_d omega_d / f = omega_peak_ref T_d omega_d / omega_peak`` [W]."""
+        per_peak = rolloff.kloss_power_per_peak_speed(speed, self.peak_torque, self._peak(factor))
+        return as_float(per_peak * np.asarray(self.reference_peak_speed, float))
+
+    def power_per_factor_derivatives(
+        self, speed: ArrayLike, factor: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
+        """Through :func:`ecdsim.physics.rolloff.kloss_power_per_peak_speed_derivatives`."""
+        ref = np.asarray(self.reference_peak_speed, float)
+        by_speed, by_peak = rolloff.kloss_power_per_peak_speed_derivatives(
+            speed, self.peak_torque, self._peak(factor)
         )
-        return as_float(
-            rolloff.kloss_peak_speed_derivative(
-                speed, self.peak_torque, self.peak_speed(temperature)
-            )
-            * d_peak
-        )
+        return as_float(by_speed * ref), as_float(by_peak * ref * ref)
 
 
 EDDY_LAWS: dict[str, type[LinearEddy] | type[KlossEddy]] = {

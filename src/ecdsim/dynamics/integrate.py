@@ -1,23 +1,15 @@
 """Nonlinear engaged segments (damping roll-off, self-heating), integrated numerically.
 
-In the forward frame of a segment (``x`` the displacement and ``u`` the speed in the
-direction of motion, friction folded into the drive ``a`` as in
-:mod:`ecdsim.dynamics.linear`), the state ``y = [x, u, T_d, E]`` obeys
-
-    x'   = u
-    J u' = a - k x - N (T_eddy(N u, T_d) + BG N u)
-    T_d' = (T_eddy(N u, T_d) N u - (T_d - T_ambient) / R) / C      (if heating is modelled)
-    E'   = N (T_eddy(N u, T_d) + BG N u) u                           (damper dissipation)
-
-(the eddy torque law from :mod:`ecdsim.dynamics.damping`, the heat balance from
-:mod:`ecdsim.physics.thermal`: only the eddy-current power heats the damper's conductor;
-gearbox damping and friction losses heat other parts). It is integrated, with the
-analytic Jacobian, either for the whole batch at once by the vectorised Rosenbrock method
-of :mod:`ecdsim.dynamics.rosenbrock` (``"RODAS4"``, the default) or case by case with
-scipy's ``solve_ivp`` (stiff methods ``"Radau"``, ``"BDF"`` or ``"LSODA"``), until the
-first event: the segment's length is reached, the speed falls to zero, the speed falls
-below ``1e-9`` of its scale while the static equilibrium lies ahead (asymptotic approach
-to rest, "creep"), the damper heats beyond its damping law's domain, or the time cap.
+The segment's equations, in its forward frame with the state ``y = [x, u, s, E]``
+(displacement, speed, the damping law's log factor standing for the damper temperature,
+damper dissipation), are those of :mod:`ecdsim.dynamics.equations`. They are integrated,
+with the analytic Jacobian, either for the whole batch at once by the vectorised
+Rosenbrock method of :mod:`ecdsim.dynamics.rosenbrock` (``"RODAS4"``, the default) or
+case by case with scipy's ``solve_ivp`` (stiff methods ``"Radau"``, ``"BDF"`` or
+``"LSODA"``), until the first event: the segment's length is reached, the speed falls to
+zero, the speed falls below ``1e-9`` of its scale while the static equilibrium lies
+ahead (asymptotic approach to rest, "creep"), or the time cap. The damper cannot heat
+beyond its damping law's zero (Eq. 1's ``BD_T = 0``): the state s keeps it out of reach.
 """
 
 from __future__ import annotations
@@ -32,10 +24,9 @@ from numpy.typing import NDArray
 from ecdsim._types import FloatArray
 from ecdsim.dynamics import linear
 from ecdsim.dynamics.damping import EddyLaw
-from ecdsim.physics import thermal as heat
+from ecdsim.dynamics.equations import Model
 
 HORIZON = 4  # event kind: the integration horizon passed without an event
-DOMAIN = 5  # event kind: the damper temperature left the damping law's domain
 HORIZON_TIME = 1e9  # [s] integration horizon when there is no stop time
 CREEP_FRACTION = 1e-9  # speed, relative to its scale, taken as "at rest" while creeping
 BATCHED = "RODAS4"  # the vectorised integrator's name among the integrator choices
@@ -53,7 +44,8 @@ class NonlinearSegments:
     speed0 : u at the start [rad/s], >= 0
     length : distance to the segment's end [rad]
     cap : time available [s] (inf for none)
-    temperature0 : damper temperature at the start [degC]
+    state0 : the damper's temperature state s at the start (the damping law's log
+        factor, 0 at ambient; see :mod:`ecdsim.dynamics.equations`) [K]
     ambient : ambient temperature [degC]
     ratio : gear ratio N [-]
     gearbox_damping : BG at the high-speed shaft [N*m*s/rad]
@@ -71,7 +63,7 @@ class NonlinearSegments:
     speed0: FloatArray
     length: FloatArray
     cap: FloatArray
-    temperature0: FloatArray
+    state0: FloatArray
     ambient: FloatArray
     ratio: FloatArray
     gearbox_damping: FloatArray
@@ -89,11 +81,12 @@ class NonlinearAdvance:
 
     Attributes
     ----------
-    kind : REACH, ZERO, CAP, REST (linear's codes), HORIZON or DOMAIN
+    kind : REACH, ZERO, CAP, REST (linear's codes) or HORIZON
     duration : time spent [s]
     x : displacement at the end [rad]
     v : speed at the end [rad/s]
     damper_work : damping dissipation over the segment [J]
+    state : the damper's temperature state s at the end [K]
     temperature : damper temperature at the end [degC]
     max_temperature : highest damper temperature in the segment [degC]
     max_speed : highest speed in the segment [rad/s]
@@ -105,6 +98,7 @@ class NonlinearAdvance:
     x: FloatArray
     v: FloatArray
     damper_work: FloatArray
+    state: FloatArray
     temperature: FloatArray
     max_temperature: FloatArray
     max_speed: FloatArray
@@ -118,8 +112,8 @@ class _One:
     x: float
     v: float
     work: float
-    temperature: float
-    max_temperature: float
+    state: float
+    max_state: float
     max_speed: float
     solution: Callable[[FloatArray], FloatArray] | None
 
@@ -142,7 +136,7 @@ class _Event:
 class _Scales:
     """Per-segment scales for tolerances, the first step and the creep threshold."""
 
-    atol: FloatArray  # (4, n): x, u, T_d, E
+    atol: FloatArray  # (4, n): x, u, s, E
     first_step: FloatArray
     creep_speed: FloatArray
     creeps: NDArray[np.bool_]
@@ -162,6 +156,8 @@ def _scales(segs: NonlinearSegments, rtol: float) -> _Scales:
         ]
     )
     # The speed's absolute tolerance resolves the creep threshold (1e-9 of its scale).
+    # The temperature state s changes T_d by f ds (f the damping factor, about 1 or
+    # less), so its absolute tolerance is one in kelvin.
     atol = np.stack(
         [
             rtol * 1e-3 * length,
@@ -177,12 +173,8 @@ def _scales(segs: NonlinearSegments, rtol: float) -> _Scales:
     return _Scales(atol, first, CREEP_FRACTION * speed, creeps)
 
 
-def _advance_batched(segs: NonlinearSegments, rtol: float, record: bool) -> NonlinearAdvance:
-    """All segments at once with the vectorised Rosenbrock integrator."""
-    from ecdsim.dynamics import rosenbrock
-
-    scales = _scales(segs, rtol)
-    model = rosenbrock.Model(
+def _model(segs: NonlinearSegments) -> Model:
+    return Model(
         inertia=segs.inertia,
         stiffness=segs.stiffness,
         drive=segs.drive,
@@ -194,8 +186,32 @@ def _advance_batched(segs: NonlinearSegments, rtol: float, record: bool) -> Nonl
         eddy=segs.eddy.take(segs.case),
         heating=segs.thermal,
     )
+
+
+class _InTemperature:
+    """A segment's dense output ``t -> [x, u, s, E]`` with the row s turned into T_d."""
+
+    def __init__(
+        self, solution: Callable[[FloatArray], FloatArray], model: Model, index: int
+    ) -> None:
+        self.solution = solution
+        self.model = model.take(np.array([index]))
+
+    def __call__(self, t: FloatArray) -> FloatArray:
+        y = np.array(self.solution(t), dtype=float)
+        y[2] = self.model.temperature(y[2])
+        return y
+
+
+def _advance_batched(
+    segs: NonlinearSegments, model: Model, rtol: float, record: bool
+) -> NonlinearAdvance:
+    """All segments at once with the vectorised Rosenbrock integrator."""
+    from ecdsim.dynamics import rosenbrock
+
+    scales = _scales(segs, rtol)
     y0 = np.stack(
-        [np.zeros_like(segs.speed0), segs.speed0, segs.temperature0, np.zeros_like(segs.speed0)]
+        [np.zeros_like(segs.speed0), segs.speed0, segs.state0, np.zeros_like(segs.speed0)]
     )
     out = rosenbrock.integrate_batch(
         model,
@@ -210,79 +226,46 @@ def _advance_batched(segs: NonlinearSegments, rtol: float, record: bool) -> Nonl
         scales.first_step,
         record,
         HORIZON,
-        DOMAIN,
     )
     stopped = (out.kind == linear.ZERO) | (out.kind == linear.REST)
+    hottest = np.maximum(out.max_thermal_state, out.state[2])
     return NonlinearAdvance(
         kind=out.kind,
         duration=out.duration,
         x=out.state[0],
         v=np.where(stopped, 0.0, out.state[1]),
         damper_work=out.state[3],
-        temperature=out.state[2],
-        max_temperature=np.maximum(out.max_temperature, out.state[2]),
+        state=out.state[2],
+        temperature=model.temperature(out.state[2]),
+        max_temperature=model.temperature(hottest),
         max_speed=np.maximum(out.max_speed, segs.speed0),
-        solutions=list(out.trajectories),
+        solutions=[
+            None if sol is None else _InTemperature(sol, model, j)
+            for j, sol in enumerate(out.trajectories)
+        ],
     )
 
 
-def _integrate_one(segs: NonlinearSegments, j: int, rtol: float, method: str, record: bool) -> _One:
+def _integrate_one(
+    segs: NonlinearSegments, model: Model, j: int, rtol: float, method: str, record: bool
+) -> _One:
     from scipy.integrate import solve_ivp
 
-    law = segs.eddy.at(int(segs.case[j]))
-    n = float(segs.ratio[j])
-    bg = float(segs.gearbox_damping[j])
-    inertia = float(segs.inertia[j])
-    k = float(segs.stiffness[j])
-    a = float(segs.drive[j])
+    one = model.take(np.array([j]))
     u0 = float(segs.speed0[j])
     length = float(segs.length[j])
     cap = float(segs.cap[j])
-    t_amb = float(segs.ambient[j])
-    capacity = float(segs.heat_capacity[j])
-    resistance = float(segs.thermal_resistance[j])
-    conduct = 0.0 if math.isinf(resistance) else 1.0 / resistance
-    heating = segs.thermal
-    temp0 = float(segs.temperature0[j])
+    state0 = float(segs.state0[j])
     if length <= 0.0:
-        return _One(linear.REACH, 0.0, 0.0, u0, 0.0, temp0, temp0, u0, None)
+        return _One(linear.REACH, 0.0, 0.0, u0, 0.0, state0, state0, u0, None)
     if cap <= 0.0:
-        return _One(linear.CAP, 0.0, 0.0, u0, 0.0, temp0, temp0, u0, None)
-
-    def forces(u: float, temp: float) -> tuple[float, float, float, float]:
-        shaft = n * u
-        eddy = float(law.torque(shaft, temp))
-        d_speed = float(law.speed_derivative(shaft, temp))
-        d_temp = float(law.temperature_derivative(shaft, temp))
-        return eddy, d_speed, d_temp, n * (eddy + bg * shaft)
+        return _One(linear.CAP, 0.0, 0.0, u0, 0.0, state0, state0, u0, None)
 
     def rhs(_t: float, y: FloatArray) -> FloatArray:
-        x, u, temp = float(y[0]), float(y[1]), float(y[2])
-        eddy, _, _, torque = forces(u, temp)
-        du = (a - k * x - torque) / inertia
-        dtemp = (
-            float(heat.temperature_rate(eddy * n * u, temp, t_amb, capacity, resistance))
-            if heating
-            else 0.0
-        )
-        return np.array([u, du, dtemp, torque * u])
+        return one.rhs(np.reshape(y, (4, 1))).ravel()
 
     def jac(_t: float, y: FloatArray) -> FloatArray:
-        u, temp = float(y[1]), float(y[2])
-        eddy, d_speed, d_temp, torque = forces(u, temp)
-        d_torque_du = n * n * (d_speed + bg)
-        d_torque_dtemp = n * d_temp
-        out = np.zeros((4, 4))
-        out[0, 1] = 1.0
-        out[1, 0] = -k / inertia
-        out[1, 1] = -d_torque_du / inertia
-        out[1, 2] = -d_torque_dtemp / inertia
-        if heating:
-            out[2, 1] = n * (d_speed * n * u + eddy) / capacity
-            out[2, 2] = (d_temp * n * u - conduct) / capacity
-        out[3, 1] = torque + d_torque_du * u
-        out[3, 2] = d_torque_dtemp * u
-        return out
+        return one.jacobian_matrix(y)
 
     scales = _scales(segs, rtol)
     creep_speed = float(scales.creep_speed[j])
@@ -296,14 +279,12 @@ def _integrate_one(segs: NonlinearSegments, j: int, rtol: float, method: str, re
     ]
     if creeps:
         events.append(_Event(lambda _t, y: float(y[1]) - creep_speed, True, -1.0))
-    if heating:
-        events.append(_Event(lambda _t, y: float(law.domain_margin(float(y[2]))), True, -1.0))
     atol = scales.atol[:, j]
     t_end = cap if math.isfinite(cap) else HORIZON_TIME
     sol = solve_ivp(
         rhs,
         (0.0, t_end),
-        np.array([0.0, u0, temp0, 0.0]),
+        np.array([0.0, u0, state0, 0.0]),
         method=method,
         rtol=rtol,
         atol=atol,
@@ -315,13 +296,11 @@ def _integrate_one(segs: NonlinearSegments, j: int, rtol: float, method: str, re
     duration = float(sol.t[-1])
     kind = HORIZON
     if sol.status == 1:
-        domain_index = 5 if creeps else 4
-        outcomes: list[tuple[int, int]] = [(linear.REACH, 0), (linear.ZERO, 1), (linear.REST, 4)]
-        if heating:
-            outcomes.append((DOMAIN, domain_index))
+        outcomes: list[tuple[int, int]] = [(linear.REACH, 0), (linear.ZERO, 1)]
+        if creeps:
+            outcomes.append((linear.REST, 4))
         for code, index in outcomes:
-            present = index < len(sol.t_events) and (code != linear.REST or creeps)
-            if present and len(sol.t_events[index]):
+            if len(sol.t_events[index]):
                 kind = code
                 duration = float(sol.t_events[index][0])
                 y_end = sol.y_events[index][0]
@@ -333,7 +312,7 @@ def _integrate_one(segs: NonlinearSegments, j: int, rtol: float, method: str, re
     peaks = [float(p[1]) for p in sol.y_events[2]]
     max_speed = max([u0, v_end, *peaks, *np.asarray(sol.y[1], float).tolist()])
     hot = [float(p[2]) for p in sol.y_events[3]]
-    max_temp = max([float(np.max(sol.y[2])), float(y_end[2]), *hot])
+    max_state = max([float(np.max(sol.y[2])), float(y_end[2]), *hot])
     solution = sol.sol if record and sol.sol is not None else None
     return _One(
         kind,
@@ -342,9 +321,9 @@ def _integrate_one(segs: NonlinearSegments, j: int, rtol: float, method: str, re
         v_end,
         float(y_end[3]),
         float(y_end[2]),
-        max_temp,
+        max_state,
         max_speed,
-        solution,
+        None if solution is None else _InTemperature(solution, model, j),
     )
 
 
@@ -354,19 +333,25 @@ def advance_nonlinear(
     """Integrate each segment to its first event.
 
     ``method`` "RODAS4" advances all segments together (:mod:`ecdsim.dynamics.rosenbrock`);
-    "Radau", "BDF" or "LSODA" make one scipy ``solve_ivp`` call per segment.
+    "Radau", "BDF" or "LSODA" make one scipy ``solve_ivp`` call per segment. Both
+    integrate the same :class:`~ecdsim.dynamics.equations.Model`.
     """
+    model = _model(segs)
     if method == BATCHED:
-        return _advance_batched(segs, rtol, record)
-    results = [_integrate_one(segs, j, rtol, method, record) for j in range(segs.inertia.size)]
+        return _advance_batched(segs, model, rtol, record)
+    results = [
+        _integrate_one(segs, model, j, rtol, method, record) for j in range(segs.inertia.size)
+    ]
+    state = np.array([r.state for r in results])
     return NonlinearAdvance(
         kind=np.array([r.kind for r in results], dtype=np.int8),
         duration=np.array([r.duration for r in results]),
         x=np.array([r.x for r in results]),
         v=np.array([r.v for r in results]),
         damper_work=np.array([r.work for r in results]),
-        temperature=np.array([r.temperature for r in results]),
-        max_temperature=np.array([r.max_temperature for r in results]),
+        state=state,
+        temperature=model.temperature(state),
+        max_temperature=model.temperature(np.array([r.max_state for r in results])),
         max_speed=np.array([r.max_speed for r in results]),
         solutions=[r.solution for r in results],
     )

@@ -175,7 +175,7 @@ def _findings(problem: DynamicProblem, result: DynamicResult) -> list[tuple[str,
                 int(i),
             )
         )
-    for code in ("event_limit", "horizon", "domain"):
+    for code in ("event_limit", "horizon"):
         for i in np.flatnonzero(status == STATUSES.index(code)):
             out.append(
                 (

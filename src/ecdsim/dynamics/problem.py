@@ -190,6 +190,18 @@ def dynamic_problem(
                 "the peak speed omega_peak(T) is <= 0 at an analysis temperature; the "
                 "resistivity law does not reach that far",
             )
+        alpha = np.asarray(params.rolloff.resistivity_coefficient, dtype=float)
+        if params.thermal is not None and np.any(alpha < 0.0):
+            # Heating drives omega_peak = omega_peak_ref (1 + alpha (T - T_ref)) towards 0
+            # and the low-speed damping BD / (1 + alpha (T - T_ref)) to infinity: the
+            # damper would lock the load short of the end, approached without end.
+            raise DynamicDomainError(
+                "damper.rolloff.resistivity_coefficient",
+                f"must be >= 0 with self-heating (got {float(np.min(alpha)):.6g} /K): the "
+                "Kloss law's low-speed damping BD / (1 + alpha (T - T_ref)) grows without "
+                "bound as the damper heats towards T_ref - 1/alpha (conductors have "
+                "alpha > 0; copper 0.0039 /K)",
+            )
     travel = np.asarray(base.travel)
     start = np.asarray(params.initial_angle, dtype=float)
     if np.any(start < 0.0) or np.any(start >= travel):

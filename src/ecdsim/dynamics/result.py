@@ -41,7 +41,6 @@ EVENT_KINDS = (
     "creep",  # asymptotic approach to the static equilibrium (time = inf)
     "event_limit",  # too many events: the run was cut short
     "horizon",  # the integrator reached its time horizon without an event
-    "domain",  # the damper heated beyond its damping law's domain (BD_T or omega_peak <= 0)
 )
 STATUSES = (
     "running",
@@ -52,7 +51,6 @@ STATUSES = (
     "stop_time",
     "event_limit",
     "horizon",
-    "domain",
 )
 
 

@@ -14,14 +14,15 @@ nothing. In the transformed form (Hairer and Wanner, IV.7, Eq. 7.4'):
     (I / (h g) - J) K_i = f(y + sum_j A_ij K_j) + sum_j (C_ij / h) K_j,
     y1 = y + sum_i M_i K_i,     error = sum_i E_i K_i
 
-with the analytic Jacobian J of the segment's equations (see
-:mod:`ecdsim.dynamics.integrate`). The linear systems are solved by elimination specific
-to their sparsity (the position row is ``x' = u``; the energy does not feed back). Steps
-are accepted when the embedded error, in the max norm over ``atol + rtol |y|``, is <= 1.
-Dense output between steps is the cubic Hermite interpolant of the step's end states
-and derivatives; events and the interior maxima of speed and temperature are located on
-it by Newton's iteration safeguarded by bisection (the damping law's domain limit by
-bisection). The method's order (4) is checked in ``tests/test_dynamics_rosenbrock.py``.
+with the analytic Jacobian J of the segment's equations (:mod:`ecdsim.dynamics.equations`,
+whose temperature state is the damping law's log factor, so that no stage can cross the
+law's zero). The linear systems are solved by elimination specific to their sparsity
+(the position row is ``x' = u``; the energy does not feed back). Steps are accepted when
+the embedded error, in the max norm over ``atol + rtol |y|``, is <= 1. Dense output
+between steps is the cubic Hermite interpolant of the step's end states and derivatives;
+events and the interior maxima of speed and temperature state are located on it by
+Newton's iteration safeguarded by bisection. The method's order (4) is checked in
+``tests/test_dynamics_rosenbrock.py``.
 
 Cost: every array operation runs over the whole batch, so the step works in place on
 preallocated arrays, skips the rows that cannot change (without heating the temperature
@@ -32,7 +33,6 @@ accepted cases.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,8 +40,9 @@ from numpy.typing import NDArray
 
 from ecdsim._types import BoolArray, FloatArray
 from ecdsim.dynamics import linear
-from ecdsim.dynamics.damping import EddyLaw
-from ecdsim.physics import thermal as heat
+from ecdsim.dynamics.equations import Model
+
+__all__ = ["Model", "Outcome", "Trajectory", "integrate_batch"]
 
 GAMMA = 0.25
 _A21, _A31, _A32 = 1.544, 0.9466785280815826, 0.2557011698983284
@@ -73,89 +74,6 @@ M = (_A51, _A52, _A53, _A54, 1.0, 1.0)
 E = (0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 ERROR_EXPONENT = -1.0 / 4.0  # local order of the error estimate
 MAX_STEPS = 200_000
-
-
-@dataclass(frozen=True)
-class Model:
-    """The engaged equations of a set of segments, in the forward frame (1-D arrays).
-
-    ``y = [x, u, T_d, E]``: ``x' = u``, ``J u' = a - k x - N (T_eddy(N u, T_d) + BG N u)``,
-    ``T_d' = (T_eddy N u - (T_d - T_amb) / R) / C`` if heating, ``E' = N (T_eddy + BG N u) u``.
-    """
-
-    inertia: FloatArray
-    stiffness: FloatArray
-    drive: FloatArray
-    ratio: FloatArray
-    gearbox_damping: FloatArray
-    heat_capacity: FloatArray
-    thermal_resistance: FloatArray
-    ambient: FloatArray
-    eddy: EddyLaw
-    heating: bool
-
-    def take(self, index: NDArray[np.intp]) -> Model:
-        """The model of a subset of the segments."""
-        return Model(
-            inertia=self.inertia[index],
-            stiffness=self.stiffness[index],
-            drive=self.drive[index],
-            ratio=self.ratio[index],
-            gearbox_damping=self.gearbox_damping[index],
-            heat_capacity=self.heat_capacity[index],
-            thermal_resistance=self.thermal_resistance[index],
-            ambient=self.ambient[index],
-            eddy=self.eddy.take(index),
-            heating=self.heating,
-        )
-
-    def rhs(self, y: FloatArray, out: FloatArray | None = None) -> FloatArray:
-        """``dy/dt``, shape (4, n), written into ``out`` if given (which must not be y)."""
-        x, u, temp = y[0], y[1], y[2]
-        dy = np.empty_like(y) if out is None else out
-        shaft = self.ratio * u
-        eddy = self.eddy.torque(shaft, temp)
-        torque = self.ratio * (eddy + self.gearbox_damping * shaft)
-        accel = dy[1]
-        np.multiply(self.stiffness, x, out=accel)
-        np.subtract(self.drive, accel, out=accel)
-        accel -= torque
-        accel /= self.inertia
-        if self.heating:
-            dy[2] = heat.temperature_rate(
-                eddy * shaft, temp, self.ambient, self.heat_capacity, self.thermal_resistance
-            )
-        else:
-            dy[2] = 0.0
-        np.multiply(torque, u, out=dy[3])
-        dy[0] = u
-        return dy
-
-    def jacobian(self, y: FloatArray) -> tuple[FloatArray, ...]:
-        """Nonzero entries (j10, j11, j12, j21, j22, j31, j32) of ``df/dy``."""
-        u, temp = y[1], y[2]
-        n = self.ratio
-        shaft = n * u
-        eddy = self.eddy.torque(shaft, temp)
-        d_speed = self.eddy.speed_derivative(shaft, temp)
-        d_temp = self.eddy.temperature_derivative(shaft, temp)
-        torque = n * (eddy + self.gearbox_damping * shaft)
-        d_torque_du = n * n * (d_speed + self.gearbox_damping)
-        d_torque_dtemp = n * d_temp
-        j10 = -self.stiffness / self.inertia
-        j11 = -d_torque_du / self.inertia
-        j12 = -d_torque_dtemp / self.inertia
-        if self.heating:
-            finite = np.isfinite(self.thermal_resistance)
-            conduct = np.where(finite, 1.0 / np.where(finite, self.thermal_resistance, 1.0), 0.0)
-            j21 = n * (d_speed * shaft + eddy) / self.heat_capacity
-            j22 = (d_temp * shaft - conduct) / self.heat_capacity
-        else:
-            j21 = np.zeros_like(u)
-            j22 = np.zeros_like(u)
-        j31 = torque + d_torque_du * u
-        j32 = d_torque_dtemp * u
-        return j10, j11, j12, j21, j22, j31, j32
 
 
 class _Solver:
@@ -315,19 +233,6 @@ def _hermite_slope(
     )
 
 
-def _bisect(func: Callable[[FloatArray], FloatArray], n: int) -> FloatArray:
-    """First sign change of func(s) on [0, 1] (func(0) and func(1) differ in sign)."""
-    lo = np.zeros(n)
-    hi = np.ones(n)
-    start = func(lo) > 0.0
-    for _ in range(48):  # 2^-48 of a step: below rounding of the event time
-        mid = 0.5 * (lo + hi)
-        same = (func(mid) > 0.0) == start
-        lo = np.where(same, mid, lo)
-        hi = np.where(same, hi, mid)
-    return hi
-
-
 def _cubic(
     y0: FloatArray, f0: FloatArray, y1: FloatArray, f1: FloatArray, h: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
@@ -376,31 +281,6 @@ def _root(coef: tuple[FloatArray, ...]) -> FloatArray:
     return np.asarray(s)
 
 
-@dataclass(frozen=True)
-class _Span:
-    """The accepted steps of one iteration: end states and slopes, for interpolation."""
-
-    y0: FloatArray
-    f0: FloatArray
-    y1: FloatArray
-    f1: FloatArray
-    h: FloatArray
-
-    def value(self, row: int, s: FloatArray, i: NDArray[np.intp]) -> FloatArray:
-        """Component ``row`` at fractions s of the steps of cases i."""
-        return _hermite(
-            self.y0[row, i], self.f0[row, i], self.y1[row, i], self.f1[row, i], self.h[i], s
-        )
-
-    def domain_crossing(self, law: EddyLaw, i: NDArray[np.intp]) -> FloatArray:
-        """Fraction of the step where the damping law's domain margin reaches 0."""
-
-        def margin(s: FloatArray) -> FloatArray:
-            return law.domain_margin(self.value(2, s, i))
-
-        return _bisect(margin, i.size)
-
-
 def _earliest(
     event_s: FloatArray,
     event_kind: NDArray[np.int8],
@@ -443,13 +323,13 @@ class Trajectory:
 
 @dataclass(frozen=True)
 class Outcome:
-    """Per segment: kind (linear's codes, HORIZON, DOMAIN), duration, end state, extremes."""
+    """Per segment: kind (linear's codes, HORIZON), duration, end state, extremes."""
 
     kind: NDArray[np.int8]
     duration: FloatArray
     state: FloatArray  # (4, n)
     max_speed: FloatArray
-    max_temperature: FloatArray
+    max_thermal_state: FloatArray  # largest s, the temperature state (increasing in T_d)
     trajectories: list[Trajectory | None]
 
 
@@ -466,14 +346,13 @@ def integrate_batch(
     first_step: FloatArray,
     record: bool,
     horizon_kind: int,
-    domain_kind: int,
 ) -> Outcome:
     """Integrate every segment from ``y0`` (4, n) to its first event; see the module doc.
 
     Events: x reaches ``length`` (REACH), u falls to 0 (ZERO), u falls to
-    ``creep_speed`` where ``creeps`` (REST), the damping law's domain margin falls to 0
-    when heating (``domain_kind``), the time reaches ``cap`` (CAP) or ``horizon``
-    (``horizon_kind``).
+    ``creep_speed`` where ``creeps`` (REST), the time reaches ``cap`` (CAP) or
+    ``horizon`` (``horizon_kind``). The damper cannot leave its damping law's domain:
+    the temperature state is the law's log factor (:mod:`ecdsim.dynamics.equations`).
 
     The running cases' arrays are kept compact (a case leaves them when it ends); a
     rejected step leaves its case's state unchanged, so every step needs no gathering
@@ -552,15 +431,6 @@ def integrate_batch(
                 if target is not None:
                     c0 = c0 - target[hit]
                 _earliest(event_s, event_kind, hit, _root((c0, c1, c2, c3)), code)
-        if model.heating:
-            margin_a = sub.eddy.domain_margin(ya[2])
-            margin_b = sub.eddy.domain_margin(yb[2])
-            hit = np.flatnonzero((margin_a > 0.0) & (margin_b <= 0.0))
-            if hit.size:
-                span = _Span(ya[:, hit], fa[:, hit], yb[:, hit], fb[:, hit], h[hit])
-                every = np.arange(hit.size)
-                s_hit = span.domain_crossing(sub.eddy.take(hit), every)
-                _earliest(event_s, event_kind, hit, s_hit, domain_kind)
         e_idx = np.flatnonzero(event_kind >= 0)
         # Extremes: the step's end (or event) value, and an interior maximum where the
         # derivative changes sign from + to - before that point (found at the end).

@@ -170,6 +170,7 @@ class _State:
     phi: FloatArray
     w: FloatArray
     temp: FloatArray
+    heat: FloatArray  # the damper's temperature state s (its damping law's log factor)
     engaged: BoolArray
     engage_angle: FloatArray
     done: BoolArray
@@ -202,6 +203,7 @@ class _State:
             phi=c.angle0.copy(),
             w=c.speed0.copy(),
             temp=c.ambient.copy(),
+            heat=np.zeros(n),
             engaged=engaged,
             engage_angle=c.angle0 + c.gap,
             done=np.zeros(n, dtype=bool),
@@ -261,7 +263,7 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
 
     final_inertia = np.where(s.engaged, c.total_inertia, c.load_inertia)
     keeps_speed = np.isin(
-        s.status, [_ST[k] for k in ("latched", "stop_time", "event_limit", "horizon", "domain")]
+        s.status, [_ST[k] for k in ("latched", "stop_time", "event_limit", "horizon")]
     )
     final_speed = np.where(keeps_speed, s.w, 0.0)
     energy = EnergyBalance(
@@ -443,7 +445,7 @@ def _advance_cases(
                 speed0=speed0[nl_idx],
                 length=length[nl_idx],
                 cap=cap[nl_idx],
-                temperature0=s.temp[cases],
+                state0=s.heat[cases],
                 ambient=c.ambient[cases],
                 ratio=c.ratio[cases],
                 gearbox_damping=c.gearbox_damping[cases],
@@ -466,6 +468,7 @@ def _advance_cases(
         peak_speed[nl_idx] = out.max_speed
         temp_end[nl_idx] = out.temperature
         temp_peak[nl_idx] = out.max_temperature
+        s.heat[cases] = out.state
         display[nl_idx] = t_r[nl_idx] + out.duration
         if records is not None:
             for j, sol in enumerate(out.solutions):
@@ -523,10 +526,9 @@ def _advance_cases(
     s.w[creeping] = 0.0
     log.add(creeping, s.t[creeping], "creep", s.phi[creeping], s.w[creeping])
 
-    for code, name in ((integrate.HORIZON, "horizon"), (integrate.DOMAIN, "domain")):
-        cut = run[kind == code]
-        s.finish(cut, name)
-        log.add(cut, s.t[cut], name, s.phi[cut], s.w[cut])
+    cut = run[kind == integrate.HORIZON]
+    s.finish(cut, "horizon")
+    log.add(cut, s.t[cut], "horizon", s.phi[cut], s.w[cut])
 
     engaging = run[reached & (reach_kind == _EV["engage"])]
     if engaging.size:

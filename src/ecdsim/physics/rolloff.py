@@ -26,7 +26,7 @@ All speeds and torques here are at the high-speed damper shaft.
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 
 
 def peak_torque_from_damping(damping_rate: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
@@ -75,25 +75,43 @@ def peak_speed_at(
     return as_float(np.asarray(reference_peak_speed, dtype=float) * factor)
 
 
+def _kloss_parts(
+    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, BoolArray]:
+    """``(w, p, 2 T_peak, w**2 + p**2, denominator > 0)`` for the rational Kloss forms.
+
+    Multiplying ``x = w / p`` out of the Kloss formulas gives rational functions of the
+    speed w and the peak speed p that stay finite where p vanishes (where x is infinite).
+    Only ``w = p = 0`` is left undefined; the callers return 0 there.
+    """
+    w = np.asarray(speed, dtype=float)
+    p = np.asarray(peak_speed, dtype=float)
+    scale = 2.0 * np.asarray(peak_torque, dtype=float)
+    den = w * w + p * p
+    defined = den > 0.0
+    return w, p, scale, np.where(defined, den, 1.0), defined
+
+
 def kloss_torque(speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
     """Eddy-current torque against speed, Kloss form: ``2 T_peak x / (1 + x**2)``.
 
-    ``x = omega_d / omega_peak`` (Wouterse 1991, doi:10.1049/ip-b.1991.0019). Odd in
-    the speed: the torque opposes the motion's direction when the sign convention
-    ``damping torque = -T_d`` is used. Linear below the peak: the paper's section 2.1
-    roll-off point.
+    ``x = omega_d / omega_peak``. Odd in the speed: the torque opposes the motion's
+    direction when the sign convention ``damping torque = -T_d`` is used. Evaluated as
+    ``2 T_peak omega_d omega_peak / (omega_d**2 + omega_peak**2)``, finite (0) at
+    ``omega_peak = 0``. Source: Wouterse 1991 (doi:10.1049/ip-b.1991.0019); linear below
+    the peak, the roll-off point of paper section 2.1.
 
     Parameters
     ----------
     speed : high-speed shaft speed omega_d [rad/s]
     peak_torque : T_peak, the largest eddy-current torque [N*m]
-    peak_speed : omega_peak, the speed at which it occurs [rad/s], > 0
+    peak_speed : omega_peak, the speed at which it occurs [rad/s], >= 0
 
     >>> float(kloss_torque(2000.0, 0.13, 2000.0))  # at the peak
     0.13
     """
-    x = np.asarray(speed, dtype=float) / np.asarray(peak_speed, dtype=float)
-    return as_float(2.0 * np.asarray(peak_torque, dtype=float) * x / (1.0 + x * x))
+    w, p, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
+    return as_float(np.where(defined, scale * w * p / den, 0.0))
 
 
 def kloss_speed_derivative(
@@ -101,21 +119,20 @@ def kloss_speed_derivative(
 ) -> FloatArray:
     """``dT_d / domega_d`` of the Kloss torque: ``(2 T_peak / omega_peak)(1 - x**2)/(1 + x**2)**2``.
 
-    The local damping rate of the damper (the slope definition of paper section 2.1);
-    equal to BD at zero speed, zero at the peak and negative beyond it. The derivative
-    of the Kloss form of Wouterse 1991 (doi:10.1049/ip-b.1991.0019).
+    The local damping rate of the damper (the slope definition of paper section 2.1; the
+    derivative of the Kloss form of Wouterse 1991, doi:10.1049/ip-b.1991.0019); equal to
+    BD at zero speed, zero at the peak and negative beyond it. Evaluated as
+    ``2 T_peak p (p**2 - w**2) / (w**2 + p**2)**2``
+    (``w = omega_d``, ``p = omega_peak``); 0 where both vanish.
 
     Parameters
     ----------
     speed : high-speed shaft speed omega_d [rad/s]
     peak_torque : T_peak [N*m]
-    peak_speed : omega_peak [rad/s], > 0
+    peak_speed : omega_peak [rad/s], >= 0
     """
-    wp = np.asarray(peak_speed, dtype=float)
-    x = np.asarray(speed, dtype=float) / wp
-    x2 = x * x
-    slope = 2.0 * np.asarray(peak_torque, dtype=float) / wp
-    return as_float(slope * (1.0 - x2) / ((1.0 + x2) * (1.0 + x2)))
+    w, p, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
+    return as_float(np.where(defined, scale * p * (p * p - w * w) / den / den, 0.0))
 
 
 def kloss_peak_speed_derivative(
@@ -123,20 +140,68 @@ def kloss_peak_speed_derivative(
 ) -> FloatArray:
     """``dT_d / domega_peak`` of the Kloss torque at fixed speed and peak torque.
 
-    ``-(2 T_peak x / omega_peak)(1 - x**2)/(1 + x**2)**2``; with ``domega_peak/dT =
-    omega_peak_ref * alpha`` (:func:`peak_speed_at`) it gives the torque's temperature
-    sensitivity, the roll-off counterpart of the paper's Eq. 1 coefficient. Derivative of
-    the Kloss form of Wouterse 1991 (doi:10.1049/ip-b.1991.0019).
+    ``-(2 T_peak x / omega_peak)(1 - x**2)/(1 + x**2)**2``, evaluated as
+    ``2 T_peak w (w**2 - p**2) / (w**2 + p**2)**2``; with ``domega_peak/dT =
+    omega_peak_ref * alpha`` it gives the torque's temperature sensitivity, the roll-off
+    counterpart of the paper's Eq. 1 coefficient (Kloss form of Wouterse 1991,
+    doi:10.1049/ip-b.1991.0019).
 
     Parameters
     ----------
     speed : high-speed shaft speed omega_d [rad/s]
     peak_torque : T_peak [N*m]
-    peak_speed : omega_peak [rad/s], > 0
+    peak_speed : omega_peak [rad/s], >= 0
     """
-    wp = np.asarray(peak_speed, dtype=float)
-    x = np.asarray(speed, dtype=float) / wp
-    x2 = x * x
-    return as_float(
-        -2.0 * np.asarray(peak_torque, dtype=float) * x / wp * (1.0 - x2) / ((1.0 + x2) ** 2)
+    w, p, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
+    return as_float(np.where(defined, scale * w * (w * w - p * p) / den / den, 0.0))
+
+
+def kloss_power_per_peak_speed(
+    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
+) -> FloatArray:
+    """Eddy-current power over the peak speed: ``T_d omega_d / omega_peak``.
+
+    ``2 T_peak omega_d**2 / (omega_d**2 + omega_peak**2)``: the Kloss torque times the
+    speed, divided by omega_peak in closed form, so that it stays finite (``2 T_peak``)
+    where omega_peak vanishes. Times ``omega_peak_ref`` it is the heating power over the
+    resistivity factor ``omega_peak / omega_peak_ref``, the form the heat balance of
+    :mod:`ecdsim.physics.thermal` takes in the damping law's log state. 0 where both
+    speeds vanish. Sources: the Kloss
+    form of Wouterse 1991 (doi:10.1049/ip-b.1991.0019); power = damping torque times
+    speed, as for the linear law of paper Eq. 5.
+
+    Parameters
+    ----------
+    speed : high-speed shaft speed omega_d [rad/s]
+    peak_torque : T_peak [N*m]
+    peak_speed : omega_peak [rad/s], >= 0
+
+    >>> float(kloss_power_per_peak_speed(2000.0, 0.13, 2000.0))  # at the peak: T_peak
+    0.13
+    """
+    w, _, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
+    return as_float(np.where(defined, scale * w * w / den, 0.0))
+
+
+def kloss_power_per_peak_speed_derivatives(
+    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """Partial derivatives of :func:`kloss_power_per_peak_speed` in omega_d and omega_peak.
+
+    ``(4 T_peak w p**2, -4 T_peak w**2 p) / (w**2 + p**2)**2`` with ``w = omega_d``,
+    ``p = omega_peak`` [N*m*s/rad each]; 0 where both vanish. Derivatives of the Kloss
+    form of Wouterse 1991 (doi:10.1049/ip-b.1991.0019), for the Jacobian of the heated
+    dynamics (paper section 2.1 roll-off with heating).
+
+    Parameters
+    ----------
+    speed : high-speed shaft speed omega_d [rad/s]
+    peak_torque : T_peak [N*m]
+    peak_speed : omega_peak [rad/s], >= 0
+    """
+    w, p, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
+    common = 2.0 * scale * w * p / den / den
+    return (
+        as_float(np.where(defined, common * p, 0.0)),
+        as_float(np.where(defined, -common * w, 0.0)),
     )

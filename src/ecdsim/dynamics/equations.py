@@ -1,0 +1,193 @@
+"""The engaged equations of the nonlinear segments, vectorised over a set of segments.
+
+In the forward frame of a segment (``x`` the displacement and ``u`` the speed in the
+direction of motion, friction folded into the drive ``a`` as in
+:mod:`ecdsim.dynamics.linear`), the state ``y = [x, u, s, E]`` obeys
+
+    x' = u
+    J u' = a - k x - N (T_eddy(N u, f) + BG N u)
+    s' = (p(N u, f) - (T_d - T_ambient) / (R f)) / C      (if heating is modelled, else 0)
+    E' = N (T_eddy(N u, f) + BG N u) u                      (damper dissipation)
+
+with ``f = f_a exp(c s)`` the damping law's temperature factor (``1 + c (T_d - T_ref)``:
+Eq. 1's bracket, or the Kloss peak speed's resistivity factor), ``f_a`` its value at the
+ambient temperature and ``p = T_eddy N u / f`` the eddy-current power over it. ``s`` is
+the factor's logarithm over c, in kelvin (``T_d - T_ambient`` over ``f_a`` to first
+order, exactly at c = 0); the damper temperature is ``T_d = T_ambient + f_a s E(c s)``
+(:mod:`ecdsim.physics.thermal`, where the heat balance is rewritten for s).
+
+Why s and not T_d: where c < 0 the factor, the damping and the heating power all vanish
+at ``T_zero = T_ref - 1/c``, which the true temperature approaches but never reaches (the
+power ``f p`` vanishes with f, so f decays at most exponentially). An integrator of T_d
+overshoots it by its error and then evaluates the law where it has no meaning
+(``BD_T < 0``); with s every state, even a rejected trial step's, has ``f > 0``, and the
+approach to T_zero is the smooth growth of s. The invariant holds by construction, so
+the answer does not depend on the tolerance. (Only the eddy-current power heats the
+damper's conductor; gearbox damping and friction losses heat other parts.)
+
+Both integrators of :mod:`ecdsim.dynamics.integrate` use this one :class:`Model`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ecdsim._types import FloatArray
+from ecdsim.dynamics.damping import EddyLaw
+from ecdsim.physics import thermal
+
+
+@dataclass(frozen=True)
+class Model:
+    """The engaged equations of a set of segments, in the forward frame (1-D arrays).
+
+    Attributes
+    ----------
+    inertia : J [kg*m^2]
+    stiffness : k, fall of the spring torque per radian [N*m/rad]
+    drive : a, spring torque minus friction at the segment's start [N*m]
+    ratio : gear ratio N [-]
+    gearbox_damping : BG at the high-speed shaft [N*m*s/rad]
+    heat_capacity : C [J/K]
+    thermal_resistance : R [K/W] (inf: adiabatic)
+    ambient : ambient temperature, where s = 0 [degC]
+    eddy : the eddy-current law, one case per segment
+    heating : whether the damper temperature evolves
+    ambient_factor : f_a, the law's temperature factor at ambient [-]; computed when None
+    """
+
+    inertia: FloatArray
+    stiffness: FloatArray
+    drive: FloatArray
+    ratio: FloatArray
+    gearbox_damping: FloatArray
+    heat_capacity: FloatArray
+    thermal_resistance: FloatArray
+    ambient: FloatArray
+    eddy: EddyLaw
+    heating: bool
+    ambient_factor: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        if self.ambient_factor is None:
+            # The problem's domain checks keep f_a >= 0 (Eq. 1's BD_T >= 0 at ambient, a
+            # positive peak speed); the clip only removes rounding at the law's zero.
+            factor = np.maximum(self.eddy.factor(self.ambient), 0.0)
+            object.__setattr__(
+                self, "ambient_factor", np.broadcast_to(factor, np.shape(self.inertia))
+            )
+
+    @property
+    def _factor_at_ambient(self) -> FloatArray:
+        factor = self.ambient_factor
+        assert factor is not None  # set in __post_init__
+        return factor
+
+    def take(self, index: NDArray[np.intp]) -> Model:
+        """The model of a subset of the segments."""
+        return Model(
+            inertia=self.inertia[index],
+            stiffness=self.stiffness[index],
+            drive=self.drive[index],
+            ratio=self.ratio[index],
+            gearbox_damping=self.gearbox_damping[index],
+            heat_capacity=self.heat_capacity[index],
+            thermal_resistance=self.thermal_resistance[index],
+            ambient=self.ambient[index],
+            eddy=self.eddy.take(index),
+            heating=self.heating,
+            ambient_factor=self._factor_at_ambient[index],
+        )
+
+    def factor(self, state: FloatArray) -> FloatArray:
+        """The damping law's temperature factor ``f = f_a exp(c s)`` [-]."""
+        return thermal.damping_factor_from_log(
+            state, self._factor_at_ambient, self.eddy.coefficient
+        )
+
+    def temperature(self, state: FloatArray) -> FloatArray:
+        """The damper temperature at states s (broadcast over leading axes) [degC].
+
+        Where c < 0 the true temperature stays below the law's zero ``T_ref - 1/c``; the
+        reconstruction's rounding (a few ulp once f is below 1e-16) is clipped to it.
+        """
+        c = self.eddy.coefficient
+        temperature = thermal.temperature_from_factor_log(
+            state, self.ambient, self._factor_at_ambient, c
+        )
+        falling = c < 0.0
+        zero = np.asarray(self.eddy.reference_temperature, float) - 1.0 / np.where(falling, c, -1.0)
+        return np.minimum(temperature, np.where(falling, zero, np.inf))
+
+    def rhs(self, y: FloatArray, out: FloatArray | None = None) -> FloatArray:
+        """``dy/dt``, shape (4, n), written into ``out`` if given (which must not be y)."""
+        x, u, s = y[0], y[1], y[2]
+        dy = np.empty_like(y) if out is None else out
+        factor = self.factor(s)
+        shaft = self.ratio * u
+        eddy = self.eddy.torque_at_factor(shaft, factor)
+        torque = self.ratio * (eddy + self.gearbox_damping * shaft)
+        accel = dy[1]
+        np.multiply(self.stiffness, x, out=accel)
+        np.subtract(self.drive, accel, out=accel)
+        accel -= torque
+        accel /= self.inertia
+        if self.heating:
+            dy[2] = thermal.factor_log_rate(
+                self.eddy.power_per_factor(shaft, factor),
+                s,
+                self.heat_capacity,
+                self.thermal_resistance,
+                self.eddy.coefficient,
+            )
+        else:
+            dy[2] = 0.0
+        np.multiply(torque, u, out=dy[3])
+        dy[0] = u
+        return dy
+
+    def jacobian(self, y: FloatArray) -> tuple[FloatArray, ...]:
+        """Nonzero entries (j10, j11, j12, j21, j22, j31, j32) of ``df/dy``."""
+        u, s = y[1], y[2]
+        n = self.ratio
+        c = self.eddy.coefficient
+        factor = self.factor(s)
+        shaft = n * u
+        eddy = self.eddy.torque_at_factor(shaft, factor)
+        d_speed = self.eddy.speed_derivative_at_factor(shaft, factor)
+        d_factor = self.eddy.factor_derivative(shaft, factor)
+        torque = n * (eddy + self.gearbox_damping * shaft)
+        d_torque_du = n * n * (d_speed + self.gearbox_damping)
+        d_torque_ds = n * d_factor * (c * factor)  # df/ds = c f
+        j10 = -self.stiffness / self.inertia
+        j11 = -d_torque_du / self.inertia
+        j12 = -d_torque_ds / self.inertia
+        if self.heating:
+            by_speed, by_factor = self.eddy.power_per_factor_derivatives(shaft, factor)
+            j21 = n * by_speed / self.heat_capacity
+            j22 = thermal.factor_log_rate_slope(
+                by_factor, factor, s, self.heat_capacity, self.thermal_resistance, c
+            )
+        else:
+            j21 = np.zeros_like(u)
+            j22 = np.zeros_like(u)
+        j31 = torque + d_torque_du * u
+        j32 = d_torque_ds * u
+        return j10, j11, j12, j21, j22, j31, j32
+
+    def jacobian_matrix(self, y: FloatArray) -> FloatArray:
+        """The full Jacobian of one segment (n = 1) at a state of shape (4,) or (4, 1)."""
+        j10, j11, j12, j21, j22, j31, j32 = (
+            float(np.ravel(j)[0]) for j in self.jacobian(np.reshape(y, (4, 1)))
+        )
+        return np.array(
+            [
+                [0.0, 1.0, 0.0, 0.0],
+                [j10, j11, j12, 0.0],
+                [0.0, j21, j22, 0.0],
+                [0.0, j31, j32, 0.0],
+            ]
+        )
