@@ -219,4 +219,3 @@ def parse_temperature(value: object) -> float:
     if problem:
         raise QuantityError(f"{quoted(value)} {problem}; {TEMPERATURE.expected}")
     return number
-
