@@ -102,3 +102,41 @@ def test_report_refusals_are_json_and_declared_so() -> None:
     declared = APP.openapi()["paths"]["/api/report"]["post"]["responses"]
     assert set(declared["422"]["content"]) == {"application/json"}
     assert set(declared["200"]["content"]) == {"text/html"}
+
+
+def test_a_slow_computation_gets_503_and_does_not_block_other_requests(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import threading
+
+    from ecdsim.webapp import server
+
+    release = threading.Event()
+    started = threading.Event()
+
+    def stuck(config: Any) -> Any:  # stands in for a computation that never ends
+        started.set()
+        release.wait(30.0)
+        raise RuntimeError("released")
+
+    monkeypatch.setattr(server, "predict_config", stuck)
+    monkeypatch.setattr(server, "COMPUTE_LIMIT_S", 0.5)
+    app = server.create_app()
+    with TestClient(app) as local:
+        outcome: dict[str, Any] = {}
+
+        def slow_request() -> None:
+            outcome["slow"] = local.post("/api/deploy", json={"config": _config()})
+
+        worker = threading.Thread(target=slow_request)
+        worker.start()
+        assert started.wait(10.0)
+        # While the computation hangs, another request is served (event order, not time).
+        assert local.get("/api/example").status_code == 200
+        worker.join(30.0)
+        release.set()
+    response = outcome["slow"]
+    assert response.status_code == 503
+    assert response.json()["errors"][0].startswith("computation: took longer than 0.5 s")
+    declared = app.openapi()["paths"]["/api/deploy"]["post"]["responses"]
+    assert set(declared["503"]["content"]) == {"application/json"}

@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import time
 import tomllib
+from collections.abc import Callable
 from importlib.resources import files
 from pathlib import Path
 from typing import Any
@@ -127,6 +128,35 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
 }
 # The largest request body read: a config is a few kB; anything near this is not one.
 MAX_BODY_BYTES = 1_000_000
+# The longest a computation may hold a request [s]; the paper example takes ~0.05 s and
+# the largest request the limits allow (50 temperatures, dynamics) a few seconds.
+COMPUTE_LIMIT_S = 60.0
+_LIMITED: dict[int | str, dict[str, Any]] = {
+    **_ERRORS,
+    503: {"description": "The computation took longer than the time limit", **_PROBLEM_JSON},
+}
+
+
+async def within_time_limit(compute: Callable[[], Response]) -> Response:
+    """Run ``compute`` in a worker thread, off the event loop, for at most the time limit.
+
+    Other requests are served meanwhile. Past :data:`COMPUTE_LIMIT_S` the client gets
+    503 at once; the thread cannot be killed and finishes in the background, its result
+    discarded.
+    """
+    import anyio
+
+    try:
+        with anyio.fail_after(COMPUTE_LIMIT_S):
+            return await anyio.to_thread.run_sync(compute, abandon_on_cancel=True)
+    except TimeoutError:
+        raise HTTPException(
+            status_code=503,
+            detail=[
+                f"computation: took longer than {COMPUTE_LIMIT_S:g} s; ask for fewer "
+                "temperatures, points or a shorter stop_time"
+            ],
+        ) from None
 
 
 def _refuse(problems: list[str]) -> HTTPException:
@@ -327,17 +357,21 @@ def create_app(config_text: str | None = None) -> FastAPI:
             "source": "paper example (section 6)" if which == "paper" else source,
         }
 
-    @app.post("/api/deploy", response_model=DeployResponse, responses=_ERRORS)
-    def deploy(body: DeployBody) -> Response:
+    @app.post("/api/deploy", response_model=DeployResponse, responses=_LIMITED)
+    async def deploy(body: DeployBody) -> Response:
         """Predict the deployment of a config, as `ecdsim deploy --json`, plus curves."""
-        config, text = load_body(body.config)
-        began = time.perf_counter()
-        prediction = _predict(config)
-        document = prediction.to_dict()
-        extra = curves(prediction, config, body.time_points, body.sweep_points)
-        elapsed = 1000.0 * (time.perf_counter() - began)
-        payload = {"prediction": document, **extra, "toml": text, "compute_ms": elapsed}
-        return Response(json.dumps(payload, allow_nan=False), media_type="application/json")
+
+        def compute() -> Response:
+            config, text = load_body(body.config)
+            began = time.perf_counter()
+            prediction = _predict(config)
+            document = prediction.to_dict()
+            extra = curves(prediction, config, body.time_points, body.sweep_points)
+            elapsed = 1000.0 * (time.perf_counter() - began)
+            payload = {"prediction": document, **extra, "toml": text, "compute_ms": elapsed}
+            return Response(json.dumps(payload, allow_nan=False), media_type="application/json")
+
+        return await within_time_limit(compute)
 
     @app.post("/api/config/parse", response_model=ExampleResponse, responses=_ERRORS)
     def parse(body: TomlBody) -> dict[str, Any]:
@@ -368,14 +402,18 @@ def create_app(config_text: str | None = None) -> FastAPI:
     @app.post(
         "/api/report",
         response_class=HTMLResponse,
-        responses={200: {"content": {"text/html": {}}}, **_ERRORS},
+        responses={200: {"content": {"text/html": {}}}, **_LIMITED},
     )
-    def report(body: ConfigBody) -> Response:
+    async def report(body: ConfigBody) -> Response:
         """The self-contained HTML report of the config (as `ecdsim report`)."""
-        config, text = load_body(body.config)
-        html = render_html(config, _predict(config), text)
-        return HTMLResponse(
-            html, headers={"Content-Disposition": 'attachment; filename="ecdsim-report.html"'}
-        )
+
+        def compute() -> Response:
+            config, text = load_body(body.config)
+            html = render_html(config, _predict(config), text)
+            return HTMLResponse(
+                html, headers={"Content-Disposition": 'attachment; filename="ecdsim-report.html"'}
+            )
+
+        return await within_time_limit(compute)
 
     return app
