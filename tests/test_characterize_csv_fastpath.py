@@ -8,12 +8,14 @@ report for a file full of problems, at any block size.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from ecdsim.characterize import csvdata
 from ecdsim.characterize.droptest import DROP_TEST_COLUMNS
+from tests.conftest import ROOT
 
 HEADER = "temperature [degC],mass [g],radius [mm],angle [deg],time [s],note"
 ROWS = [
@@ -74,3 +76,24 @@ def test_first_equal_row_against_a_dictionary() -> None:
     seen: dict[tuple[float, ...], int] = {}
     expected = [seen.setdefault(tuple(row), i) for i, row in enumerate(array.tolist())]
     assert csvdata._first_equal_row(array).tolist() == expected
+
+
+def test_json_points_compute_the_correction_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The JSON of a temperature once recomputed the whole correction column for every
+    # point (quadratic: a 1,000,000-row log took minutes); it must be computed once.
+    from ecdsim.characterize import droptest
+
+    table = droptest.read_drop_test(ROOT / "examples" / "drop_test.csv")
+    fit = droptest.reduce_drop_test(table).fits[0]
+    calls = 0
+    original = droptest.TemperatureFit.correction
+
+    def counted(self: droptest.TemperatureFit) -> Any:
+        nonlocal calls
+        calls += 1
+        return original.fget(self)  # type: ignore[attr-defined]
+
+    monkeypatch.setattr(droptest.TemperatureFit, "correction", property(counted))
+    document = fit.to_dict()
+    assert len(document["points"]) == fit.rows.size == 6  # 6 masses at -40 degC
+    assert calls <= 2  # the points' column, and the max of it in the summary

@@ -290,7 +290,12 @@ def read_table(path: str | Path, columns: Sequence[Column]) -> Table:
     file = Path(path)
     text, sha256 = _read_text(file)
     source = str(file)
-    reader = csv.reader(io.StringIO(text, newline=""))
+    plain = _plain(text)
+    lines = (text.replace("\r\n", "\n") if "\r" in text else text).split("\n")
+    # A plain file is read from its lines alone (the csv module over a StringIO of the
+    # whole text would hold it a second time, four bytes a character).
+    reader = csv.reader(lines) if plain else csv.reader(io.StringIO(text, newline=""))
+    del text
     header: list[str] | None = None
     for record in reader:
         if any(cell.strip() for cell in record):
@@ -302,15 +307,14 @@ def read_table(path: str | Path, columns: Sequence[Column]) -> Table:
     checks = {c.key: c.check for c in columns}
     keys = list(layout.index)
     parse = _RecordParser(len(header), keys, layout, checks)
-    lines = text.replace("\r\n", "\n").split("\n")
-    if _plain(text):
+    if plain:
         rows, array, bad = _read_plain(lines, reader.line_num, parse)
     else:
         rows, array, bad = _read_with_csv_module(reader, parse, source)
     rows, array, bad = _drop_repeats(rows, array, bad, lines)
     if rows.size == 0:
-        lines = [b.message() for b in bad]
-        raise ConfigError([*lines, "no usable data row remains"], source)
+        report = [b.message() for b in bad]
+        raise ConfigError([*report, "no usable data row remains"], source)
     return Table(
         source=source,
         sha256=sha256,
