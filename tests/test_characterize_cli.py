@@ -45,7 +45,7 @@ def test_fit_help_lists_both_commands(tmp_path: Path, monkeypatch: pytest.Monkey
     common = {"--json": None, "--plot": None, "--output": "-o", "--reference-temperature": None}
     common |= {"--strict": None, "--help": None}
     drop = read_help(runner, app, ["fit", "drop-test"])
-    assert_options(drop, {**common, "--config": None})
+    assert_options(drop, {**common, "--config": None, "--noise": None})
     run_example(runner, app, drop, tmp_path / "drop", monkeypatch)
     assert (tmp_path / "drop" / "plots" / "torque_vs_speed_fit.png").is_file()
     trace = read_help(runner, app, ["fit", "trace"])
@@ -127,6 +127,32 @@ def test_json_output(tmp_path: Path) -> None:
     comparison = document["temperature_laws"]["comparison"]
     assert comparison["better"] == "linear"
     assert comparison["delta_aic"] < -2.0  # AIC(linear) - AIC(resistivity), Burnham-Anderson
+
+
+def test_the_noise_model_is_chosen_on_the_command_line() -> None:
+    # The default is the torque-noise line; --noise timing fits log t instead, and says
+    # so in the table's title and in the JSON document (top level and per temperature).
+    default = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "--json"])
+    timing = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "--json", "--noise", "timing"])
+    assert default.exit_code == 0, default.output
+    assert timing.exit_code == 0, timing.output
+    documents = {"torque": json.loads(default.stdout), "timing": json.loads(timing.stdout)}
+    for name, document in documents.items():
+        assert document["noise_model"] == name
+        assert {e["noise_model"] for e in document["temperatures"]} == {name}
+    for entry in documents["torque"]["temperatures"]:
+        assert entry["residual_std_Nm"] > 0.0
+        assert entry["relative_time_std"] is None
+    for entry in documents["timing"]["temperatures"]:
+        assert entry["residual_std_Nm"] is None
+        # The example's scatter is a 0.01 N*m weighing error (docs section 9); seen as a
+        # relative time error it is 0.01 / (torque - FECD), with torques of 1.43 to
+        # 5.2 N*m and FECD 0.36 to 0.66 N*m at most 0.01 / (1.43 - 0.66) = 1.3 %.
+        assert 0.0 < entry["relative_time_std"] < 0.013
+        assert entry["speed_noise_bias"] is None
+    table = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "--noise", "timing"])
+    assert table.exit_code == 0, table.output
+    assert "--noise timing" in table.stdout
 
 
 @dataclass(frozen=True)
@@ -228,6 +254,10 @@ def test_one_temperature_failing_is_reported_and_the_rest_fitted(tmp_path: Path)
         (
             ["fit", "drop-test", str(EXAMPLE), "--reference-temperature", "-300"],
             "--reference-temperature: '-300 degC' is below absolute zero",
+        ),
+        (
+            ["fit", "drop-test", str(EXAMPLE), "--noise", "speed"],
+            "--noise: unknown noise model 'speed'; choose one of: torque, timing",
         ),
         (
             ["fit", "trace", str(TRACE), "--config", str(PAPER_CONFIG), "-T", "-400"],

@@ -7,6 +7,12 @@ with Gaussian scatter in the torque, speeds exact: the statistical model the int
 claim (docs/characterize.md section 1), once with the same noise at every temperature
 and once with three times the noise at the hottest one.
 
+The issue's own scenario has the noise in the drop TIME instead (1 % relative, masses
+exact). The torque-noise line is the wrong model for it (its FECD intervals cover about
+99 %), so those campaigns are reduced with ``noise="timing"`` (least squares of log t,
+docs/characterize.md section 1) and checked against the same bands; the torque-noise
+line's over-coverage is kept visible.
+
 Checks, each against a binomial band (a correct 95 % interval covers in a fraction of
 campaigns that is binomial with p = 0.95):
 
@@ -22,7 +28,8 @@ The intervals' Welch-Satterthwaite degrees of freedom are an approximation, so t
 checked twice: by closed forms typed here, and by coverage.
 
 Run as a script, the module prints the figures quoted in docs/characterize.md
-section 2 (5000 campaigns each, and the 1 % timing-noise campaigns of the issue)::
+section 2 (5000 campaigns each, and the 1 % timing-noise campaigns of the issue under
+both noise models)::
 
     .venv/bin/python -m tests.test_characterize_coverage
 """
@@ -47,6 +54,7 @@ TEMPERATURES = np.array([-40.0, -10.0, 25.0, 60.0, 100.0])  # degC
 MASSES = np.array([3.0, 4.5, 6.0, 7.5, 9.0])  # kg
 RADIUS, ANGLE = 0.05, math.pi  # m, rad (180 deg drops, paper section 7)
 TORQUE_NOISE = 0.02  # N*m, standard deviation; about 1 % of the mean drive torque
+TIMING_NOISE = 0.01  # relative standard deviation of the recorded time (issue 11)
 REPLICATES = 1000
 SEED = 20261123
 # (name, truth, which fit, which parameter) for every law parameter checked
@@ -141,8 +149,9 @@ def run_campaigns(
     timing_noise: float = 0.0,
     hot_factor: float = 1.0,
     known_errors: bool = True,
+    noise: str = "torque",
 ) -> Tally:
-    """Reduce ``n`` campaigns and count coverage and alarms."""
+    """Reduce ``n`` campaigns under the ``noise`` model and count coverage and alarms."""
     rng = np.random.default_rng(seed)
     laws = ("linear", "friction")
     tally = Tally(
@@ -156,7 +165,7 @@ def run_campaigns(
         table = campaign_table(
             rng, torque_noise=torque_noise, timing_noise=timing_noise, hot_factor=hot_factor
         )
-        result = reduce_drop_test(table, TRUTH.t_ref)
+        result = reduce_drop_test(table, TRUTH.t_ref, noise=noise)
         assert result.laws is not None
         assert result.laws.friction is not None
         fits = {"linear": result.laws.damping["linear"], "friction": result.laws.friction}
@@ -182,6 +191,20 @@ def unequal_tally() -> Tally:
     return run_campaigns(
         REPLICATES, SEED + 10, torque_noise=TORQUE_NOISE, hot_factor=3.0, known_errors=False
     )
+
+
+@pytest.fixture(scope="module")
+def timing_tally() -> Tally:
+    # The issue's campaigns (1 % timing noise), reduced under the timing-noise model.
+    return run_campaigns(
+        REPLICATES, SEED + 20, timing_noise=TIMING_NOISE, known_errors=False, noise="timing"
+    )
+
+
+@pytest.fixture(scope="module")
+def timing_tally_torque_model() -> Tally:
+    # The same campaigns (same seed) reduced under the torque-noise model.
+    return run_campaigns(REPLICATES, SEED + 20, timing_noise=TIMING_NOISE, known_errors=False)
 
 
 @pytest.mark.slow
@@ -210,6 +233,45 @@ def test_law_misfit_false_alarm_rate_is_1_percent(tally: Tally, which: str) -> N
     # [0.0006, 0.0194] (at least one alarm, at most 19). Before the fix: 9 %.
     low, high = binomial_band(0.01, tally.n)
     assert low <= tally.alarms[which] / tally.n <= high
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(PARAMETERS))
+def test_law_intervals_cover_95_percent_with_timing_noise(timing_tally: Tally, name: str) -> None:
+    # 1 % relative timing noise, masses exact, fitted as such (least squares of log t):
+    # each line's residuals are the drops' relative timing errors, with the same
+    # variance at every temperature, so the pooling and the Welch-Satterthwaite dof hold
+    # as under torque noise. 1000 campaigns: band 0.95 +- 3 * sqrt(0.95 * 0.05 / 1000)
+    # = [0.929, 0.971].
+    low, high = binomial_band(0.95, timing_tally.n)
+    assert low <= timing_tally.covered[name] / timing_tally.n <= high
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("which", ["linear", "friction"])
+def test_law_misfit_false_alarm_rate_is_1_percent_with_timing_noise(
+    timing_tally: Tally, which: str
+) -> None:
+    # The true laws under timing noise, tested at 1 %: band 0.01 +- 3 * sqrt(0.01 * 0.99
+    # / 1000) = [0.0006, 0.0194]. The torque-noise line gave 1.3 % and 0.02 % here
+    # (5000 campaigns, docs/characterize.md section 2): the friction test nearly never
+    # fired, because its errors were overstated.
+    low, high = binomial_band(0.01, timing_tally.n)
+    assert low <= timing_tally.alarms[which] / timing_tally.n <= high
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["friction at 0 degC", "friction slope"])
+def test_the_torque_noise_line_overcovers_friction_under_timing_noise(
+    timing_tally_torque_model: Tally, name: str
+) -> None:
+    # Why the timing model is needed, kept visible: a relative timing error eps puts
+    # BECD * speed * eps into the torque, so the torque-space scatter grows with speed.
+    # The plain line's pooled residual variance then averages the fast points' large
+    # scatter into the intercept's error, which is set by the slow points: FECD's
+    # intervals come out too wide (about 99 % measured), above the band of a correct one.
+    tally = timing_tally_torque_model
+    assert tally.covered[name] / tally.n > binomial_band(0.95, tally.n)[1]
 
 
 @pytest.mark.slow
@@ -371,4 +433,15 @@ if __name__ == "__main__":
         f"torque noise {TORQUE_NOISE} N*m, three times that at 100 degC",
         run_campaigns(5000, SEED + 3, torque_noise=TORQUE_NOISE, hot_factor=3.0),
     )
-    _report("timing noise 1 %", run_campaigns(5000, SEED + 2, timing_noise=0.01))
+    _report(
+        "timing noise 1 %, torque-noise line (--noise torque)",
+        run_campaigns(5000, SEED + 2, timing_noise=TIMING_NOISE),
+    )
+    _report(
+        "timing noise 1 %, timing-noise line (--noise timing)",
+        run_campaigns(5000, SEED + 2, timing_noise=TIMING_NOISE, noise="timing"),
+    )
+    _report(
+        f"torque noise {TORQUE_NOISE} N*m, timing-noise line (--noise timing)",
+        run_campaigns(5000, SEED + 1, torque_noise=TORQUE_NOISE, noise="timing"),
+    )

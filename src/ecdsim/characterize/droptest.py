@@ -25,11 +25,25 @@ The inertia used is the ``rig_inertia_kg_m2`` column plus ``m r**2``; the damper
 rotor inertia (reflected: J_rotor * N**2) is unknown before the test and belongs in that
 column when known. Without the column no correction is made (the paper's steady-state
 reading), and a warning says how large the falling mass alone would make it.
+
+Where the scatter lies is a choice (:data:`NOISE_MODELS`, docs/characterize.md section 1):
+
+* ``torque`` (the default): the torque carries independent, equal-variance errors (the
+  rig's friction varying from drop to drop, a mass known to a few grams) and the speeds
+  are exact: the line above, by (non-linear) least squares in torque;
+* ``timing``: the masses and the radius are known precisely and the recorded time carries
+  a relative error (a stopwatch or a light gate triggered with a delay proportional to
+  the drop). Then ``log t`` carries equal-variance errors and the torque is exact, so the
+  fit is least squares of ``log t_i`` against the model's drop time
+  ``t(torque_i; FECD, BECD, J_i)`` (:func:`drop_time`): the residuals are the drops'
+  relative timing errors, the speed errors neither dilute the slope nor make the
+  torque-space scatter grow with speed, and the intervals hold for that noise.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -59,7 +73,7 @@ from ecdsim.characterize.linefit import (
     fit_line,
     summarise_line,
 )
-from ecdsim.characterize.stats import Estimate, finite_or_none
+from ecdsim.characterize.stats import Estimate, finite_or_none, linearised
 from ecdsim.characterize.templaws import (
     MISFIT_LEVEL,
     LawFit,
@@ -74,6 +88,9 @@ STANDARD_GRAVITY = 9.80665  # m/s**2, the conventional value (3rd CGPM, 1901)
 LARGE_CORRECTION = 0.05
 # Below this the falling mass's own start-up transient is not worth a warning.
 NOTABLE_CORRECTION = 0.01
+# The timing-noise fit keeps FECD below every drive torque by this fraction of the largest
+# (the model's drop time is infinite at FECD = torque).
+FRICTION_CEILING = 1e-9
 
 DROP_TEST_COLUMNS = (
     Column("temperature", TEMPERATURE, "temperature_C", check=above_absolute_zero),
@@ -196,6 +213,42 @@ def startup_angle(
     return as_float(np.asarray(steady, dtype=float) * (t - lag))
 
 
+def drop_time(
+    angle: ArrayLike, steady: ArrayLike, damping_rate: ArrayLike, inertia: ArrayLike
+) -> FloatArray:
+    """Time a drop released from rest takes to turn ``theta``: the root t of
+    ``theta = w_ss (t - lag(t))`` (:func:`startup_angle` inverted; docs/characterize.md
+    section 1).
+
+    ``g(t) = t - lag(t)`` rises (``g' = 1 - exp(-t / tau) > 0``), is convex, and
+    ``t - tau < g(t) <= t``; so Newton's method started at ``theta / w_ss + tau``, right of
+    the root, descends onto it monotonically. Without inertia t = theta / w_ss.
+
+    Parameters
+    ----------
+    angle : angle turned theta [rad]
+    steady : steady speed w_ss = (torque - FECD) / BECD [rad/s], > 0
+    damping_rate : BECD [N*m*s/rad], > 0
+    inertia : total inertia at the shaft J [kg*m**2]
+
+    >>> round(float(drop_time(8.013475893998, 1.0, 2.0, 4.0)), 9)  # transient_lag's example
+    10.0
+    """
+    pace = np.asarray(angle, dtype=float) / np.asarray(steady, dtype=float)
+    tau = np.broadcast_to(_time_constant(damping_rate, inertia), pace.shape)
+    moving = tau > 0.0
+    safe_tau = np.where(moving, tau, 1.0)
+    t = pace + np.where(moving, tau, 0.0)
+    for _ in range(200):
+        excess = np.where(moving, t + safe_tau * np.expm1(-t / safe_tau), t) - pace
+        rate = np.where(moving, -np.expm1(-t / safe_tau), 1.0)
+        step = excess / rate
+        t = t - step
+        if np.all(np.abs(step) <= 4.0 * np.finfo(float).eps * np.abs(t)):
+            break
+    return as_float(t)
+
+
 def corrected_speed(
     angle: ArrayLike, time: ArrayLike, damping_rate: ArrayLike, inertia: ArrayLike
 ) -> FloatArray:
@@ -226,6 +279,7 @@ class TemperatureFit:
     corrected : steady speed after the start-up correction [rad/s] (= speed without it)
     inertia : total inertia used for each point [kg*m**2] (0: no correction)
     line : the fitted line and its statistics
+    noise : the noise model it was fitted under (a :data:`NOISE_MODELS` name)
     """
 
     temperature: float
@@ -235,6 +289,7 @@ class TemperatureFit:
     corrected: FloatArray
     inertia: FloatArray
     line: LineFit
+    noise: str = "torque"
 
     @property
     def correction(self) -> FloatArray:
@@ -249,10 +304,11 @@ class TemperatureFit:
         carry independent errors of variance ``sigma_w**2``, the residual variance is
         about ``BECD**2 sigma_w**2`` and the fitted slope is low by the fraction
         ``sigma_w**2 / var(speed)`` (regression dilution; Draper and Smith, section
-        3.4). None without residual degrees of freedom; 0 for an exact fit.
+        3.4). None without residual degrees of freedom, and under the timing-noise
+        model, which fits the speed error and so has no such bias; 0 for an exact fit.
         """
         stats = self.line.statistics
-        if stats.residual_std is None:
+        if stats.residual_std is None or not NOISE_MODELS[self.noise].dilutes:
             return None
         if stats.exact:
             return 0.0
@@ -268,28 +324,33 @@ class TemperatureFit:
         """One entry of the ``temperatures`` list of the JSON document."""
         line = self.line
         curvature = line.curvature
-        points = []
-        for i, row in enumerate(self.rows):
-            points.append(
-                {
-                    "row": int(row),
-                    "torque_Nm": float(self.torque[i]),
-                    "speed_rad_s": float(self.speed[i]),
-                    "corrected_speed_rad_s": float(self.corrected[i]),
-                    "relative_speed_correction": float(self.correction[i]),
-                    "inertia_kg_m2": float(self.inertia[i]),
-                    "residual_Nm": float(line.statistics.residuals[i]),
-                    "studentized_residual": finite_or_none(float(line.studentized[i])),
-                    "outlier": bool(line.outliers[i]),
-                }
-            )
+        # Whole columns first (the correction is a property computed over all points:
+        # once per point made this quadratic in the number of drops).
+        columns = {
+            "row": self.rows.tolist(),
+            "torque_Nm": self.torque.tolist(),
+            "speed_rad_s": self.speed.tolist(),
+            "corrected_speed_rad_s": self.corrected.tolist(),
+            "relative_speed_correction": self.correction.tolist(),
+            "inertia_kg_m2": np.broadcast_to(self.inertia, self.rows.shape).tolist(),
+            "residual_Nm": (self.torque - line.fitted).tolist(),
+            "studentized_residual": [finite_or_none(v) for v in line.studentized.tolist()],
+            "outlier": np.asarray(line.outliers, dtype=bool).tolist(),
+        }
+        points = [
+            dict(zip(columns, values, strict=True))
+            for values in zip(*columns.values(), strict=True)
+        ]
         return {
             "temperature_C": self.temperature,
             "n_points": line.n_points,
             **line.slope.to_dict("damping_rate", "_Nms_per_rad"),
             **line.intercept.to_dict("friction", "_Nm"),
             "r_squared": line.r_squared,
-            "residual_std_Nm": line.statistics.residual_std,
+            "noise_model": self.noise,
+            "residual_std_Nm": None,
+            "relative_time_std": None,
+            NOISE_MODELS[self.noise].scatter_key: line.statistics.residual_std,
             "dof": line.statistics.dof,
             "roll_off": bool(curvature.roll_off) if curvature else False,
             "bending": bool(curvature.bending) if curvature else False,
@@ -350,6 +411,7 @@ class DropTestResult:
     reference_temperature : T_ref of the damping laws [degC]
     gravity : g used [m/s**2]
     warnings : flags raised (roll-off, outliers, start-up correction, ...)
+    noise : the noise model of the lines (a :data:`NOISE_MODELS` name)
     """
 
     table: Table
@@ -359,6 +421,7 @@ class DropTestResult:
     reference_temperature: float
     gravity: float
     warnings: tuple[FitWarning, ...] = field(default=())
+    noise: str = "torque"
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document of ``ecdsim fit drop-test --json`` (docs/characterize.md)."""
@@ -369,6 +432,7 @@ class DropTestResult:
             "source_sha256": self.table.sha256,
             "gravity_m_per_s2": self.gravity,
             "reference_temperature_C": self.reference_temperature,
+            "noise_model": self.noise,
             "temperatures": [fit.to_dict() for fit in self.fits],
             "failed_temperatures": [f.to_dict() for f in self.failed],
             "temperature_laws": self.laws.to_dict() if self.laws else None,
@@ -385,11 +449,14 @@ def fit_temperature(
     angle: ArrayLike,
     time: ArrayLike,
     inertia: ArrayLike,
+    *,
+    noise: str = "torque",
 ) -> TemperatureFit:
     """Fit the torque-speed line of one temperature, correcting the start-up if J > 0.
 
     Raises :class:`~ecdsim.characterize.linefit.LineFitError` where the points cannot
-    define a line or the fitted damping rate is not positive.
+    define a line or the fitted damping rate is not positive, and ValueError for an
+    unknown ``noise``.
 
     Parameters
     ----------
@@ -399,33 +466,206 @@ def fit_temperature(
     angle : angle turned theta [rad]
     time : time taken t [s]
     inertia : total inertia at the shaft per point J [kg*m**2]; zeros for no correction
+    noise : where the scatter lies, a :data:`NOISE_MODELS` name (module docstring)
     """
+    model = noise_model(noise)
     y = as_float(torque)
     theta = as_float(angle)
     t = as_float(time)
     j = np.broadcast_to(as_float(inertia), y.shape).astype(float)
     speed = steady_speed(theta, t)
     check_line_data(speed, y)
-    plain = fit_line(speed, y)
-    if plain.slope.value <= 0.0:
+    # The least-squares line of the steady-state readings: the paper's answer, and the
+    # start of every fit.
+    design = np.column_stack([np.ones_like(speed), speed - np.mean(speed)])
+    centred = np.linalg.lstsq(design, y, rcond=None)[0]
+    plain = (float(centred[0] - centred[1] * np.mean(speed)), float(centred[1]))
+    if plain[1] <= 0.0:
         raise LineFitError(
-            f"the fitted damping rate {plain.slope.value:.4g} N*m*s/rad is not positive: "
+            f"the fitted damping rate {plain[1]:.4g} N*m*s/rad is not positive: "
             "torque does not rise with speed"
         )
+    line = model.fit(y, theta, t, j, plain)
+    corrected = corrected_speed(theta, t, line.slope.value, j)
     row_array = np.asarray(rows, dtype=np.int64)
-    if not np.any(j > 0.0):
-        return TemperatureFit(temperature, row_array, y, speed, speed, j, plain)
-    friction, damping = _fit_with_startup(y, theta, t, j, plain)
-    corrected = corrected_speed(theta, t, damping, j)
+    return TemperatureFit(temperature, row_array, y, speed, corrected, j, line, model.name)
+
+
+def _torque_line(
+    torque: FloatArray,
+    angle: FloatArray,
+    time: FloatArray,
+    inertia: FloatArray,
+    start: tuple[float, float],
+) -> LineFit:
+    """The torque-noise line: the plain line, or the start-up-corrected fit where J > 0."""
+    if not np.any(inertia > 0.0):
+        return fit_line(steady_speed(angle, time), torque)
+    friction, damping = _fit_with_startup(torque, angle, time, inertia, start)
+    corrected = corrected_speed(angle, time, damping, inertia)
     # d torque_model / d B = w_c + B * w_c**2 / theta * d lag / d B
-    derivative = corrected + damping * corrected**2 / theta * _lag_derivative(t, damping, j)
-    design = np.column_stack([np.ones_like(y), derivative])
-    line = summarise_line(corrected, y, friction, damping, design)
-    return TemperatureFit(temperature, row_array, y, speed, corrected, j, line)
+    derivative = corrected + damping * corrected**2 / angle * _lag_derivative(
+        time, damping, inertia
+    )
+    design = np.column_stack([np.ones_like(torque), derivative])
+    return summarise_line(corrected, torque, friction, damping, design)
+
+
+def _log_drop_time(
+    torque: FloatArray, angle: FloatArray, friction: float, damping: float, inertia: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """``log t`` of each drop under (FECD, BECD), and ``d log t / d (FECD, BECD)``.
+
+    With ``P = theta * BECD / (torque - FECD)`` the drop time solves
+    ``g(t) = t - lag(t; BECD) = P``; implicit differentiation gives
+    ``g'(t) dt = dP + d lag / d BECD * dBECD``, ``g'(t) = 1 - exp(-t / tau)`` (1 for
+    J = 0, where ``log t = log theta + log BECD - log(torque - FECD)``).
+    """
+    drive = torque - friction
+    t = drop_time(angle, drive / damping, damping, inertia)
+    tau = _time_constant(damping, inertia)
+    moving = tau > 0.0
+    rate = np.where(moving, -np.expm1(-t / np.where(moving, tau, 1.0)), 1.0)
+    pace = angle * damping / drive
+    d_friction = pace / drive / rate / t
+    d_damping = (pace / damping + _lag_derivative(t, damping, inertia)) / rate / t
+    return as_float(np.log(t)), np.column_stack([d_friction, d_damping])
+
+
+def _timing_line(
+    torque: FloatArray,
+    angle: FloatArray,
+    time: FloatArray,
+    inertia: FloatArray,
+    start: tuple[float, float],
+) -> LineFit:
+    """The timing-noise line: least squares of ``log t`` (module docstring).
+
+    Its statistics are those of the log-time fit (residuals: relative timing errors,
+    ``s``: the relative timing scatter), so the intervals, the outlier test and the
+    scatter the laws pool hold for timing noise. The bending test weights the torque
+    residuals by ``1 / speed**2``: a relative speed error ``eps`` puts ``BECD * speed *
+    eps`` into the torque.
+    """
+    from scipy.optimize import least_squares
+
+    log_time = np.log(time)
+    scale = float(np.max(np.abs(torque)))
+    ceiling = float(np.min(torque)) - FRICTION_CEILING * scale
+    b0 = start[1]
+
+    # Searched as FECD = ceiling - scale * exp(q), BECD = b0 * exp(b): every trial point
+    # keeps FECD below the torques and BECD > 0, so the unbounded Levenberg-Marquardt
+    # solver applies (a quarter of the time of a bounded trust-region one, measured).
+    def parameters(p: FloatArray) -> tuple[float, float]:
+        return ceiling - scale * math.exp(p[0]), b0 * math.exp(p[1])
+
+    # The solver asks for the Jacobian where it last evaluated the residuals: keep that
+    # point's model (it costs as much as the rest of the fit, measured).
+    last: dict[tuple[float, float], tuple[FloatArray, FloatArray]] = {}
+
+    def model(p: FloatArray) -> tuple[FloatArray, FloatArray]:
+        key = (float(p[0]), float(p[1]))
+        if key not in last:
+            last.clear()
+            last[key] = _log_drop_time(torque, angle, *parameters(p), inertia)
+        return last[key]
+
+    def residual(p: FloatArray) -> FloatArray:
+        return as_float(log_time - model(p)[0])
+
+    def jacobian(p: FloatArray) -> FloatArray:
+        friction, damping = parameters(p)
+        return as_float(-model(p)[1] * np.array([friction - ceiling, damping]))
+
+    friction_start = min(start[0], ceiling - 0.01 * scale)
+    result = least_squares(
+        residual,
+        np.array([math.log((ceiling - friction_start) / scale), 0.0]),
+        jac=jacobian,
+        method="lm",
+        xtol=1e-14,
+        ftol=1e-14,
+        gtol=1e-14,
+    )
+    if not result.success:
+        raise LineFitError(f"the timing-noise fit did not converge ({result.message})")
+    friction, damping = parameters(result.x)
+    log_model, design = _log_drop_time(torque, angle, friction, damping, inertia)
+    # Residuals are relative: round-off is judged against 1.
+    statistics = linearised(design, log_time - log_model, np.ones_like(log_time))
+    corrected = corrected_speed(angle, time, damping, inertia)
+    return summarise_line(
+        corrected,
+        torque,
+        friction,
+        damping,
+        design,
+        statistics=statistics,
+        curvature_weights=1.0 / corrected**2,
+    )
+
+
+LineFitter = Callable[
+    [FloatArray, FloatArray, FloatArray, FloatArray, tuple[float, float]], LineFit
+]
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """Where a drop test's scatter lies, and how its line is fitted under it.
+
+    Attributes
+    ----------
+    name : registry name (``--noise``)
+    description : what it assumes, for humans
+    fit : ``(torque, angle, time, inertia, (FECD, BECD) to start from) -> LineFit``,
+        units as in :func:`fit_temperature`
+    scatter_key : JSON key of the residual standard deviation (it carries the unit)
+    dilutes : True where speed errors would bias the slope low (``speed_noise_bias``)
+    """
+
+    name: str
+    description: str
+    fit: LineFitter
+    scatter_key: str
+    dilutes: bool
+
+
+NOISE_MODELS: dict[str, NoiseModel] = {
+    "torque": NoiseModel(
+        name="torque",
+        description="scatter in the torque, speeds exact",
+        fit=_torque_line,
+        scatter_key="residual_std_Nm",
+        dilutes=True,
+    ),
+    "timing": NoiseModel(
+        name="timing",
+        description="relative scatter in the drop time, torques exact",
+        fit=_timing_line,
+        scatter_key="relative_time_std",
+        dilutes=False,
+    ),
+}
+DEFAULT_NOISE = "torque"
+
+
+def noise_model(name: str) -> NoiseModel:
+    """The registered noise model ``name``; ValueError naming the choices otherwise."""
+    try:
+        return NOISE_MODELS[name]
+    except KeyError:
+        choices = ", ".join(NOISE_MODELS)
+        raise ValueError(f"unknown noise model {name!r}; choose one of: {choices}") from None
 
 
 def _fit_with_startup(
-    torque: FloatArray, angle: FloatArray, time: FloatArray, inertia: FloatArray, start: LineFit
+    torque: FloatArray,
+    angle: FloatArray,
+    time: FloatArray,
+    inertia: FloatArray,
+    start: tuple[float, float],
 ) -> tuple[float, float]:
     """Least-squares (FECD, BECD) of ``torque = F + B * theta / (t - lag(B))``."""
     from scipy.optimize import least_squares
@@ -438,11 +678,11 @@ def _fit_with_startup(
         dw = w + p[1] * w * w / angle * _lag_derivative(time, p[1], inertia)
         return np.column_stack([-np.ones_like(w), -dw])
 
-    b0 = start.slope.value
+    b0 = start[1]
     scale = float(np.max(np.abs(torque)))
     result = least_squares(
         residual,
-        np.array([start.intercept.value, b0]),
+        np.array([start[0], b0]),
         jac=jacobian,
         bounds=([-np.inf, 1e-9 * b0], [np.inf, np.inf]),
         x_scale=np.array([scale, b0]),
@@ -488,23 +728,33 @@ def fit_drop_test(
     path: str | Path,
     reference_temperature: float = 25.0,
     gravity: float = STANDARD_GRAVITY,
+    *,
+    noise: str = DEFAULT_NOISE,
 ) -> DropTestResult:
     """Read a drop-test CSV file and fit every temperature and the temperature laws.
 
     Raises :class:`~ecdsim.config.ConfigError` for an unreadable file or one with no
-    usable row; a temperature that cannot be fitted is reported in ``failed``.
+    usable row, ValueError for an unknown ``noise``; a temperature that cannot be fitted
+    is reported in ``failed``.
 
     Parameters
     ----------
     path : the CSV file (columns in docs/characterize.md)
     reference_temperature : T_ref of the damping laws [degC]
     gravity : acceleration of gravity [m/s**2]
+    noise : where the scatter lies, a :data:`NOISE_MODELS` name (module docstring)
     """
-    return reduce_drop_test(read_drop_test(path, gravity), reference_temperature, gravity)
+    model = noise_model(noise)
+    table = read_drop_test(path, gravity)
+    return reduce_drop_test(table, reference_temperature, gravity, noise=model.name)
 
 
 def reduce_drop_test(
-    table: Table, reference_temperature: float = 25.0, gravity: float = STANDARD_GRAVITY
+    table: Table,
+    reference_temperature: float = 25.0,
+    gravity: float = STANDARD_GRAVITY,
+    *,
+    noise: str = DEFAULT_NOISE,
 ) -> DropTestResult:
     """Fit every temperature of a drop-test table and the laws over temperature.
 
@@ -513,7 +763,9 @@ def reduce_drop_test(
     table : drop-test data (from :func:`read_drop_test`)
     reference_temperature : T_ref of the damping laws [degC]
     gravity : acceleration of gravity [m/s**2]
+    noise : where the scatter lies, a :data:`NOISE_MODELS` name (module docstring)
     """
+    model = noise_model(noise)
     v = table.values
     torque = _drive_torques(table, gravity)
     has_inertia = table.has("rig_inertia")
@@ -535,6 +787,7 @@ def reduce_drop_test(
                 v["angle"][members],
                 v["time"][members],
                 inertia[members],
+                noise=model.name,
             )
         except LineFitError as exc:
             failed.append(FailedTemperature(temperature, tuple(int(r) for r in rows), str(exc)))
@@ -568,6 +821,7 @@ def reduce_drop_test(
         reference_temperature=reference_temperature,
         gravity=gravity,
         warnings=tuple(warnings),
+        noise=model.name,
     )
 
 

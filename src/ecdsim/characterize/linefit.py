@@ -147,13 +147,25 @@ def fit_line(speed: ArrayLike, torque: ArrayLike) -> LineFit:
 
 
 def summarise_line(
-    speed: ArrayLike, torque: ArrayLike, intercept: float, slope: float, design: ArrayLike
+    speed: ArrayLike,
+    torque: ArrayLike,
+    intercept: float,
+    slope: float,
+    design: ArrayLike,
+    *,
+    statistics: Linearised | None = None,
+    curvature_weights: ArrayLike | None = None,
 ) -> LineFit:
     """Statistics, flags and intervals of a line whose parameters are already fitted.
 
     ``design`` is the derivative of the model torque with respect to (FECD, BECD) at each
     point: ``[1, speed]`` for a plain line; for the drop test with the start-up
     correction, the speed column also carries the derivative of the correction.
+
+    A fit whose scatter is not in the torque (the drop test's timing-noise model, whose
+    residuals are relative errors of the drop time) passes its own ``statistics``: the
+    intervals, the outlier test and the scatter handed to the laws over temperature then
+    come from them, and ``design`` is not used; R**2 stays a torque-space figure.
 
     Parameters
     ----------
@@ -162,15 +174,21 @@ def summarise_line(
     intercept : fitted FECD [N*m]
     slope : fitted BECD [N*m*s/rad]
     design : d torque / d (FECD, BECD), shape (n, 2) [-, rad/s]
+    statistics : the fit's own linearised statistics; None: torque residuals and ``design``
+    curvature_weights : weights of the bending test's points [1/(N*m)**2], e.g.
+        ``1 / speed**2`` where the torque-space scatter grows with speed; None: equal
     """
     x = np.asarray(speed, dtype=float)
     y = np.asarray(torque, dtype=float)
     fitted = intercept + slope * x
-    stats = linearised(np.asarray(design, dtype=float), y - fitted, y)
+    if statistics is None:
+        stats = linearised(np.asarray(design, dtype=float), y - fitted, y)
+    else:
+        stats = statistics
     quantile = t_quantile(stats.dof) if stats.dof > 0 else None
     friction, damping = estimates(np.array([intercept, slope]), stats.covariance, quantile)
     total = float(np.sum((y - np.mean(y)) ** 2))
-    r_squared = 1.0 - float(np.sum(stats.residuals**2)) / total
+    r_squared = 1.0 - float(np.sum((y - fitted) ** 2)) / total
     studentized = stats.studentized()
     outlier_p = _bonferroni(studentized, stats)
     return LineFit(
@@ -182,7 +200,7 @@ def summarise_line(
         studentized=studentized,
         outlier_p=outlier_p,
         outliers=np.asarray(np.nan_to_num(outlier_p, nan=1.0) < OUTLIER_LEVEL),
-        curvature=curvature_test(x, y),
+        curvature=curvature_test(x, y, weights=curvature_weights),
     )
 
 
@@ -203,29 +221,36 @@ def _bonferroni(studentized: FloatArray, stats: Linearised) -> FloatArray:
     return p
 
 
-def curvature_test(speed: ArrayLike, torque: ArrayLike) -> CurvatureTest | None:
+def curvature_test(
+    speed: ArrayLike, torque: ArrayLike, *, weights: ArrayLike | None = None
+) -> CurvatureTest | None:
     """Test a quadratic term ``c * speed**2`` against the straight line.
 
     The F statistic ``(SSR_line - SSR_quad) / (SSR_quad / (n - 3))`` equals the square
-    of the quadratic coefficient's t statistic (Draper and Smith, section 6.2). None with
-    fewer than 4 points or fewer than 3 distinct speeds (no degree of freedom to test).
+    of the quadratic coefficient's t statistic (Draper and Smith, section 6.2); with
+    ``weights`` both fits are weighted least squares (the same test on the rows scaled by
+    ``sqrt(weight)``). None with fewer than 4 points or fewer than 3 distinct speeds (no
+    degree of freedom to test).
 
     Parameters
     ----------
     speed : speeds [rad/s]
     torque : torques [N*m]
+    weights : each point's weight, proportional to 1 / its torque variance
+        [1/(N*m)**2]; None: equal
     """
     x = np.asarray(speed, dtype=float)
-    y = np.asarray(torque, dtype=float)
     n = x.size
     if n < 4 or np.unique(x).size < 3:
         return None
+    root = np.ones_like(x) if weights is None else np.sqrt(np.asarray(weights, dtype=float))
+    y = np.asarray(torque, dtype=float) * root
     # Centred and scaled speed: the quadratic fit is well conditioned at any speed scale.
     centre = float(np.mean(x))
     spread = float(np.max(np.abs(x - centre)))
     z = (x - centre) / spread
-    line = np.column_stack([np.ones_like(z), z])
-    quad = np.column_stack([line, z * z])
+    line = np.column_stack([root, z * root])
+    quad = np.column_stack([line, z * z * root])
     coef_line = np.linalg.lstsq(line, y, rcond=None)[0]
     coef_quad = np.linalg.lstsq(quad, y, rcond=None)[0]
     ssr_line = float(np.sum((y - line @ coef_line) ** 2))

@@ -135,7 +135,7 @@ def plot_line_residuals(result: DropTestResult) -> Figure:
     for fit, color in zip(result.fits, temperature_colors(len(result.fits)), strict=True):
         ax.plot(
             fit.corrected,
-            fit.line.statistics.residuals,
+            fit.torque - fit.line.fitted,
             "o-",
             color=color,
             markersize=4,

@@ -208,17 +208,32 @@ def drop_test(
         ),
     ] = None,
     reference_temperature: ReferenceOpt = "25",
+    noise: Annotated[
+        str,
+        typer.Option(
+            "--noise",
+            help=(
+                "Where the scatter lies: 'torque' (speeds exact; the default) or 'timing' "
+                "(a relative error of the recorded time; masses and radius exact)."
+            ),
+            metavar="MODEL",
+        ),
+    ] = "torque",
     strict: StrictOpt = False,
 ) -> None:
     """Fit BECD and FECD per temperature from drop tests, then laws over temperature."""
-    from ecdsim.characterize.droptest import fit_drop_test
+    from ecdsim.characterize.droptest import fit_drop_test, noise_model
     from ecdsim.characterize.export import fitted_parameter_text, largest_torque, provenance
     from ecdsim.config import ConfigError
 
     reference = temperature_option("--reference-temperature", reference_temperature)
+    try:
+        noise = noise_model(noise).name
+    except ValueError as exc:
+        fail([f"--noise: {exc}"])
     loaded = _load_config(config) if config is not None else None
     try:
-        result = fit_drop_test(data, reference)
+        result = fit_drop_test(data, reference, noise=noise)
     except ConfigError as exc:
         fail(str(exc).splitlines())
     bad_rows = [b.message() for b in result.table.bad_rows]
@@ -277,8 +292,9 @@ def _print_drop_test(result: DropTestResult) -> None:
     from rich.table import Table
 
     console = Console(soft_wrap=False, width=max(120, Console().width))
+    name = result.noise
     table = Table(
-        title="Drop test: torque = FECD + BECD * speed (paper Eq. 5, Figure 8)",
+        title=(f"Drop test: torque = FECD + BECD * speed (paper Eq. 5, Figure 8), --noise {name}"),
         title_justify="left",
     )
     headers = [
