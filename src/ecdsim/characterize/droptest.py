@@ -556,12 +556,13 @@ def _timing_line(
 
     # Searched as FECD = ceiling - scale * exp(q), BECD = b0 * exp(b): every trial point
     # keeps FECD below the torques and BECD > 0, so the unbounded Levenberg-Marquardt
-    # solver applies (a quarter of the time of a bounded trust-region one, measured).
+    # solver applies (1000 campaigns of the coverage tests: 15 s against 21.5 s with the
+    # bounded trust-region solver, measured).
     def parameters(p: FloatArray) -> tuple[float, float]:
         return ceiling - scale * math.exp(p[0]), b0 * math.exp(p[1])
 
     # The solver asks for the Jacobian where it last evaluated the residuals: keep that
-    # point's model (it costs as much as the rest of the fit, measured).
+    # point's model rather than solve for the drop times twice.
     last: dict[tuple[float, float], tuple[FloatArray, FloatArray]] = {}
 
     def model(p: FloatArray) -> tuple[FloatArray, FloatArray]:
