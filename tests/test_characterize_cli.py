@@ -129,9 +129,10 @@ def test_json_output(tmp_path: Path) -> None:
     assert comparison["delta_aic"] < -2.0  # AIC(linear) - AIC(resistivity), Burnham-Anderson
 
 
-def test_the_noise_model_is_chosen_on_the_command_line() -> None:
+def test_the_noise_model_is_chosen_on_the_command_line(tmp_path: Path) -> None:
     # The default is the torque-noise line; --noise timing fits log t instead, and says
-    # so in the table's title and in the JSON document (top level and per temperature).
+    # so in the table's title, in the JSON document (top level and per temperature) and
+    # in the parameter file's header.
     default = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "--json"])
     timing = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "--json", "--noise", "timing"])
     assert default.exit_code == 0, default.output
@@ -150,9 +151,13 @@ def test_the_noise_model_is_chosen_on_the_command_line() -> None:
         # 5.2 N*m and FECD 0.36 to 0.66 N*m at most 0.01 / (1.43 - 0.66) = 1.3 %.
         assert 0.0 < entry["relative_time_std"] < 0.013
         assert entry["speed_noise_bias"] is None
-    table = runner.invoke(app, ["fit", "drop-test", str(EXAMPLE), "--noise", "timing"])
+    output = tmp_path / "fitted.toml"
+    args = ["fit", "drop-test", str(EXAMPLE), "--noise", "timing", "-o", str(output)]
+    table = runner.invoke(app, args)
     assert table.exit_code == 0, table.output
     assert "--noise timing" in table.stdout
+    header = output.read_text(encoding="utf-8").splitlines()[0]
+    assert header.endswith(": ecdsim fit drop-test --noise timing")
 
 
 @dataclass(frozen=True)

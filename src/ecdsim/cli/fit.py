@@ -265,7 +265,11 @@ def drop_test(
             loaded.spec.load if loaded else None,
             largest_torque([t for f in fits for t in f.torque]),
             f"ECD fitted from drop tests ({Path(data).name})",
-            provenance("ecdsim fit drop-test", result.table.source, result.table.sha256),
+            provenance(
+                f"ecdsim fit drop-test --noise {result.noise}",
+                result.table.source,
+                result.table.sha256,
+            ),
         )
 
     def plotter(folder: Path) -> list[Path]:
