@@ -7,7 +7,7 @@ STAMP_DEMO := $(VENV)/.installed-demo
 STAMP_TEST := $(VENV)/.installed-test
 DEMO_DIR ?= ecdsim-demo
 
-.PHONY: demo test lint typecheck pytest browser bench validate clean
+.PHONY: demo test lint typecheck pytest browser bench validate fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -56,6 +56,12 @@ bench: $(STAMP_TEST)
 	$(BIN)/python benchmarks/bench_webapp.py
 	$(BIN)/python benchmarks/bench_montecarlo.py
 	$(BIN)/python benchmarks/bench_csv.py
+
+# The long fuzz campaign (docs/fuzzing.md): FUZZ_EXAMPLES random examples per target and
+# per API operation (schemathesis, all checks); make test runs the same file short and seeded.
+FUZZ_EXAMPLES ?= 500
+fuzz: $(STAMP_TEST)
+	ECDSIM_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(BIN)/python -m pytest tests/test_fuzz.py -p no:cacheprovider
 
 # The validation suite against independent references (validation/); writes docs/validation.md
 # and exits non-zero if any check fails.

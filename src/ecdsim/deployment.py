@@ -406,16 +406,18 @@ def _linear_range_warnings(
 ) -> list[ModelWarning]:
     damper = prediction.system.ecd.damper
     ecd = prediction.ecd
-    shaft_speed = solution.max_speed * ecd.gear_ratio
-    checks: list[tuple[str, float | None, FloatArray, str]] = [
-        ("linear_range_speed", damper.max_linear_speed, shaft_speed, "rad/s"),
-        (
-            "linear_range_torque",
-            damper.max_linear_torque,
-            damper_torque(ecd.damper_damping_rate, shaft_speed),
-            "N*m",
-        ),
-    ]
+    # A shaft speed that overflows (start_torque = 1e308 N*m) is past any limit: compared as inf.
+    with np.errstate(over="ignore"):
+        shaft_speed = solution.max_speed * ecd.gear_ratio
+        checks: list[tuple[str, float | None, FloatArray, str]] = [
+            ("linear_range_speed", damper.max_linear_speed, shaft_speed, "rad/s"),
+            (
+                "linear_range_torque",
+                damper.max_linear_torque,
+                damper_torque(ecd.damper_damping_rate, shaft_speed),
+                "N*m",
+            ),
+        ]
     out = []
     for code, limit, value, unit in checks:
         if limit is None:

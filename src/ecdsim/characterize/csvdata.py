@@ -291,7 +291,10 @@ def read_table(path: str | Path, columns: Sequence[Column]) -> Table:
     text, sha256 = _read_text(file)
     source = str(file)
     plain = _plain(text)
-    lines = (text.replace("\r\n", "\n") if "\r" in text else text).split("\n")
+    if plain:
+        lines = (text.replace("\r\n", "\n") if "\r" in text else text).split("\n")
+    else:  # numbered as the csv module counts lines: a bare carriage return ends one too
+        lines = re.split(r"\r\n?|\n", text)
     # A plain file is read from its lines alone (the csv module over a StringIO of the
     # whole text would hold it a second time, four bytes a character).
     reader = csv.reader(lines) if plain else csv.reader(io.StringIO(text, newline=""))

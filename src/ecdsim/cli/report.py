@@ -14,6 +14,7 @@ from typing import Annotated
 import typer
 
 from ecdsim.cli.common import echo_warnings, fail, load_run, predict_run
+from ecdsim.cli.montecarlo import INTERRUPTED
 
 REPORT_EPILOG = "Example: [bold]ecdsim report examples/paper_cc16.toml -o report.html --pdf[/bold]"
 APP_EPILOG = (
@@ -55,6 +56,12 @@ def report(
         written = write_report(loaded, prediction, text, output)
     except OSError as exc:
         fail([f"--output {output}: cannot write ({exc.strerror or exc})"])
+    except KeyboardInterrupt:
+        # The write is atomic: say so, since the shell only shows ^C.
+        typer.echo(
+            f"interrupted: {output} not written (an earlier file there is unchanged)", err=True
+        )
+        raise typer.Exit(INTERRUPTED) from None
     echo_warnings(prediction)
     typer.echo(f"wrote {written}")
     if pdf:

@@ -46,8 +46,14 @@ def log_mean(a: ArrayLike, b: ArrayLike) -> FloatArray:
     x = 1.0 - b_safe / a_safe  # relative drop over the segment, x < 1
     small = np.abs(x) < _SERIES_LIMIT
     x_safe = np.where(small, 0.5, x)
-    # logmean / a = x / (-ln(1 - x)); series 1 - x/2 - x**2/12 for small |x|.
-    ratio = np.where(small, 1.0 - x / 2.0 - x * x / 12.0, x_safe / -np.log1p(-x_safe))
+    # logmean / a = x / (-ln(1 - x)); series 1 - x/2 - x**2/12 for small |x|. Where b < a/2,
+    # 1 - x has lost b/a's digits (and is 0 once b/a < 1e-16: log1p(-1) = -inf), so
+    # -ln(1 - x) = ln a - ln b is taken from the logs, which cannot overflow.
+    far = b_safe < 0.5 * a_safe
+    log_ratio = np.where(
+        far, np.log(a_safe) - np.log(b_safe), -np.log1p(-np.where(far, 0.5, x_safe))
+    )
+    ratio = np.where(small, 1.0 - x / 2.0 - x * x / 12.0, x_safe / log_ratio)
     return np.where(valid, a_safe * ratio, 0.0)
 
 

@@ -22,6 +22,7 @@ from pydantic import BaseModel
 
 from ecdsim._version import __version__
 from ecdsim.atomic import write_text
+from ecdsim.config.errors import ConfigError
 from ecdsim.config.units import Kind
 from ecdsim.deployment import Prediction, predict
 from ecdsim.formatting import format_number
@@ -275,7 +276,9 @@ def montecarlo_section(config: Config, samples: int = REPORT_MC_SAMPLES) -> dict
             plan = build_plan(config, samples, "exact", seed=seed, out=out)
             run(plan, out, InProcess())
             summary = summarize(plan, out)
-    except (MissingDependency, RunError) as exc:
+    except (MissingDependency, RunError, ConfigError) as exc:
+        # ConfigError: tolerances that only fail against the configured values (a "10 %"
+        # spread of a value of 0); the report of the deployment itself still stands.
         section["error"] = str(exc)
         return section
     section["summary"] = summary

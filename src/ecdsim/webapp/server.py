@@ -123,6 +123,7 @@ _PROBLEM_JSON = {
     "content": {"application/json": {"schema": {"$ref": "#/components/schemas/ProblemDetail"}}}
 }
 _ERRORS: dict[int | str, dict[str, Any]] = {
+    400: {"description": "Body is not JSON (FastAPI's own refusal)", **_PROBLEM_JSON},
     413: {"description": "Request body too large", **_PROBLEM_JSON},
     422: {"description": "Invalid input, one line per problem", **_PROBLEM_JSON},
 }
@@ -328,7 +329,10 @@ def create_app(config_text: str | None = None) -> FastAPI:
     async def _refused(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         raw: Any = exc.detail
         detail = raw if isinstance(raw, list) else [str(raw)]
-        return JSONResponse(status_code=exc.status_code, content={"errors": detail})
+        # Keep the refusal's headers: a 405 must say which methods are allowed (RFC 9110).
+        return JSONResponse(
+            status_code=exc.status_code, content={"errors": detail}, headers=exc.headers
+        )
 
     @app.get("/", response_class=HTMLResponse, include_in_schema=False)
     def index() -> FileResponse:
