@@ -634,3 +634,17 @@ def test_a_body_that_is_not_json_gets_a_documented_400() -> None:
     assert response.json() == {"errors": ["There was an error parsing the body"]}
     for path in ["/api/deploy", "/api/report", "/api/config.toml", "/api/config/parse"]:
         assert "400" in APP.openapi()["paths"][path]["post"]["responses"], path
+
+
+def test_report_of_a_study_without_sensitivities_shows_a_dash(tmp_path: Path) -> None:
+    # report crashed (TypeError formatting None) when the study had no sensitivity to show
+    # (with ratio = 3.8e-298 every input's src is None).
+    document = copy.deepcopy(TOLERANCES)
+    document["gearbox"]["ratio"] = 3.8e-298
+    path = _write_config(tmp_path, document)
+    assert path is not None
+    output = tmp_path / "report.html"
+    result = _run(["report", str(path), "-o", str(output)])
+    assert_clean_exit(result, path)
+    assert result.exit_code == 0
+    assert "damper.damping_rate (-)" in output.read_text(encoding="utf-8")

@@ -293,7 +293,11 @@ def montecarlo_section(config: Config, samples: int = REPORT_MC_SAMPLES) -> dict
                 "mean": time["mean"],
                 "std": time["std"],
                 "stall_probability": case["stall"]["probability"],
-                "drivers": ", ".join(f"{i['key']} ({i['src']:+.2f})" for i in inputs[:3]),
+                # src is None where it cannot be computed (every sample stalls): "-".
+                "drivers": ", ".join(
+                    f"{i['key']} ({'-' if i['src'] is None else format(i['src'], '+.2f')})"
+                    for i in inputs[:3]
+                ),
             }
         )
     return section
