@@ -36,6 +36,7 @@ from schemathesis.config import SchemathesisConfig
 from typer.testing import CliRunner, Result
 
 from ecdsim.cli.app import app
+from ecdsim.montecarlo.stats import describe
 from ecdsim.physics.quasistatic import log_mean
 from ecdsim.webapp.server import create_app
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
@@ -648,3 +649,22 @@ def test_report_of_a_study_without_sensitivities_shows_a_dash(tmp_path: Path) ->
     assert_clean_exit(result, path)
     assert result.exit_code == 0
     assert "damper.damping_rate (-)" in output.read_text(encoding="utf-8")
+
+
+def test_montecarlo_json_of_times_near_1e300_has_finite_moments(tmp_path: Path) -> None:
+    # montecarlo crashed (ValueError: inf is not JSON) with damping_rate = "1.3e-304 N*m*s/rad":
+    # the times are finite (~1e300 s) but their sum of squares overflowed to inf.
+    spread = describe([1e300, 3e300])  # by hand: mean 2e300, std sqrt(2) * 1e300 (ddof 1)
+    assert spread["mean"] == pytest.approx(2e300, rel=1e-15)
+    assert spread["std"] == pytest.approx(math.sqrt(2.0) * 1e300, rel=1e-15)
+    document = copy.deepcopy(TOLERANCES)
+    document["damper"]["damping_rate"] = "1.3e-304 N*m*s/rad"
+    path = _write_config(tmp_path, document)
+    assert path is not None
+    result = _run(COMMANDS["montecarlo"][1](path, tmp_path))
+    assert_clean_exit(result, path)
+    assert result.exit_code == 0
+    for case in json.loads(result.stdout)["cases"]:
+        time = case["deployment_time_s"]
+        assert time["min"] <= time["mean"] <= time["max"]
+        assert math.isfinite(time["std"])

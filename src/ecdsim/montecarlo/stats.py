@@ -94,8 +94,17 @@ def describe(values: ArrayLike) -> dict[str, Any]:
     all_finite = arriving == x.size
 
     def moments(sample: FloatArray) -> tuple[float | None, float | None]:
-        mean = float(np.mean(sample)) if sample.size else None
-        std = float(np.std(sample, ddof=1)) if sample.size > 1 else None
+        if not sample.size:
+            return None, None
+        with np.errstate(over="ignore"):
+            mean = float(np.mean(sample))
+            std = float(np.std(sample, ddof=1)) if sample.size > 1 else None
+        if not (np.isfinite(mean) and (std is None or np.isfinite(std))):
+            # Finite times near 1e300 s (damping_rate = 1e-304) overflow the sums: scaled
+            # by the largest magnitude the moments stay finite (JSON has no infinity).
+            scale = float(np.max(np.abs(sample)))
+            mean = scale * float(np.mean(sample / scale))
+            std = scale * float(np.std(sample / scale, ddof=1)) if sample.size > 1 else None
         return mean, std
 
     mean, std = moments(finite)
