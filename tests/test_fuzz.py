@@ -668,3 +668,19 @@ def test_montecarlo_json_of_times_near_1e300_has_finite_moments(tmp_path: Path) 
         time = case["deployment_time_s"]
         assert time["min"] <= time["mean"] <= time["max"]
         assert math.isfinite(time["std"])
+
+
+def test_compare_fluid_json_with_an_overflowing_speed_writes_null(tmp_path: Path) -> None:
+    # compare-fluid --json crashed (ValueError: inf is not JSON, exit 1) with start_torque =
+    # "1e308 N*m": the fluid damper's speed at the end of its deadband overflows to inf.
+    document = copy.deepcopy(FLUID)
+    document["load"]["start_torque"] = "1e308 N*m"
+    path = _write_config(tmp_path, document)
+    assert path is not None
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "overflow encountered", RuntimeWarning)  # still open
+        result = runner.invoke(app, ["compare-fluid", str(path), "--json"])
+    assert_clean_exit(result, path)
+    assert result.exit_code == 0
+    speeds = [case["fluid"]["engage_speed_rad_s"] for case in json.loads(result.stdout)["cases"]]
+    assert None in speeds

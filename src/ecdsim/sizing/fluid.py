@@ -553,7 +553,7 @@ class FluidComparison:
     extrapolated: BoolArray
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready form (infinite times become null); see docs/sizing.md."""
+        """JSON-ready form (infinite times and speeds become null); see docs/sizing.md."""
 
         def number(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None
@@ -564,10 +564,10 @@ class FluidComparison:
                 "damped_time_s": number(float(d.damped_time[i])),
                 "free_time_s": None if d.free_time is None else number(float(d.free_time[i])),
                 "engage_speed_rad_s": (
-                    None if d.engage_speed is None else float(d.engage_speed[i])
+                    None if d.engage_speed is None else number(float(d.engage_speed[i]))
                 ),
                 "total_time_s": None if d.total_time is None else number(float(d.total_time[i])),
-                "end_speed_rad_s": float(d.end_speed[i]),
+                "end_speed_rad_s": number(float(d.end_speed[i])),
                 "stalled": bool(d.stalled[i]),
             }
 
