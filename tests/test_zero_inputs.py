@@ -208,3 +208,22 @@ def test_long_plot_titles_are_wrapped_not_cut_off() -> None:
     assert len(lines) == 2
     assert all(len(line) <= 70 for line in lines)
     assert " ".join(lines) == f"{system}: ECD torque against speed"
+
+
+def test_fit_trace_against_a_zero_spring_says_why(tmp_path: Path) -> None:
+    # A zero start torque is a valid config, but a trace cannot be fitted against a load
+    # that drives nothing: one line per temperature and exit 2, not scipy's traceback.
+    config = tmp_path / "no_spring.toml"
+    text = (ROOT / "examples" / "paper_cc16.toml").read_text()
+    config.write_text(_edit(text, **{'start_torque = "3.73 N*m"': 'start_torque = "0 N*m"'}))
+    trace = ROOT / "examples" / "deployment_trace.csv"
+    result = runner.invoke(app, ["fit", "trace", str(trace), "--config", str(config)])
+    assert result.exit_code == 2
+    assert result.exception is None or isinstance(result.exception, SystemExit)
+    lines = result.stderr.strip().splitlines()
+    # The example trace's rows by temperature (header = row 1): 2-112, 113-174, 175-210.
+    assert lines[:3] == [
+        f"error: not fitted: {t} degC (rows {rows}): the configuration's load gives no drive "
+        "torque, so there is nothing to fit the trace against (is [load] start_torque 0?)"
+        for t, rows in (("-40", "2-112"), ("25", "113-174"), ("100", "175-210"))
+    ]

@@ -395,7 +395,20 @@ class FailedTemperature:
 
 
 def _row_list(rows: tuple[int, ...] | list[int]) -> str:
-    return ", ".join(str(r) for r in rows)
+    """Row numbers with runs of consecutive rows shown as ranges, for one readable line.
+
+    >>> _row_list([2, 3, 4, 5, 9, 11, 12])
+    '2-5, 9, 11-12'
+    """
+    parts: list[str] = []
+    ordered = sorted(rows)
+    start = 0
+    for i in range(1, len(ordered) + 1):
+        if i == len(ordered) or ordered[i] != ordered[i - 1] + 1:
+            first, last = ordered[start], ordered[i - 1]
+            parts.append(str(first) if first == last else f"{first}-{last}")
+            start = i
+    return ", ".join(parts)
 
 
 @dataclass(frozen=True)

@@ -374,6 +374,13 @@ def _least_squares(
     """Fit ``observed = model(p)``; the solution and its linearised statistics."""
     from scipy.optimize import least_squares
 
+    if not (np.all(np.isfinite(x0)) and float(np.max(np.abs(x0))) > 0.0):
+        # A zero start torque (a valid config, issue 11 item 2) drives nothing: there is
+        # no motion of the configured load to fit the damper against.
+        raise TraceFitError(
+            "the configuration's load gives no drive torque, so there is nothing to fit the "
+            "trace against (is [load] start_torque 0?)"
+        )
     scale = np.maximum(np.abs(x0), 1e-3 * float(np.max(np.abs(x0))))
     result = least_squares(
         lambda p: model(p) - observed,
