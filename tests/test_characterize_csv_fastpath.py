@@ -34,6 +34,7 @@ ROWS = [
     " 100 , 4500 , 50 , 180 , 29.0 ,",  # spaces around cells
     ",,,,,",  # only separators: blank
     "100,6000,50,180,20.7,",
+    "100,7500,50,180,1e308,",  # finite, but beyond the magnitudes ecdsim accepts
 ]
 
 
@@ -58,7 +59,8 @@ def test_block_reader_equals_row_by_row_reader(
     for key in reference.values:
         np.testing.assert_array_equal(fast.values[key], reference.values[key])
     assert [b.message() for b in fast.bad_rows] == [b.message() for b in reference.bad_rows]
-    assert [b.row for b in fast.bad_rows] == [5, 6, 7, 8, 9, 10, 11, 12]
+    assert [b.row for b in fast.bad_rows] == [5, 6, 7, 8, 9, 10, 11, 12, 17]
+    assert "outside the magnitudes ecdsim accepts" in fast.bad_rows[-1].reason
 
 
 def test_windows_line_ends_are_plain(tmp_path: Path) -> None:

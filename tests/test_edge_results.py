@@ -7,6 +7,7 @@ number; a mechanism that cannot start reports no speed it never reached.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -16,6 +17,7 @@ from typer.testing import CliRunner
 from ecdsim.cli.app import app
 from ecdsim.config import parse_config
 from ecdsim.deployment import ModelDomainError, predict
+from ecdsim.model import DeploymentSystem
 from tests import hand
 from tests.conftest import PAPER_CONFIG
 
@@ -23,39 +25,59 @@ runner = CliRunner()
 PAPER = PAPER_CONFIG.read_text()
 
 
+def _with_gearbox(**changes: float) -> DeploymentSystem:
+    """The paper example with gearbox fields replaced, built past the config's limits."""
+    system = parse_config(PAPER).system
+    gearbox = dataclasses.replace(system.ecd.gearbox, **changes)
+    return dataclasses.replace(system, ecd=dataclasses.replace(system.ecd, gearbox=gearbox))
+
+
 @pytest.mark.parametrize(
     ("line", "new", "key"),
     [
         ("ratio = 380", "ratio = 1e200", "gearbox.ratio"),
         ("damping_fraction = 0.26 ", "damping_fraction = 1e308 ", "gearbox.damping_fraction"),
+        ('start_torque = "3.73 N*m"', 'start_torque = "1e308 N*m"', "load.start_torque"),
+        ("ratio = 380", "ratio = 2e-160", "gearbox.ratio"),
     ],
 )
-def test_overflowing_inputs_are_named(tmp_path: Path, line: str, new: str, key: str) -> None:
+def test_extreme_inputs_are_refused_by_name(tmp_path: Path, line: str, new: str, key: str) -> None:
+    # At the edge: magnitudes outside 1e-30..1e30 (SI) are refused before any product of
+    # them (BT_T * N**2, Eq. 3) can overflow or underflow.
     assert line in PAPER
-    config = tmp_path / "big.toml"
+    config = tmp_path / "extreme.toml"
     config.write_text(PAPER.replace(line, new))
-    loaded = parse_config(config.read_text())
-    with pytest.raises(ModelDomainError) as info:
-        predict(loaded.system, [25.0])
-    assert info.value.key == key
     result = runner.invoke(app, ["deploy", str(config), "--json"])
     assert result.exit_code == 2
-    assert result.stderr.count("\n") == 1
-    assert f"{key}: the inputs make BECD_T (Eq. 3) overflow to infinity" in result.stderr
+    (message,) = result.stderr.strip().splitlines()
+    assert f"{key}: " in message
+    assert "is outside the magnitudes ecdsim accepts (1e-30 to 1e+30 in SI units, or 0)" in message
 
 
-def test_subnormal_damping_is_not_solved_rather_than_infinite(tmp_path: Path) -> None:
-    # N = 2e-160: BECD = BT * N^2 = 1.638e-4 * 4e-320, a subnormal ~5e-324, so the Eq. 5
-    # speed 3.73 / 5e-324 overflows. The JSON must stay valid (no Infinity).
-    config = tmp_path / "tiny.toml"
-    config.write_text(PAPER.replace("ratio = 380", "ratio = 2e-160"))
-    result = runner.invoke(app, ["deploy", str(config), "-T", "25", "--json"])
-    assert result.exit_code == 0, result.output
-    case = json.loads(result.stdout)["cases"][0]
+@pytest.mark.parametrize(
+    ("changes", "key"),
+    [
+        ({"ratio": 1e200}, "gearbox.ratio"),
+        ({"damping_fraction": 1e308}, "gearbox.damping_fraction"),
+    ],
+)
+def test_overflowing_models_are_named_by_predict(changes: dict[str, float], key: str) -> None:
+    # Past the config (a model built in code): predict still names the input.
+    with pytest.raises(ModelDomainError) as info:
+        predict(_with_gearbox(**changes), [25.0])
+    assert info.value.key == key
+    assert "overflow to infinity" in str(info.value)
+
+
+def test_subnormal_damping_is_not_solved_rather_than_infinite() -> None:
+    # N = 2e-160 (a model built in code): BECD = BT * N^2 = 1.638e-4 * 4e-320, a subnormal
+    # ~5e-324, so the Eq. 5 speed 3.73 / 5e-324 overflows. Flagged, and the JSON valid.
+    prediction = predict(_with_gearbox(ratio=2e-160), [25.0])
+    case = prediction.to_dict()["cases"][0]
     assert 0.0 < case["damping_rate_Nms_per_rad"] < 1e-300
     assert case["exact"]["solved"] is False
     assert case["paper"]["solved"] is False
-    assert "Infinity" not in result.stdout
+    assert "Infinity" not in json.dumps(prediction.to_dict())
 
 
 def test_a_rising_spring_that_cannot_start_reaches_no_speed() -> None:

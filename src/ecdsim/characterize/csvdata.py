@@ -30,7 +30,13 @@ import numpy as np
 
 from ecdsim._types import BoolArray, FloatArray
 from ecdsim.config.errors import ConfigError
-from ecdsim.config.units import ABSOLUTE_ZERO_C, Kind, QuantityError
+from ecdsim.config.units import (
+    ABSOLUTE_ZERO_C,
+    MAGNITUDE_RANGE,
+    Kind,
+    QuantityError,
+    magnitude_problem,
+)
 
 MASS = Kind("mass", "kg", "250 g")
 LENGTH = Kind("length", "m", "50 mm")
@@ -443,9 +449,12 @@ def _block_values(
         return (*empty, list(regular))  # a cell that is not a number: re-read the block
     ok = np.all(np.isfinite(raw), axis=1)
     values = np.empty_like(raw)
+    low, high = MAGNITUDE_RANGE
     for j, key in enumerate(parse.keys):
         scale, offset = parse.layout.conversion[key]
-        values[:, j] = scale * raw[:, j] + offset
+        values[:, j] = scale * np.where(ok, raw[:, j], 0.0) + offset
+        size = np.abs(values[:, j])
+        ok &= (size == 0.0) | ((size >= low) & (size <= high))  # else re-read: reported
         check = parse.checks[key]
         if check is not None:
             # The check is a scalar function: call it once per distinct value.
@@ -533,7 +542,7 @@ def _parse_record(
         scale, offset = layout.conversion[key]
         value = scale * number + offset
         check = checks[key]
-        problem = check(value) if check else None
+        problem = magnitude_problem(value) or (check(value) if check else None)
         if problem:
             problems.append(BadRow(row, header, cell, problem))
             continue

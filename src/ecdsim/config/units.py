@@ -115,7 +115,7 @@ class Kind:
             number = float(value)
             if self.unit != "":
                 raise QuantityError(f"{quoted(value)} has no unit; {self.expected}")
-            return _finite(number, value, self)
+            return _in_range(_finite(number, value, self), value, self)
         if not isinstance(value, str):
             raise QuantityError(f"{quoted(value)} is not a quantity; {self.expected}")
         if len(value) > MAX_QUANTITY_LENGTH:
@@ -133,7 +133,7 @@ class Kind:
         if self.unit == "":
             if unit_text:
                 return _convert(number, unit_text, value, self)
-            return number
+            return _in_range(number, value, self)
         if not unit_text:
             raise QuantityError(f"{quoted(value)} has no unit; {self.expected}")
         if self.angular and _NOT_ANGULAR.search(unit_text):
@@ -144,9 +144,37 @@ class Kind:
         return _convert(number, unit_text, value, self)
 
 
+# The magnitudes ecdsim accepts, in SI units (0 aside). Every physical input of a
+# deployment lies far inside (the smallest, a rotor inertia, ~1e-9 kg*m^2; the largest, a
+# test time, ~1e5 s); outside, products such as BT_T * N**2 overflow or underflow to
+# meaningless numbers deep inside NumPy, so such values are refused here, by name.
+MAGNITUDE_RANGE = (1e-30, 1e30)
+
+
+def magnitude_problem(value: float) -> str | None:
+    """Why ``value`` [SI] is outside :data:`MAGNITUDE_RANGE`, or None (0 is accepted).
+
+    >>> magnitude_problem(1e308)
+    'is outside the magnitudes ecdsim accepts (1e-30 to 1e+30 in SI units, or 0)'
+    >>> magnitude_problem(0.0) is None
+    True
+    """
+    low, high = MAGNITUDE_RANGE
+    if value == 0.0 or low <= abs(value) <= high:
+        return None
+    return f"is outside the magnitudes ecdsim accepts ({low:g} to {high:g} in SI units, or 0)"
+
+
 def _finite(number: float, raw: object, kind: Kind) -> float:
     if not math.isfinite(number):
         raise QuantityError(f"{quoted(raw)} is not finite; {kind.expected}")
+    return number
+
+
+def _in_range(number: float, raw: object, kind: Kind) -> float:
+    problem = magnitude_problem(number)
+    if problem is not None:
+        raise QuantityError(f"{quoted(raw)} {problem}; {kind.expected}")
     return number
 
 
@@ -177,7 +205,7 @@ def _convert(number: float, unit_text: str, raw: str, kind: Kind) -> float:
         raise QuantityError(
             f"{quoted(raw)} could not be read ({quoted(str(exc))}); {kind.expected}"
         ) from None
-    return _finite(result, raw, kind)
+    return _in_range(_finite(result, raw, kind), raw, kind)
 
 
 TORQUE = Kind("torque", "N*m", "3.73 N*m")
