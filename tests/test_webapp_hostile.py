@@ -140,3 +140,45 @@ def test_a_slow_computation_gets_503_and_does_not_block_other_requests(
     assert response.json()["errors"][0].startswith("computation: took longer than 0.5 s")
     declared = app.openapi()["paths"]["/api/deploy"]["post"]["responses"]
     assert set(declared["503"]["content"]) == {"application/json"}
+
+
+def test_a_500_leaves_a_kept_alive_connection_serving(monkeypatch: pytest.MonkeyPatch) -> None:
+    # A real server (uvicorn) and one HTTP/1.1 client: a defect inside a request is a JSON
+    # 500, and the next request on the same client is served normally.
+    import socket
+    import threading
+
+    import httpx
+    import uvicorn
+
+    from ecdsim.webapp import server
+
+    def defect(config: Any) -> Any:
+        raise RuntimeError("a defect, not the user's fault")
+
+    monkeypatch.setattr(server, "predict_config", defect)
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    srv = uvicorn.Server(
+        uvicorn.Config(server.create_app(), host="127.0.0.1", port=port, log_level="critical")
+    )
+    thread = threading.Thread(target=srv.run, daemon=True)
+    thread.start()
+    try:
+        for _ in range(2000):  # wait for start-up, polling (no wall-clock assertion)
+            if srv.started:
+                break
+            threading.Event().wait(0.01)
+        assert srv.started
+        with httpx.Client(base_url=f"http://127.0.0.1:{port}") as web:
+            for _ in range(3):
+                failed = web.post("/api/deploy", json={"config": _config()})
+                assert failed.status_code == 500
+                assert failed.json() == {
+                    "errors": ["internal error (RuntimeError); please report it"]
+                }
+                assert web.get("/api/example").status_code == 200
+    finally:
+        srv.should_exit = True
+        thread.join(timeout=10.0)
