@@ -679,3 +679,35 @@ def test_compare_fluid_json_with_an_overflowing_speed_writes_null(tmp_path: Path
     assert_clean_exit(result, path)
     assert result.exit_code == 2
     assert "load.start_torque" in result.stderr
+
+
+@pytest.mark.parametrize("spread", ["1e-320 %", "1e308 %"])
+def test_montecarlo_percent_spreads_outside_the_magnitudes_are_refused(
+    tmp_path: Path, spread: str
+) -> None:
+    # "1e-320 %" made a zero scale (0/0 in the scores), "1e308 %" overflowed the moments.
+    document = copy.deepcopy(TOLERANCES)
+    entry = document["tolerances"]["quantities"]["damper.damping_rate"]
+    entry.pop("three_sigma", None)
+    entry.pop("sigma", None)
+    entry["three_sigma"] = spread
+    path = _write_config(tmp_path, document)
+    assert path is not None
+    result = _run(COMMANDS["montecarlo"][1](path, tmp_path))
+    assert_clean_exit(result, path)
+    assert result.exit_code == 2
+    assert "damper.damping_rate" in result.stderr
+    assert "as a fraction is outside the magnitudes ecdsim accepts" in result.stderr
+
+
+def test_compare_fluid_refuses_a_power_law_index_near_zero(tmp_path: Path) -> None:
+    # exponent = 1e-12 raised torques to the power 1e12 (overflow in expm1).
+    document = copy.deepcopy(FLUID)
+    document["fluid_damper"]["exponent"] = 1e-12
+    path = _write_config(tmp_path, document)
+    assert path is not None
+    result = _run(["compare-fluid", str(path)])
+    assert_clean_exit(result, path)
+    assert result.exit_code == 2
+    assert "fluid_damper.exponent" in result.stderr
+    assert "must be in [0.1, 3] (1 = Newtonian)" in result.stderr

@@ -72,6 +72,18 @@ def _deployment_or_speed(value: object) -> float | None:
     return number
 
 
+def _flow_exponent(x: float) -> str | None:
+    # A fluid's power-law index: ~0.3-1 for shear-thinning silicones, 1 Newtonian. The
+    # segment time raises torques to 1/n, so n near 0 overflows for any torque above 1.
+    low, high = FLOW_EXPONENT_RANGE
+    return None if low <= x <= high else f"must be in [{low:g}, {high:g}] (1 = Newtonian)"
+
+
+# The power-law indices accepted for a fluid damper (docs/sizing.md).
+FLOW_EXPONENT_RANGE = (0.1, 3.0)
+FlowExponent = Annotated[float, quantity(NUMBER, _flow_exponent), NUMBER]
+
+
 def _known_mass(x: float) -> str | None:
     return None if x > 0.0 else "must be > 0 (leave mass out if it is not known)"
 
@@ -184,7 +196,7 @@ class FluidDamperSpec(_Section):
     kinematic_viscosity: list[tuple[Temperature, PositiveKinematicViscosity]] | None = None
     deadband: NonNegativeAngle = math.radians(15.0)
     match_temperature: Temperature = 25.0
-    exponent: PositiveNumber = 1.0
+    exponent: FlowExponent = 1.0
     match_speed: PositiveSpeed | None = None
     coulomb_friction: NonNegativeTorque | None = None
     load_inertia: PositiveInertia | None = None

@@ -41,6 +41,7 @@ from ecdsim.config.units import (
     TORQUE_PER_KELVIN,
     Kind,
     QuantityError,
+    magnitude_problem,
     quoted,
 )
 
@@ -189,6 +190,9 @@ def parse_spread(raw: object, kind: Kind) -> Spread:
             fraction = float(match.group(1)) / 100.0
             if not fraction > 0.0 or fraction == float("inf"):
                 raise QuantityError(f"{quoted(raw)} must be > 0; {expected}")
+            too_far = magnitude_problem(fraction)  # "1e-320 %" made a zero scale
+            if too_far is not None:
+                raise QuantityError(f"{quoted(raw)} as a fraction {too_far}; {expected}")
             return Spread(value=fraction, relative=True, text=raw)
     try:
         value = kind.parse(raw)
