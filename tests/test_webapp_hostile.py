@@ -142,13 +142,24 @@ def test_a_slow_computation_gets_503_and_does_not_block_other_requests(
     assert set(declared["503"]["content"]) == {"application/json"}
 
 
+def _read_response(reader: Any) -> tuple[int, bytes]:
+    """Status and body of one HTTP/1.1 response with a Content-Length, read from ``reader``."""
+    status_line = reader.readline()
+    assert status_line.startswith(b"HTTP/1.1 "), f"connection closed: {status_line!r}"
+    length = 0
+    while (line := reader.readline()) not in (b"\r\n", b""):
+        name, _, value = line.decode("latin-1").partition(":")
+        if name.strip().lower() == "content-length":
+            length = int(value)
+    return int(status_line.split()[1]), reader.read(length)
+
+
 def test_a_500_leaves_a_kept_alive_connection_serving(monkeypatch: pytest.MonkeyPatch) -> None:
     # A real server (uvicorn) and one HTTP/1.1 client: a defect inside a request is a JSON
     # 500, and the next request on the same client is served normally.
     import socket
     import threading
 
-    import httpx
     import uvicorn
 
     from ecdsim.webapp import server
@@ -171,14 +182,30 @@ def test_a_500_leaves_a_kept_alive_connection_serving(monkeypatch: pytest.Monkey
                 break
             threading.Event().wait(0.01)
         assert srv.started
-        with httpx.Client(base_url=f"http://127.0.0.1:{port}") as web:
+        # One raw socket, so the test sees exactly one connection: an HTTP client library
+        # would quietly reconnect if the server closed it after the 500 (which uvicorn
+        # does when the app re-raises, the defect this test guards against).
+        body = json.dumps({"config": _config()}).encode()
+        post = (
+            b"POST /api/deploy HTTP/1.1\r\nHost: t\r\nContent-Type: application/json\r\n"
+            + f"Content-Length: {len(body)}\r\n\r\n".encode()
+            + body
+        )
+        get = b"GET /api/example HTTP/1.1\r\nHost: t\r\n\r\n"
+        with (
+            socket.create_connection(("127.0.0.1", port), timeout=30.0) as connection,
+            connection.makefile("rb") as reader,
+        ):
             for _ in range(3):
-                failed = web.post("/api/deploy", json={"config": _config()})
-                assert failed.status_code == 500
-                assert failed.json() == {
+                connection.sendall(post)
+                status, payload = _read_response(reader)
+                assert status == 500
+                assert json.loads(payload) == {
                     "errors": ["internal error (RuntimeError); please report it"]
                 }
-                assert web.get("/api/example").status_code == 200
+                connection.sendall(get)
+                status, _ = _read_response(reader)
+                assert status == 200
     finally:
         srv.should_exit = True
         thread.join(timeout=10.0)

@@ -13,6 +13,7 @@ field. plotly.js is served from the installed ``plotly`` package (no CDN).
 from __future__ import annotations
 
 import json
+import logging
 import time
 import tomllib
 from collections.abc import Callable
@@ -33,6 +34,8 @@ from ecdsim.config.loader import MAX_NESTING, nesting_depth
 from ecdsim.deployment import ModelDomainError, Prediction, predict
 from ecdsim.report.builder import predict_config, render_html
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
+
+_LOG = logging.getLogger(__name__)
 
 STATIC = Path(str(files("ecdsim.webapp") / "static"))
 EXAMPLE_CONFIG = files("ecdsim") / "data" / "paper_cc16.toml"
@@ -260,6 +263,39 @@ class BodyLimit:
         await self.app(scope, _replay([body], receive), send)
 
 
+class InternalErrorAsJson:
+    """ASGI middleware: an unexpected exception becomes a JSON 500, and is not re-raised.
+
+    Logged with its traceback for the developer; the client gets one line and a response
+    that completes normally, so its kept-alive connection stays usable.
+    """
+
+    def __init__(self, app: Any) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Any, receive: Any, send: Any) -> None:
+        """Run the app; on an exception before the response started, answer 500."""
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        started = False
+
+        async def tracking_send(message: Any) -> None:
+            nonlocal started
+            if message["type"] == "http.response.start":
+                started = True
+            await send(message)
+
+        try:
+            await self.app(scope, receive, tracking_send)
+        except Exception as exc:
+            _LOG.exception("internal error answering %s", scope.get("path", "?"))
+            if started:  # nothing sensible left to send; let the server close it
+                raise
+            message = f"internal error ({type(exc).__name__}); please report it"
+            await _json_response(500, {"errors": [message]}, send)
+
+
 def _replay(messages: list[Any], then: Any = None) -> Any:
     queue = list(messages)
 
@@ -274,11 +310,15 @@ def _replay(messages: list[Any], then: Any = None) -> Any:
 
 
 async def _too_large(limit: int, send: Any) -> None:
-    payload = json.dumps({"errors": [f"body: larger than {limit} bytes"]}).encode()
+    await _json_response(413, {"errors": [f"body: larger than {limit} bytes"]}, send)
+
+
+async def _json_response(status: int, content: Any, send: Any) -> None:
+    payload = json.dumps(content).encode()
     await send(
         {
             "type": "http.response.start",
-            "status": 413,
+            "status": status,
             "headers": [
                 (b"content-type", b"application/json"),
                 (b"content-length", str(len(payload)).encode()),
@@ -312,15 +352,11 @@ def create_app(config_text: str | None = None) -> FastAPI:
             problems.append(f"{where}: {error.get('msg', 'invalid')}")
         return JSONResponse(status_code=422, content={"errors": problems})
 
-    @app.exception_handler(Exception)
-    async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
-        # A defect, not the user's fault: still a JSON answer that closes the exchange
-        # cleanly, so a kept-alive connection serves its next request.
-        return JSONResponse(
-            status_code=500,
-            content={"errors": [f"internal error ({type(exc).__name__}); please report it"]},
-        )
-
+    # A defect, not the user's fault: answered as JSON by a middleware that does not
+    # re-raise. (An exception handler for Exception runs in Starlette's outermost
+    # ServerErrorMiddleware, which re-raises after answering; uvicorn then closes the
+    # connection, so a kept-alive client's next request could meet a reset.)
+    app.add_middleware(InternalErrorAsJson)
     app.add_middleware(BodyLimit, limit=MAX_BODY_BYTES)
 
     # Starlette's class: FastAPI's own refusals (400 for a body that is not JSON, 404,
