@@ -6,14 +6,18 @@ import json
 import math
 from typing import Any
 
+from ecdsim.cli import display
 from ecdsim.deployment import Prediction
 from ecdsim.formatting import format_number
 from ecdsim.methods import SOLVERS
+from ecdsim.units_display import UnitSystem
 
 
-def to_json(prediction: Prediction) -> str:
-    """The stable JSON document of ``ecdsim deploy --json``."""
-    return json.dumps(prediction.to_dict(), indent=2, sort_keys=True, allow_nan=False)
+def to_json(prediction: Prediction, units: UnitSystem = "si") -> str:
+    """The stable JSON document of ``ecdsim deploy --json`` (SI; ``display_units`` noted)."""
+    document = prediction.to_dict()
+    document["display_units"] = units
+    return json.dumps(document, indent=2, sort_keys=True, allow_nan=False)
 
 
 def _fmt(value: float | None, digits: int = 4) -> str:
@@ -22,13 +26,12 @@ def _fmt(value: float | None, digits: int = 4) -> str:
 
 def print_tables(prediction: Prediction) -> None:
     """Print the component table and the deployment table on stdout."""
-    from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
     document = prediction.to_dict()
     cases: list[dict[str, Any]] = document["cases"]
-    console = Console(soft_wrap=False, width=max(120, Console().width))
+    console = display.make_console()
 
     ecd = Table(title="ECD referred to the input shaft (Eq. 1-4)", title_justify="left")
     for header in (
@@ -52,7 +55,8 @@ def print_tables(prediction: Prediction) -> None:
             _fmt(case["friction_Nm"]),
             _fmt(case["system_friction_Nm"]),
         )
-    console.print(ecd)
+    # The summary (BECD, FECD, FS) stays; the components behind it go first at 80 columns.
+    display.show(console, ecd, drop=("BD_T", "BT_T", "FT_T"))
 
     table = Table(title="Deployment", title_justify="left")
     table.add_column(escape("T [degC]"), justify="right")
@@ -64,7 +68,7 @@ def print_tables(prediction: Prediction) -> None:
     if "difference" in cases[0]:
         table.add_column(escape("paper - exact\n[s]"), justify="right")
         table.add_column(escape("rel.\n[%]"), justify="right")
-    table.add_column("stall", justify="left")
+    table.add_column("stall", justify="left", no_wrap=False)
     reference = "exact" if "exact" in methods else methods[0]
     for case in cases:
         row = [_fmt(case["temperature_C"])]
@@ -81,9 +85,109 @@ def print_tables(prediction: Prediction) -> None:
             row.append(_fmt(diff["deployment_time_s"]))
             rel = diff["relative"]
             row.append("-" if rel is None else f"{100.0 * rel:+.1f}")
-        stall = case[reference]
-        row.append(f"at {stall['stall_angle_rad']:.3g} rad" if stall["stalled"] else "no")
+        row.append(stall_text(case, methods))
         table.add_row(*row)
-    console.print(table)
+    display.show(console, table, drop=("rel.", "paper - exact", "start speed"))
     labels = ", ".join(f"{m} = {SOLVERS[m].label}" for m in methods)
-    console.print(escape(f"methods: {labels}; speeds from the {reference} method"), style="dim")
+    display.note(console, f"methods: {labels}; speeds from the {reference} method")
+    if "dynamic" in methods:
+        print_dynamic_table(console, cases)
+
+
+def _stop_text(outcome: dict[str, Any], method: str) -> str | None:
+    """How one method's deployment stops short, or None if it reaches the end."""
+    if method == "dynamic" and outcome.get("stuck"):
+        angle = outcome["stuck_angle_rad"]
+        if angle == 0.0:
+            return "cannot start"
+        when = outcome["stuck_time_s"]
+        return f"stuck at {angle:.3g} rad, " + ("creeping" if when is None else f"{when:.4g} s")
+    if outcome["stalled"]:
+        angle = outcome["stall_angle_rad"]
+        return "cannot start" if angle == 0.0 else f"at {angle:.3g} rad"
+    return None
+
+
+def stall_text(case: dict[str, Any], methods: list[str]) -> str:
+    """The stall cell of one temperature: "no" only if no method stalls or sticks.
+
+    Methods that agree are named once ("cannot start"); otherwise each is named
+    ("exact: at 1.48 rad; dynamic: stuck at 1.5 rad, 30.2 s").
+    """
+    stops = {m: _stop_text(case[m], m) for m in methods}
+    found = {m: text for m, text in stops.items() if text is not None}
+    if not found:
+        return "no"
+    if len(found) == len(methods) and len(set(found.values())) == 1:
+        return next(iter(found.values()))
+    return "; ".join(f"{m}: {text}" for m, text in found.items())
+
+
+_OUTCOMES = {
+    "latched": "latched",
+    "settled": "settled on the stop",
+    "stuck": "stuck",
+    "creep": "creeps to rest",
+    "stop_time": "stop time reached",
+    "event_limit": "cut short (events)",
+    "horizon": "cut short (horizon)",
+    "running": "running",
+}
+
+
+def print_dynamic_table(console: Any, cases: list[dict[str, Any]]) -> None:
+    """The dynamic method's own results: latch speed and energy, impacts, sticking, heat.
+
+    Columns that would only repeat a constant (no impacts, no lost motion, no heating)
+    are replaced by one line saying so, so that the table fits 80 columns.
+    """
+    from rich.markup import escape
+    from rich.table import Table
+
+    dyn = [case["dynamic"] for case in cases]
+    temps = [case["temperature_C"] for case in cases]
+    impacts = any(d["impacts"] > 0 or d["rebound_speed_rad_s"] != 0.0 for d in dyn)
+    stuck = any(d["stuck"] for d in dyn)
+    engage = any((d["engagement_time_s"] or 0.0) > 0.0 for d in dyn)
+    heated = any(d["max_damper_temperature_C"] != t for d, t in zip(dyn, temps, strict=True))
+    table = Table(title="Dynamic method", title_justify="left")
+    headers = ["T [degC]", "outcome", "latch speed\n[rad/s]", "latch KE\n[J]"]
+    headers += ["impacts", "rebound\n[rad/s]"] if impacts else []
+    headers += ["stuck at\n[rad]", "stuck at\n[s]"] if stuck else []
+    headers += ["engaged\nat [s]"] if engage else []
+    headers += ["peak damper\nT [degC]"] if heated else []
+    for header in headers:
+        left = header == "outcome"
+        table.add_column(escape(header), justify="left" if left else "right", no_wrap=not left)
+    for d, t in zip(dyn, temps, strict=True):
+        arrived = d["deployment_time_s"] is not None
+        row = [
+            _fmt(t),
+            _OUTCOMES.get(d["status"], d["status"]),
+            _fmt(d["end_speed_rad_s"]) if arrived else "-",
+            _fmt(d["end_kinetic_energy_J"]) if arrived else "-",
+        ]
+        if impacts:
+            row += [str(d["impacts"]), _fmt(d["rebound_speed_rad_s"])]
+        if stuck:
+            when = d["stuck_time_s"]
+            row += [
+                _fmt(d["stuck_angle_rad"]),
+                ("inf" if when is None else _fmt(when)) if d["stuck"] else "-",
+            ]
+        if engage:
+            row.append(_fmt(d["engagement_time_s"]))
+        if heated:
+            row.append(_fmt(d["max_damper_temperature_C"]))
+        table.add_row(*row)
+    display.show(console, table, drop=("rebound", "engaged", "impacts"))
+    said = ["latch: speed and kinetic energy on arrival at the end of travel"]
+    if not impacts:
+        said.append("no impacts (no rebound)")
+    if not stuck:
+        said.append("never stuck")
+    if not engage:
+        said.append("no lost motion (engaged at release)")
+    if not heated:
+        said.append("damper at the ambient temperature (no self-heating)")
+    display.note(console, "; ".join(said))

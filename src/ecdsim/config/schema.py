@@ -313,6 +313,23 @@ class InitialSpec(_Section):
     speed: Speed = 0.0
 
 
+def _unit_system(value: object) -> str:
+    from ecdsim.units_display import UnitSystemError, check_system
+
+    try:
+        return check_system(value, "")
+    except UnitSystemError as exc:
+        detail = str(exc).removeprefix(": ")
+        raise PydanticCustomError("quantity", "{detail}", {"detail": detail}) from None
+
+
+class OutputSpec(_Section):
+    """``[output]``: how results are shown (docs/config.md#output)."""
+
+    # Display unit system of tables, plots, reports and the explorer; JSON stays SI.
+    units: Annotated[str, BeforeValidator(_unit_system)] = "si"
+
+
 class ConfigSpec(_Section):
     """A whole configuration file."""
 
@@ -325,6 +342,7 @@ class ConfigSpec(_Section):
     fluid_damper: FluidDamperSpec | None = None
     tolerances: TolerancesSpec | None = None
     initial: InitialSpec = Field(default_factory=InitialSpec)
+    output: OutputSpec = Field(default_factory=OutputSpec)
 
     @model_validator(mode="after")
     def _dynamic_inputs(self) -> ConfigSpec:

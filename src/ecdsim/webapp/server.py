@@ -19,7 +19,7 @@ import tomllib
 from collections.abc import Callable
 from importlib.resources import files
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from fastapi import FastAPI, HTTPException, Request
@@ -33,6 +33,7 @@ from ecdsim.config import Config, ConfigError, parse_config
 from ecdsim.config.loader import MAX_NESTING, nesting_depth
 from ecdsim.deployment import ModelDomainError, Prediction, predict
 from ecdsim.report.builder import predict_config, render_html
+from ecdsim.units_display import UnitSystem, check_system, describe, key_units
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
 
 _LOG = logging.getLogger(__name__)
@@ -68,8 +69,16 @@ class ConfigBody(BaseModel):
     )
 
 
+_UNITS_DESCRIPTION = (
+    "Display unit system of the response (`si` or `us`, docs/json.md#display-units); "
+    "null: the config's `[output] units` (si if absent). Numbers stay SI either way."
+)
+
+
 class DeployBody(ConfigBody):
-    """A configuration plus how finely to sample the curves."""
+    """A configuration, how finely to sample the curves, and the display unit system."""
+
+    units: Literal["si", "us"] | None = Field(None, description=_UNITS_DESCRIPTION)
 
     # strict: JSON true/false or "25" are not counts (pydantic would read false as 0).
     time_points: int = Field(
@@ -83,6 +92,12 @@ class DeployBody(ConfigBody):
         description="Temperatures of the deployment-time curve, spread between the coldest "
         "and the hottest configured temperature (0: none).",
     )
+
+
+class ReportBody(ConfigBody):
+    """A configuration and the report's unit system."""
+
+    units: Literal["si", "us"] | None = Field(None, description=_UNITS_DESCRIPTION)
 
 
 class TomlBody(BaseModel):
@@ -110,6 +125,18 @@ class DeployResponse(BaseModel):
     )
     toml: str = Field(description="The configuration as TOML (what /api/config.toml returns).")
     compute_ms: float = Field(description="Server-side time of the computation [ms].")
+    display_units: Literal["si", "us"] = Field(
+        description="The unit system to show the numbers in (the request's `units`, else the "
+        "config's `[output] units`, else si)."
+    )
+    units: dict[str, Any] = Field(
+        description="Every kind of quantity's display unit in that system: "
+        "{kind: {unit, scale, offset}}, shown = SI value * scale + offset."
+    )
+    key_units: dict[str, str] = Field(
+        description="The display unit label of every unit-bearing key in prediction, "
+        "trajectories and sweep (e.g. temperature_C: degF)."
+    )
 
 
 class ExampleResponse(BaseModel):
@@ -118,6 +145,13 @@ class ExampleResponse(BaseModel):
     config: dict[str, Any]
     toml: str
     source: str
+    display_units: Literal["si", "us"] = Field(
+        "si", description="The config's `[output] units` (si if absent or unreadable)."
+    )
+    units: dict[str, Any] = Field(
+        default_factory=dict,
+        description="Every kind of quantity's display unit in display_units (as in /api/deploy).",
+    )
 
 
 # Every refusal is JSON, whatever the endpoint's own response type (the report is HTML):
@@ -185,6 +219,27 @@ def load_body(raw: dict[str, Any]) -> tuple[Config, str]:
             [f"analysis.temperatures: {len(config.temperatures)} given; at most {MAX_TEMPERATURES}"]
         )
     return config, text
+
+
+def display_system(config: Config, asked: str | None) -> UnitSystem:
+    """The unit system to show: the request's, else the config's ``[output] units``."""
+    return check_system(asked if asked is not None else config.spec.output.units)
+
+
+def display_block(system: UnitSystem, *documents: Any) -> dict[str, Any]:
+    """The response fields that say how to show its SI numbers (docs/json.md#display-units)."""
+    return {
+        "display_units": system,
+        "units": describe(system),
+        "key_units": key_units(list(documents), system),
+    }
+
+
+def _raw_system(raw: dict[str, Any]) -> UnitSystem:
+    """The ``[output] units`` of a parsed TOML document, si if absent or not a system."""
+    output = raw.get("output")
+    value = output.get("units", "si") if isinstance(output, dict) else "si"
+    return "us" if value == "us" else "si"
 
 
 def _predict(config: Config) -> Prediction:
@@ -391,10 +446,14 @@ def create_app(config_text: str | None = None) -> FastAPI:
         if which not in {"start", "paper"}:
             raise _refuse([f"which: {which!r} is not one of 'start', 'paper'"])
         text = example_text if which == "paper" else start_text
+        raw = tomllib.loads(text)
+        system = _raw_system(raw)
         return {
-            "config": tomllib.loads(text),
+            "config": raw,
             "toml": text,
             "source": "paper example (section 6)" if which == "paper" else source,
+            "display_units": system,
+            "units": describe(system),
         }
 
     @app.post("/api/deploy", response_model=DeployResponse, responses=_LIMITED)
@@ -408,7 +467,15 @@ def create_app(config_text: str | None = None) -> FastAPI:
             document = prediction.to_dict()
             extra = curves(prediction, config, body.time_points, body.sweep_points)
             elapsed = 1000.0 * (time.perf_counter() - began)
-            payload = {"prediction": document, **extra, "toml": text, "compute_ms": elapsed}
+            system = display_system(config, body.units)
+            document["display_units"] = system
+            payload = {
+                "prediction": document,
+                **extra,
+                "toml": text,
+                "compute_ms": elapsed,
+                **display_block(system, document, extra),
+            }
             return Response(json.dumps(payload, allow_nan=False), media_type="application/json")
 
         return await within_time_limit(compute)
@@ -422,8 +489,15 @@ def create_app(config_text: str | None = None) -> FastAPI:
             raise _refuse([f"toml: not valid TOML: {exc}"]) from None
         except RecursionError:
             raise _refuse([f"toml: nested too deeply (at most {MAX_NESTING} levels)"]) from None
-        load_body(raw)
-        return {"config": raw, "toml": body.toml, "source": "uploaded"}
+        config, _ = load_body(raw)
+        system = display_system(config, None)
+        return {
+            "config": raw,
+            "toml": body.toml,
+            "source": "uploaded",
+            "display_units": system,
+            "units": describe(system),
+        }
 
     @app.post(
         "/api/config.toml",
@@ -444,7 +518,7 @@ def create_app(config_text: str | None = None) -> FastAPI:
         response_class=HTMLResponse,
         responses={200: {"content": {"text/html": {}}}, **_LIMITED},
     )
-    async def report(body: ConfigBody) -> Response:
+    async def report(body: ReportBody) -> Response:
         """The self-contained HTML report of the config (as `ecdsim report`)."""
 
         def compute() -> Response:

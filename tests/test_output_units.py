@@ -1,0 +1,165 @@
+"""Display units (issue 14 item 1, issue 15 item 1): SI or US customary on every output.
+
+Every expected number is derived here by hand from the exact definitions
+(1 in = 0.0254 m, 1 lbf = 4.4482216152605 N, 1 lbm = 0.45359237 kg, degF = degC*9/5 + 32),
+independently of :mod:`ecdsim.units_display`'s own constants.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+
+from ecdsim.units_display import (
+    check_system,
+    convert,
+    format_quantity,
+    format_value,
+    key_units,
+    kind_of_key,
+)
+from ecdsim.webapp.server import create_app
+from tests.conftest import PAPER_CONFIG
+
+# By hand: 1 lbf*in = 4.4482216152605 N * 0.0254 m = 0.112984829027617 N*m
+# (4.4482216152605 * 0.0254 = 0.11298482902761670 exactly in decimal).
+LBF_IN_NM = 0.1129848290276167
+
+
+# --- the conversions -------------------------------------------------------------------------
+
+
+def test_torque_and_damping_in_lbf_in() -> None:
+    # The paper's start torque 3.73 N*m = 3.73 / 0.1129848290276167 = 33.01328... lbf*in.
+    # rel 1e-13: two float divisions of exact decimal constants.
+    assert convert(3.73, "torque", "us") == pytest.approx(3.73 / LBF_IN_NM, rel=1e-13)
+    assert convert(3.73, "torque", "us") == pytest.approx(33.01328, abs=5e-6)
+    # BECD at 25 degC, 23.65272 N*m*s/rad -> 23.65272 / 0.11298483 = 209.3442 in*lbf*s/rad
+    # (the same factor as torque: the rate is per radian).
+    assert convert(23.65272, "damping_rate", "us") == pytest.approx(209.3442, abs=5e-5)
+    # SI is the identity.
+    assert convert(3.73, "torque", "si") == 3.73
+
+
+def test_temperatures_in_degf() -> None:
+    # -40 degC = -40 degF; 25 degC = 77 degF; 100 degC = 212 degF (exact in binary floats).
+    assert [convert(t, "temperature", "us") for t in (-40.0, 25.0, 100.0)] == [
+        -40.0,
+        77.0,
+        212.0,
+    ]
+    # A slope per kelvin: -0.0044 N*m/K is -0.0044 / 1.8 N*m/degF = -0.0024444 N*m/degF,
+    # / 0.1129848 N*m per lbf*in = -0.021635 lbf*in/degF.
+    got = convert(-0.0044, "torque_per_kelvin", "us")
+    assert got == pytest.approx(-0.0044 / 1.8 / LBF_IN_NM, rel=1e-13)
+
+
+def test_inertia_mass_length() -> None:
+    # 1 lbm*in^2 = 0.45359237 kg * 0.0254^2 m^2 = 2.9263965e-4 kg*m^2; 5 kg*m^2 = 17085.86.
+    lbm_in2 = 0.45359237 * 0.0254**2
+    assert convert(5.0, "inertia", "us") == pytest.approx(5.0 / lbm_in2, rel=1e-13)
+    assert convert(5.0, "inertia", "us") == pytest.approx(17085.86, abs=5e-3)
+    assert convert(0.185, "mass", "us") == pytest.approx(0.185 / 0.45359237, rel=1e-13)
+    # 63 mm = 63 / 25.4 in = 2.480315 in.
+    assert convert(0.063, "length", "us") == pytest.approx(2.480315, abs=5e-7)
+
+
+def test_float_noise_is_not_shown() -> None:
+    # pint's -40 degF -> degC is -39.99999999999997; shown back in degF to 4 significant
+    # digits it is -40 (and 77, 212), never the noise.
+    noisy = (-40.0 - 32.0) * 5.0 / 9.0 + 3e-14
+    assert format_quantity(noisy, "temperature", "us") == "-40 degF"
+    assert format_value(-39.99999999999997) == "-40"
+    assert format_value(77.00000000000001) == "77"
+    assert format_value(-0.0) == "0"
+    assert format_value(None) == "-"
+
+
+def test_key_suffixes_name_their_kind() -> None:
+    assert kind_of_key("damping_rate_Nms_per_rad") == "damping_rate"
+    assert kind_of_key("slope_Nm_per_K") == "torque_per_kelvin"
+    assert kind_of_key("start_speed_rad_s") == "angular_speed"
+    assert kind_of_key("stall_angle_rad") == "angle"
+    assert kind_of_key("deployment_time_s") == "time"
+    assert kind_of_key("rig_inertia_kg_m2") == "inertia"
+    assert kind_of_key("stalled") is None
+    assert key_units({"a": [{"temperature_C": 1.0}]}, "us") == {"temperature_C": "degF"}
+
+
+def test_unknown_system_is_named() -> None:
+    with pytest.raises(ValueError, match=r"^units: 'metric' is not a unit system; expected"):
+        check_system("metric")
+
+
+# --- the explorer's API ----------------------------------------------------------------------
+
+client = TestClient(create_app())
+
+
+def _degf_config() -> dict[str, Any]:
+    config = tomllib.loads(PAPER_CONFIG.read_text(encoding="utf-8"))
+    config["analysis"]["temperatures"] = ["-40 degF", "77 degF", "212 degF"]
+    return config
+
+
+def test_api_deploy_carries_display_units() -> None:
+    body = {"config": _degf_config(), "units": "us", "time_points": 3, "sweep_points": 3}
+    response = client.post("/api/deploy", json=body)
+    assert response.status_code == 200, response.text
+    data = response.json()
+    assert data["display_units"] == "us"
+    assert data["prediction"]["display_units"] == "us"
+    assert data["units"]["torque"] == {"unit": "lbf*in", "scale": 1.0 / LBF_IN_NM, "offset": 0.0}
+    assert data["units"]["temperature"] == {"unit": "degF", "scale": 1.8, "offset": 32.0}
+    labels = data["key_units"]
+    assert labels["temperature_C"] == "degF"
+    assert labels["friction_Nm"] == "lbf*in"
+    assert labels["damping_rate_Nms_per_rad"] == "in*lbf*s/rad"
+    assert labels["angle_rad"] == "rad"  # trajectories are labelled too
+    # The numbers stay SI: 77 degF is 25 degC (pint's conversion: rounding only).
+    temps = [case["temperature_C"] for case in data["prediction"]["cases"]]
+    assert temps == pytest.approx([-40.0, 25.0, 100.0], abs=1e-12)
+    # Converted with the response's own table they read back as the config's numbers.
+    scale, offset = data["units"]["temperature"]["scale"], data["units"]["temperature"]["offset"]
+    assert [format_value(t * scale + offset) for t in temps] == ["-40", "77", "212"]
+
+
+def test_api_units_default_to_the_config_then_si() -> None:
+    config = _degf_config()
+    small = {"time_points": 2, "sweep_points": 0}
+    assert (
+        client.post("/api/deploy", json={"config": config, **small}).json()["display_units"] == "si"
+    )
+    config["output"] = {"units": "us"}
+    data = client.post("/api/deploy", json={"config": config, **small}).json()
+    assert data["display_units"] == "us"
+    # The request's choice wins over the config's.
+    data = client.post("/api/deploy", json={"config": config, "units": "si", **small}).json()
+    assert data["display_units"] == "si"
+    assert data["key_units"]["temperature_C"] == "degC"
+
+
+def test_api_refuses_an_unknown_system() -> None:
+    response = client.post("/api/deploy", json={"config": _degf_config(), "units": "metric"})
+    assert response.status_code == 422
+    assert response.json()["errors"][0].startswith("units:")
+    config = _degf_config()
+    config["output"] = {"units": "imperial"}
+    response = client.post("/api/deploy", json={"config": config})
+    assert response.status_code == 422
+    assert response.json()["errors"] == [
+        "config: output.units: 'imperial' is not a unit system; expected 'si' or 'us'"
+    ]
+
+
+def test_api_example_and_parse_say_the_config_system() -> None:
+    data = client.get("/api/example").json()
+    assert data["display_units"] == "si"
+    assert data["units"]["temperature"]["unit"] == "degC"
+    text = PAPER_CONFIG.read_text(encoding="utf-8") + '\n[output]\nunits = "us"\n'
+    data = client.post("/api/config/parse", json={"toml": text}).json()
+    assert data["display_units"] == "us"
+    assert data["units"]["torque"]["unit"] == "lbf*in"
