@@ -87,7 +87,7 @@ def print_tables(prediction: Prediction) -> None:
             row.append("-" if rel is None else f"{100.0 * rel:+.1f}")
         row.append(stall_text(case, methods))
         table.add_row(*row)
-    display.show(console, table, drop=("rel.", "paper - exact", "start speed"))
+    display.show(console, table, drop=("rel.", "paper - exact", "start speed"), wrap=("stall",))
     labels = ", ".join(f"{m} = {SOLVERS[m].label}" for m in methods)
     display.note(console, f"methods: {labels}; speeds from the {reference} method")
     if "dynamic" in methods:
@@ -95,24 +95,21 @@ def print_tables(prediction: Prediction) -> None:
 
 
 def _stop_text(outcome: dict[str, Any], method: str) -> str | None:
-    """How one method's deployment stops short, or None if it reaches the end."""
+    """Where one method's deployment stops for good, or None if it reaches the end."""
     if method == "dynamic" and outcome.get("stuck"):
-        angle = outcome["stuck_angle_rad"]
-        if angle == 0.0:
-            return "cannot start"
-        when = outcome["stuck_time_s"]
-        return f"stuck at {angle:.3g} rad, " + ("creeping" if when is None else f"{when:.4g} s")
-    if outcome["stalled"]:
+        angle = outcome["stuck_angle_rad"]  # also a stop after a rebound off the end
+    elif outcome["stalled"]:
         angle = outcome["stall_angle_rad"]
-        return "cannot start" if angle == 0.0 else f"at {angle:.3g} rad"
-    return None
+    else:
+        return None
+    return "cannot start" if angle == 0.0 else f"at {angle:.3g} rad"
 
 
 def stall_text(case: dict[str, Any], methods: list[str]) -> str:
     """The stall cell of one temperature: "no" only if no method stalls or sticks.
 
-    Methods that agree are named once ("cannot start"); otherwise each is named
-    ("exact: at 1.48 rad; dynamic: stuck at 1.5 rad, 30.2 s").
+    Methods that agree are named once ("cannot start", "at 1.48 rad"); otherwise each
+    method that stops is ("dynamic: at 1.5 rad").
     """
     stops = {m: _stop_text(case[m], m) for m in methods}
     found = {m: text for m, text in stops.items() if text is not None}
@@ -151,7 +148,7 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]]) -> None:
     engage = any((d["engagement_time_s"] or 0.0) > 0.0 for d in dyn)
     heated = any(d["max_damper_temperature_C"] != t for d, t in zip(dyn, temps, strict=True))
     table = Table(title="Dynamic method", title_justify="left")
-    headers = ["T [degC]", "outcome", "latch speed\n[rad/s]", "latch KE\n[J]"]
+    headers = ["T\n[degC]", "outcome", "latch speed\n[rad/s]", "KE at latch\n[J]"]
     headers += ["impacts", "rebound\n[rad/s]"] if impacts else []
     headers += ["stuck at\n[rad]", "stuck at\n[s]"] if stuck else []
     headers += ["engaged\nat [s]"] if engage else []
@@ -163,7 +160,9 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]]) -> None:
         arrived = d["deployment_time_s"] is not None
         row = [
             _fmt(t),
-            _OUTCOMES.get(d["status"], d["status"]),
+            "cannot start"
+            if d["stuck"] and d["stuck_angle_rad"] == 0.0
+            else _OUTCOMES.get(d["status"], d["status"]),
             _fmt(d["end_speed_rad_s"]) if arrived else "-",
             _fmt(d["end_kinetic_energy_J"]) if arrived else "-",
         ]
@@ -180,7 +179,7 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]]) -> None:
         if heated:
             row.append(_fmt(d["max_damper_temperature_C"]))
         table.add_row(*row)
-    display.show(console, table, drop=("rebound", "engaged", "impacts"))
+    display.show(console, table, drop=("rebound", "engaged", "impacts"), wrap=("outcome",))
     said = ["latch: speed and kinetic energy on arrival at the end of travel"]
     if not impacts:
         said.append("no impacts (no rebound)")

@@ -1,0 +1,191 @@
+"""Tables on the terminal: the terminal's width, ``--wide`` and ``--plain``.
+
+Every command that prints tables prints them with :func:`show` on a console from
+:func:`make_console`, which
+
+* takes the width from the terminal (``COLUMNS`` or the real width; 80 when the output
+  is piped to a file or another program), never a forced minimum;
+* hides the table's secondary columns, in the order the command lists them, while the
+  table is wider than that, then wraps text cells at spaces (numbers are never cut off),
+  and says which columns it hid; ``--wide`` shows every column whatever the width;
+* with ``--plain`` prints plain aligned text, without box-drawing characters or colour,
+  for logs and scripts.
+
+The choice is set once per command by :func:`configure`. rich is imported inside the
+functions: the CLI imports this module at start-up.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+if TYPE_CHECKING:
+    from rich.console import Console
+    from rich.table import Column, Table
+
+WideOpt = Annotated[
+    bool,
+    typer.Option(
+        "--wide", help="Show every table column, even wider than the terminal.", metavar=""
+    ),
+]
+PlainOpt = Annotated[
+    bool,
+    typer.Option(
+        "--plain",
+        help="Plain aligned text: no box-drawing characters or colour (for logs, pipes).",
+        metavar="",
+    ),
+]
+
+
+@dataclass
+class Display:
+    """How the current command prints its tables."""
+
+    wide: bool = False
+    plain: bool = False
+
+
+_DISPLAY = Display()
+
+
+def configure(*, wide: bool = False, plain: bool = False) -> None:
+    """Set how the current command prints its tables (call it first in each command)."""
+    _DISPLAY.wide = wide
+    _DISPLAY.plain = plain
+
+
+def current() -> Display:
+    """The display settings of the current command."""
+    return _DISPLAY
+
+
+def make_console(*, stderr: bool = False) -> Console:
+    """A rich console as wide as the terminal (80 when piped), plain if ``--plain``."""
+    from rich.console import Console
+
+    if _DISPLAY.plain:
+        return Console(
+            stderr=stderr, soft_wrap=False, color_system=None, highlight=False, emoji=False
+        )
+    return Console(stderr=stderr, soft_wrap=False)
+
+
+def header_text(column: Column) -> str:
+    """A column's header as plain text on one line ("start speed [rad/s]")."""
+    from rich.text import Text
+
+    header = column.header
+    text = header.plain if isinstance(header, Text) else Text.from_markup(str(header)).plain
+    return " ".join(text.split())
+
+
+def _needed(console: Console, table: Table) -> int:
+    """The narrowest width at which ``table`` prints with no cell cut or folded: the
+    wrappable (text) columns at their longest word, every other column in full."""
+    from rich.measure import Measurement
+
+    options = console.options.update(width=100_000)
+    natural = Measurement.get(console, options, table).maximum
+    slack = 0
+    for column in table.columns:
+        if column.no_wrap:
+            continue
+        cells = [column.header, *column._cells]
+        sizes = [Measurement.get(console, options, cell) for cell in cells if cell is not None]
+        if sizes:
+            slack += max(m.maximum for m in sizes) - max(m.minimum for m in sizes)
+    return natural - slack
+
+
+def _unit_line(header: str) -> str:
+    """A one-line header (rich markup) with its unit on a line of its own:
+    "T [degC]" becomes "T" over "[degC]"."""
+    if "\n" in header:
+        return header
+    cut = max(header.rfind(" \\["), header.rfind(" ["))
+    if cut <= 0:
+        return header
+    return f"{header[:cut]}\n{header[cut + 1 :]}"
+
+
+def _style(table: Table, wrap: Sequence[str]) -> None:
+    from rich import box
+
+    for column in table.columns:
+        if isinstance(column.header, str):
+            column.header = _unit_line(column.header)
+        # Only the named text columns wrap (at spaces); numbers are never folded, and a
+        # number too wide for its column folds rather than printing as "1.2…".
+        column.no_wrap = not any(header_text(column).startswith(w) for w in wrap)
+        column.overflow = "fold"
+    if _DISPLAY.plain:
+        table.box = None
+        table.show_edge = False
+        table.pad_edge = False
+        table.header_style = ""
+        table.title_style = ""
+        table.border_style = ""
+    elif table.box is None:
+        table.box = box.HEAVY_HEAD
+
+
+def fit(console: Console, table: Table, drop: Sequence[str] = ()) -> list[str]:
+    """Hide ``drop`` columns (header prefixes, first hidden first) until ``table`` fits.
+
+    Returns the hidden columns' headers. With ``--wide`` nothing is hidden.
+    """
+    if _DISPLAY.wide:
+        return []
+    hidden: list[str] = []
+    for prefix in drop:
+        if _needed(console, table) <= console.width:
+            break
+        for column in table.columns:
+            name = header_text(column)
+            if name.startswith(prefix) and len(table.columns) > 1:
+                table.columns.remove(column)
+                hidden.append(name)
+                break
+    return hidden
+
+
+def show(
+    console: Console, table: Table, drop: Sequence[str] = (), wrap: Sequence[str] = ()
+) -> None:
+    """Print ``table`` to fit the console (see the module docstring).
+
+    ``drop``: header prefixes of secondary columns, in the order they are hidden when the
+    table is too wide. ``wrap``: header prefixes of text columns that may wrap at spaces
+    (every other column prints on one line). A header's unit goes on a line of its own.
+    A dim line after the table names any hidden column and ``--wide``.
+    """
+    from rich.measure import Measurement
+
+    _style(table, wrap)
+    hidden = fit(console, table, drop)
+    if not _DISPLAY.wide and _needed(console, table) > console.width:
+        # Still too wide: let every column wrap at spaces before rich squeezes numbers.
+        for column in table.columns:
+            column.no_wrap = False
+    if _DISPLAY.wide:
+        # As wide as the table needs: --wide cuts nothing, even beyond the terminal.
+        options = console.options.update(width=100_000)
+        need = Measurement.get(console, options, table).maximum
+        console.print(table, width=max(console.width, need))
+    else:
+        console.print(table)
+    if hidden:
+        note(console, f"not shown at {console.width} columns: {'; '.join(hidden)} (--wide)")
+
+
+def note(console: Console, text: str) -> None:
+    """A dim note line (plain text with ``--plain``), wrapped to the console's width."""
+    from rich.markup import escape
+
+    console.print(escape(text), style="" if _DISPLAY.plain else "dim")
