@@ -119,8 +119,9 @@ def test_spin_down_dynamic_matches_the_closed_form() -> None:
         assert block["stalled"] is True
         assert block["stall_angle_rad"] == 0.0
     messages = [w.message for w in prediction.warnings if w.method == "exact"]
-    assert any(m.startswith("cannot start at 25 degC") for m in messages), messages
-    assert any(f"friction {f:.4g} N*m" in m for m in messages), messages
+    # "cannot start: drive torque X < friction Y at T" (issue 14 item 4): drive 0 here.
+    assert any(m.startswith("cannot start: drive torque 0 N*m < ") for m in messages), messages
+    assert any(f"< friction {f:.4g} N*m at 25 degC" in m for m in messages), messages
 
 
 def test_undamped_coast_dynamic_matches_the_closed_form_and_quasi_static_says_why() -> None:

@@ -17,9 +17,10 @@ import numpy as np
 from ecdsim._types import ArrayLike, BoolArray, FloatArray
 from ecdsim._version import __version__
 from ecdsim.dynamics.params import DynamicParameters
-from ecdsim.dynamics.problem import DynamicDomainError, dynamic_problem
+from ecdsim.dynamics.problem import DynamicDomainError, DynamicProblem, dynamic_problem
 from ecdsim.methods import SOLVERS
 from ecdsim.model import DeploymentSystem, EcdState
+from ecdsim.physics import mechanics
 from ecdsim.physics.assembly import damper_torque
 from ecdsim.solvers import DeploymentSolution, QuasiStaticProblem, Trajectory
 
@@ -369,6 +370,23 @@ def _unsolved_warnings(
     ]
 
 
+def _friction_at_release(prediction: Prediction, solution: DeploymentSolution) -> FloatArray:
+    """The friction the spring must overcome at release [N*m], as ``solution`` models it.
+
+    The quasi-static methods use the kinetic friction FECD_T + FS_T; the dynamic method
+    the breakaway (static) friction of what is engaged at release (the ECD only without
+    lost motion).
+    """
+    problem = getattr(solution, "problem", None)
+    if not isinstance(problem, DynamicProblem):
+        return np.asarray(prediction.problem.friction, dtype=float)
+    system = mechanics.static_friction(
+        problem.system_friction, problem.system_static_friction_factor
+    )
+    ecd = mechanics.static_friction(problem.ecd_friction, problem.static_friction_factor)
+    return np.asarray(system + np.where(problem.lost_motion > 0.0, 0.0, ecd), dtype=float)
+
+
 def _stall_warnings(
     prediction: Prediction, name: str, solution: DeploymentSolution
 ) -> list[ModelWarning]:
@@ -376,7 +394,7 @@ def _stall_warnings(
     shape = solution.stalled.shape
     temps = np.broadcast_to(prediction.temperatures, shape)
     drive = np.broadcast_to(prediction.problem.torques[0], shape)
-    friction = np.broadcast_to(prediction.problem.friction, shape)
+    friction = np.broadcast_to(_friction_at_release(prediction, solution), shape)
     stalled = solution.stalled
     for t, angle, start, resist in zip(
         temps[stalled],
@@ -388,8 +406,8 @@ def _stall_warnings(
         if float(angle) == 0.0:
             # Say what happened at release rather than "stalls at 0 rad".
             message = (
-                f"cannot start at {float(t):g} degC: the drive torque at release "
-                f"{float(start):.4g} N*m does not exceed the friction {float(resist):.4g} N*m"
+                f"cannot start: drive torque {float(start):.4g} N*m < friction "
+                f"{float(resist):.4g} N*m at {float(t):g} degC (at release)"
             )
         else:
             message = (
