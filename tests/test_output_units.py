@@ -163,3 +163,88 @@ def test_api_example_and_parse_say_the_config_system() -> None:
     data = client.post("/api/config/parse", json={"toml": text}).json()
     assert data["display_units"] == "us"
     assert data["units"]["torque"]["unit"] == "lbf*in"
+
+
+# --- friction laws at a reference temperature other than 0 degC --------------------------
+
+_PAPER_TEXT = PAPER_CONFIG.read_text(encoding="utf-8")
+_PAPER_FS = 'system_friction = { slope = "-0.0044 N*m/K", at_0C = "0.58 N*m" }'
+_PAPER_FL = 'lubrication_friction = { slope = "-2.12e-6 N*m/K", at_0C = "2.2e-4 N*m" }'
+
+
+def _with_laws(fs: str, fl: str | None = None) -> str:
+    assert _PAPER_FS in _PAPER_TEXT
+    assert _PAPER_FL in _PAPER_TEXT
+    text = _PAPER_TEXT.replace(_PAPER_FS, fs)
+    return text.replace(_PAPER_FL, fl) if fl is not None else text
+
+
+def test_friction_law_at_77f_is_the_paper_law() -> None:
+    from ecdsim.config import parse_config
+    from ecdsim.deployment import predict
+
+    # By hand: the paper's FS_T = -0.0044 N*m/K * T + 0.58 N*m is 0.58 - 0.0044 * 25 = 0.47 N*m
+    # at 25 degC = 77 degF. FL_T = -2.12e-6 * T + 2.2e-4 is 2.2e-4 - 2.12e-6 * 25 = 1.67e-4 N*m.
+    # In US units: 0.47 N*m / 0.1129848290276167 N*m per lbf*in = 4.159851 lbf*in and
+    # -0.0044 N*m/K = -0.0044 / 1.8 / 0.1129848290276167 = -0.02163516 lbf*in/degF;
+    # 1.67e-4 N*m = 1.478075e-3 lbf*in, -2.12e-6 N*m/K = -1.042421e-5 lbf*in/degF.
+    us_text = _with_laws(
+        'system_friction = { slope = "-0.02163516 lbf*in/degF", at = "77 degF", '
+        'value = "4.159851 lbf*in" }',
+        'lubrication_friction = { slope = "-1.042421e-5 lbf*in/degF", at = "77 degF", '
+        'value = "1.478075e-3 lbf*in" }',
+    )
+    paper = parse_config(_PAPER_TEXT)
+    us = parse_config(us_text)
+    temps = (-40.0, 25.0, 100.0)
+    a = predict(paper.system, temps, ("paper", "exact")).to_dict()["cases"]
+    b = predict(us.system, temps, ("paper", "exact")).to_dict()["cases"]
+    # FS at -40 degC by hand: 0.58 + 0.0044 * 40 = 0.756 N*m; the US inputs carry 7 digits,
+    # so rel 1e-6 covers their rounding (largest: -0.02163516 of -0.021635156..., 2e-7).
+    assert [c["system_friction_Nm"] for c in b] == pytest.approx([0.756, 0.47, 0.14], rel=1e-6)
+    for case_a, case_b in zip(a, b, strict=True):
+        for method in ("paper", "exact"):
+            assert case_b[method]["deployment_time_s"] == pytest.approx(
+                case_a[method]["deployment_time_s"], rel=1e-5
+            )
+
+
+def test_friction_law_reference_forms_agree_exactly() -> None:
+    from ecdsim.config import parse_config
+
+    # at_0C, at_32F (32 degF is 0 degC) and at = "25 degC" with its value give one law:
+    # 0.58 - 0.0044 * 25 = 0.47, so at 0 degC 0.47 + 0.0044 * 25 = 0.58 N*m (rounding only).
+    forms = [
+        _PAPER_FS,
+        'system_friction = { slope = "-0.0044 N*m/K", at_32F = "0.58 N*m" }',
+        'system_friction = { slope = "-0.0044 N*m/K", at = "25 degC", value = "0.47 N*m" }',
+    ]
+    laws = [parse_config(_with_laws(f)).system.load.system_friction for f in forms]
+    for law in laws:
+        assert law.slope == -0.0044
+        assert law.at_0c == pytest.approx(0.58, abs=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("law", "message"),
+    [
+        (
+            '{ slope = "-0.0044 N*m/K", at_0C = "0.58 N*m", at_32F = "0.58 N*m" }',
+            "load.system_friction: give one reference value, not at_0C and at_32F",
+        ),
+        (
+            '{ slope = "-0.0044 N*m/K", at = "77 degF" }',
+            "load.system_friction: missing value: at needs it",
+        ),
+        (
+            '{ slope = "-0.0044 N*m/K", at = "77 N*m", value = "0.47 N*m" }',
+            "load.system_friction.at: '77 N*m' has the wrong dimension; expected a temperature",
+        ),
+    ],
+)
+def test_friction_law_reference_errors_name_the_field(law: str, message: str) -> None:
+    from ecdsim.config import ConfigError, parse_config
+
+    with pytest.raises(ConfigError) as caught:
+        parse_config(_with_laws(f"system_friction = {law}"))
+    assert message in str(caught.value)

@@ -79,17 +79,37 @@ class _Section(BaseModel):
 
 
 class FrictionLawSpec(_Section):
-    """A friction that depends on temperature: ``{slope, at_0C}`` or ``{table = [[T, F], ...]}``."""
+    """A friction that depends on temperature (docs/config.md#friction-laws).
+
+    Linear: ``slope`` and the value at one reference temperature, given as ``at_0C``
+    (0 degC, the paper's form), ``at_32F`` (32 degF, the same temperature for a degF
+    config) or ``at`` with ``value`` (any temperature, e.g. ``at = "77 degF"``). Or a
+    measured ``table = [[T, F], ...]``.
+    """
 
     slope: TorquePerKelvin | None = None
     at_0C: Torque | None = None  # noqa: N815 - the paper's name, "value at 0 degC"
+    at_32F: Torque | None = None  # noqa: N815 - "value at 32 degF" (= 0 degC)
+    at: Temperature | None = None
+    value: Torque | None = None
     table: list[tuple[Temperature, Torque]] | None = None
 
     @model_validator(mode="after")
     def _one_form(self) -> FrictionLawSpec:
-        linear = self.slope is not None or self.at_0C is not None
+        references = [
+            name
+            for name, given in (
+                ("at_0C", self.at_0C is not None),
+                ("at_32F", self.at_32F is not None),
+                ("at", self.at is not None or self.value is not None),
+            )
+            if given
+        ]
+        linear = self.slope is not None or bool(references)
         if linear and self.table is not None:
-            raise ValueError("give either slope and at_0C, or table, not both")
+            raise ValueError(
+                "give either slope and at_0C (or at_32F, or at and value), or table, not both"
+            )
         if self.table is not None:
             temps = [t for t, _ in self.table]
             if len(temps) < 2:
@@ -98,10 +118,37 @@ class FrictionLawSpec(_Section):
                 raise ValueError(
                     f"table temperatures must be strictly increasing, got {temps} degC"
                 )
-        elif self.slope is None or self.at_0C is None:
-            missing = "slope" if self.slope is None else "at_0C"
-            raise ValueError(f"missing {missing} (give slope and at_0C, or a table)")
+            return self
+        if len(references) > 1:
+            raise ValueError(
+                f"give one reference value, not {' and '.join(references)} "
+                "(at_0C, at_32F, or at with value)"
+            )
+        if self.slope is None:
+            raise ValueError("missing slope (give slope and at_0C, or a table)")
+        if not references:
+            raise ValueError("missing at_0C (give slope and at_0C, at_32F, or at and value)")
+        if references == ["at"] and (self.at is None or self.value is None):
+            missing = "at" if self.at is None else "value"
+            other = "value" if missing == "at" else "at"
+            raise ValueError(
+                f"missing {missing}: {other} needs it (e.g. at = '77 degF', value = '4.1 lbf*in')"
+            )
         return self
+
+    def reference(self) -> tuple[float, float]:
+        """The linear law's reference point: (temperature [degC], value [N*m]) as given."""
+        if self.at is not None and self.value is not None:
+            return self.at, self.value
+        given = self.at_32F if self.at_32F is not None else self.at_0C
+        assert given is not None  # _one_form guarantees one reference
+        return 0.0, given
+
+    def value_at_0c(self) -> float:
+        """The linear law's value at 0 degC [N*m]: ``value - slope * at`` (the model's form)."""
+        assert self.slope is not None  # _one_form guarantees it
+        temperature, value = self.reference()
+        return value - self.slope * temperature if temperature != 0.0 else value
 
     def to_law(self) -> TemperatureLaw:
         """The model's temperature law (SI)."""
@@ -109,10 +156,9 @@ class FrictionLawSpec(_Section):
             return TabulatedTemperatureLaw(
                 tuple(t for t, _ in self.table), tuple(v for _, v in self.table)
             )
-        # _one_form guarantees both are present here.
+        # _one_form guarantees the slope and one reference here.
         assert self.slope is not None
-        assert self.at_0C is not None
-        return LinearTemperatureLaw(self.slope, self.at_0C)
+        return LinearTemperatureLaw(self.slope, self.value_at_0c())
 
 
 class RolloffSpec(_Section):
