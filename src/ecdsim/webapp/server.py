@@ -530,4 +530,8 @@ def create_app(config_text: str | None = None) -> FastAPI:
 
         return await within_time_limit(compute)
 
+    # The bench fit (drop test) has its own module: ecdsim.webapp.fitapi.
+    from ecdsim.webapp.fitapi import add_fit_routes
+
+    add_fit_routes(app, _LIMITED)
     return app
