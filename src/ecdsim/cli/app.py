@@ -16,7 +16,9 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from ecdsim._version import __version__
+from ecdsim.cli import display, failon
 from ecdsim.cli.common import USER_ERROR, echo_warnings, fail, load_run, predict_run
+from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, WideOpt
 from ecdsim.cli.fit import fit_app
 from ecdsim.cli.montecarlo import EPILOG as MONTECARLO_EPILOG
 from ecdsim.cli.montecarlo import montecarlo
@@ -35,6 +37,7 @@ app = typer.Typer(
         "Example: [bold]ecdsim deploy examples/paper_cc16.toml --plot plots[/bold]"
     ),
     rich_markup_mode="rich",
+    cls=HelpGroup,
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -95,7 +98,9 @@ def _render(prediction: Prediction, as_json: bool, plot_dir: Path | None) -> Non
         typer.echo(f"wrote {path}", err=as_json)
 
 
-ConfigArg = Annotated[Path, typer.Argument(help="TOML configuration file (see docs/config.md).")]
+ConfigArg = Annotated[
+    Path, typer.Argument(help="TOML configuration file (see docs/config.md).", metavar="CONFIG")
+]
 JsonOpt = Annotated[
     bool, typer.Option("--json", help="Print stable JSON on stdout (docs/json.md).")
 ]
@@ -108,12 +113,16 @@ TempOpt = Annotated[
         "--temperature",
         "-T",
         help="Analysis temperature, repeatable; overrides \\[analysis] (bare numbers are degC).",
+        metavar="TEMP",
     ),
 ]
 MethodOpt = Annotated[
     list[str] | None,
     typer.Option(
-        "--method", "-m", help="Solver, repeatable: paper, exact, dynamic. Overrides \\[analysis]."
+        "--method",
+        "-m",
+        help="Solver, repeatable: paper, exact, dynamic. Overrides \\[analysis].",
+        metavar="METHOD",
     ),
 ]
 TimeseriesOpt = Annotated[
@@ -127,9 +136,10 @@ TimeseriesOpt = Annotated[
 
 
 @app.command(
+    cls=HelpCommand,
     epilog=(
         "Example: [bold]ecdsim deploy examples/paper_cc16.toml -T -40 -T 25 -T 100 --json[/bold]"
-    )
+    ),
 )
 def deploy(
     config: ConfigArg,
@@ -138,22 +148,35 @@ def deploy(
     temperature: TempOpt = None,
     method: MethodOpt = None,
     timeseries: TimeseriesOpt = None,
+    fail_on: failon.FailOnOpt = None,
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
 ) -> None:
     """Predict deployment time, speeds and stall at each temperature (paper Eq. 1-13)."""
+    display.configure(wide=wide, plain=plain)
+    conditions = failon.parse(fail_on)
     loaded = load_run(config, temperature, method)
+    failon.require_requirements(conditions, loaded)
     prediction = predict_run(loaded)
     if timeseries is not None:
         _write_timeseries(prediction, timeseries, as_json)
     _render(prediction, as_json, plot)
+    reasons = failon.stall_reasons(prediction) if "stall" in conditions else []
+    if "requirements" in conditions:
+        reasons += failon.requirement_reasons(loaded)
+    failon.finish(conditions, reasons)
 
 
-@app.command(epilog="Example: [bold]ecdsim demo --out ecdsim-demo[/bold]")
+@app.command(cls=HelpCommand, epilog="Example: [bold]ecdsim demo --out ecdsim-demo[/bold]")
 def demo(
     out: Annotated[
         Path, typer.Option("--out", help="Folder for the demo's plots.", metavar="DIR")
     ] = Path("ecdsim-demo"),
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
 ) -> None:
     """Run the paper's Cc-16 example (section 6) and write its plots."""
+    display.configure(wide=wide, plain=plain)
     from importlib.resources import as_file, files
 
     resource = files("ecdsim") / "data" / "paper_cc16.toml"
@@ -166,11 +189,11 @@ def demo(
 # Registered after deploy and demo so that --help lists the commands in the order users
 # ask their questions: deploy, characterise, size, tolerances, report.
 app.add_typer(fit_app, name="fit", help="Fit BECD(T) and FECD(T) to bench data (paper section 7).")
-app.command(epilog=SIZE_EPILOG)(size)
-app.command(name="compare-fluid", epilog=FLUID_EPILOG)(compare_fluid)
-app.command(epilog=MONTECARLO_EPILOG)(montecarlo)
-app.command(epilog=REPORT_EPILOG)(report)
-app.command(name="app", epilog=APP_EPILOG)(explore)
+app.command(cls=HelpCommand, epilog=SIZE_EPILOG)(size)
+app.command(cls=HelpCommand, name="compare-fluid", epilog=FLUID_EPILOG)(compare_fluid)
+app.command(cls=HelpCommand, epilog=MONTECARLO_EPILOG)(montecarlo)
+app.command(cls=HelpCommand, epilog=REPORT_EPILOG)(report)
+app.command(cls=HelpCommand, name="app", epilog=APP_EPILOG)(explore)
 
 
 def main() -> None:

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+from typer import _click
+from typer.core import TyperCommand, TyperGroup
 
 if TYPE_CHECKING:
     from rich.console import Console
@@ -189,3 +191,32 @@ def note(console: Console, text: str) -> None:
     from rich.markup import escape
 
     console.print(escape(text), style="" if _DISPLAY.plain else "dim")
+
+
+def _quiet_flags(params: list[_click.Parameter]) -> None:
+    from typer.core import TyperOption
+
+    for param in params:
+        # A flag takes no value: show no "<bool>" type after it in --help.
+        if isinstance(param, TyperOption) and param.is_flag and param.metavar is None:
+            param.metavar = ""
+
+
+class HelpCommand(TyperCommand):
+    """A command whose --help shows no ``<bool>`` after flags (``--json``, ``--help``)."""
+
+    def get_params(self, ctx: _click.Context) -> list[_click.Parameter]:
+        """The parameters, flags with an empty metavar."""
+        params = super().get_params(ctx)
+        _quiet_flags(params)
+        return params
+
+
+class HelpGroup(TyperGroup):
+    """A command group whose --help shows no ``<bool>`` after flags."""
+
+    def get_params(self, ctx: _click.Context) -> list[_click.Parameter]:
+        """The parameters, flags with an empty metavar."""
+        params = super().get_params(ctx)
+        _quiet_flags(params)
+        return params
