@@ -48,14 +48,12 @@ pytest: $(STAMP_TEST) browser
 
 test: browser lint typecheck pytest
 
-# Each benchmark measures its ratios within one run (the machines are shared and noisy).
-# The web and Monte Carlo benchmarks need the test extra (fastapi, dask, pyarrow).
+# One table of every bench file's cases, ecdsim and its baseline interleaved (the machines
+# are shared and noisy); writes benchmarks/results.json. BENCH_OPTIONS=--quick for a short
+# run. The web and Monte Carlo benchmarks need the test extra (fastapi, dask, pyarrow).
+BENCH_OPTIONS ?=
 bench: $(STAMP_TEST)
-	$(BIN)/python benchmarks/run.py
-	$(BIN)/python benchmarks/bench_dynamic.py
-	$(BIN)/python benchmarks/bench_webapp.py
-	$(BIN)/python benchmarks/bench_montecarlo.py
-	$(BIN)/python benchmarks/bench_csv.py
+	$(BIN)/python benchmarks/run.py $(BENCH_OPTIONS)
 
 # The long fuzz campaign (docs/fuzzing.md): FUZZ_EXAMPLES random examples per target and
 # per API operation (schemathesis, all checks); make test runs the same file short and seeded.

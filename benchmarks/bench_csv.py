@@ -1,30 +1,32 @@
 """Large bench-test CSV files: the block reader against the row-by-row reader.
 
-``make bench`` runs this file. It writes a synthetic drop-test log of ``--rows`` rows
-(the example's 18 rows repeated, times perturbed so that no row repeats another), then
-reads it with :func:`ecdsim.characterize.csvdata.read_table` two ways, interleaved over
-``--repeats`` rounds in fresh processes (so that each peak memory is its own):
+Cases (``cases(quick)``, run by ``benchmarks/run.py``): a synthetic drop-test log of
+1,000,000 rows (100,000 with ``quick``; the example's 18 rows repeated, times perturbed
+so that no row repeats another) read by :func:`ecdsim.characterize.csvdata.read_table`
+two ways, interleaved, each read a fresh process (so that each peak memory is its own;
+the time is that of the ``read_table`` call, measured inside the process):
 
 - baseline: the row-by-row csv-module reader (forced by quoting one header cell, which
   sends any file down that path), the reader ecdsim used for every file before;
 - ecdsim: the block reader that NumPy parses, used for plain files.
 
-Prints the minimum and median time and peak resident memory of each and their ratio,
-checks that both give the same table, and runs ``ecdsim fit drop-test`` once on the
-file end to end, with the table and with ``--json`` (which lists every point). Exit
-status 1 if the two tables differ.
+Agreement: both give the same table (a digest of rows, values and bad-row report). A
+second case times ``ecdsim fit drop-test FILE`` end to end as a whole process (no
+baseline). ``python benchmarks/bench_csv.py [--quick]`` runs these cases alone.
 """
 
 from __future__ import annotations
 
 import argparse
-import statistics
 import subprocess
 import sys
-import tempfile
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+
+from harness import Case, Command, Notes, Timed, measure, same, scratch, table, venv_script
 
 HERE = Path(__file__).resolve().parent
 EXAMPLE = HERE.parent / "examples" / "drop_test.csv"
@@ -68,57 +70,60 @@ def read_once(path: Path) -> tuple[float, float, str]:
     return float(out[0]), float(out[1]), out[2]
 
 
-FIT = """
-import resource, subprocess, sys, time
-start = time.perf_counter()
-subprocess.run(sys.argv[1:], capture_output=True, check=True)
-peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-print(time.perf_counter() - start, peak)
-"""
+def cases(quick: bool) -> list[Case[Any]]:
+    """Reading a large log both ways, and the fit end to end on it (quick: 100,000 rows)."""
+    rows = 100_000 if quick else 1_000_000
+    folder = scratch()
+    plain, quoted = folder / f"plain-{rows}.csv", folder / f"quoted-{rows}.csv"
+    write_log(plain, rows, quoted=False)
+    write_log(quoted, rows, quoted=True)
+    peaks: dict[str, list[float]] = {"block": [], "row-by-row": []}
 
+    def reader(path: Path, key: str) -> Callable[[], Timed[str]]:
+        def read() -> Timed[str]:
+            seconds, peak, digest = read_once(path)
+            peaks[key].append(peak)
+            return Timed(seconds, digest)  # the read itself, not the interpreter start
 
-def fit_once(path: Path, *options: str) -> tuple[float, float]:
-    """(seconds, peak MB) of ``ecdsim fit drop-test PATH [options]`` as a whole process."""
-    ecdsim = str(Path(sys.executable).parent / "ecdsim")
-    command = [sys.executable, "-c", FIT, ecdsim, "fit", "drop-test", str(path), *options]
-    out = subprocess.run(command, capture_output=True, text=True, check=True).stdout.split()
-    return float(out[0]), float(out[1])
+        return read
 
-
-def main() -> int:
-    """Run the benchmark and print its figures."""
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--rows", type=int, default=1_000_000)
-    parser.add_argument("--repeats", type=int, default=5)
-    args = parser.parse_args()
-    with tempfile.TemporaryDirectory() as folder:
-        plain, quoted = Path(folder) / "plain.csv", Path(folder) / "quoted.csv"
-        write_log(plain, args.rows, quoted=False)
-        write_log(quoted, args.rows, quoted=True)
-        runs: dict[str, list[tuple[float, float, str]]] = {"row-by-row": [], "block": []}
-        for _ in range(args.repeats):  # interleaved: both see the same machine load
-            runs["row-by-row"].append(read_once(quoted))
-            runs["block"].append(read_once(plain))
-        print(f"read_table on {args.rows:,} drop-test rows, {args.repeats} interleaved rounds")
-        for name, results in runs.items():
-            times = [r[0] for r in results]
-            peaks = [r[1] for r in results]
-            print(
-                f"  {name:10s} time min {min(times):6.2f} s, median "
-                f"{statistics.median(times):6.2f} s; peak memory {max(peaks):6.0f} MB"
-            )
-        ratios = [a[0] / b[0] for a, b in zip(runs["row-by-row"], runs["block"], strict=True)]
-        print(
-            f"  speed-up per round: min {min(ratios):.1f}x, median {statistics.median(ratios):.1f}x"
+    def memory() -> Notes:
+        block, row = max(peaks["block"]), max(peaks["row-by-row"])
+        return Notes(
+            lines=(f"peak memory of the reading process: {block:.0f} MB, row by row {row:.0f} MB",),
+            data={"peak_mb_block": block, "peak_mb_row_by_row": row},
         )
-        digests = {r[2] for results in runs.values() for r in results}
-        same = len(digests) == 1
-        print(f"  same table both ways: {'yes' if same else 'NO'}")
-        for options in ((), ("--json",)):
-            seconds, peak = fit_once(plain, *options)
-            shown = " ".join(("ecdsim fit drop-test FILE", *options))
-            print(f"  {shown}: {seconds:.1f} s, peak memory {peak:.0f} MB")
-    return 0 if same else 1
+
+    fit = Command((venv_script("ecdsim"), "fit", "drop-test", str(plain)))
+    return [
+        Case(
+            name=f"read_table {rows:,} rows",
+            ecdsim=reader(plain, "block"),
+            baseline=reader(quoted, "row-by-row"),
+            baseline_name="the row-by-row csv-module reader ecdsim used before, "
+            "same file with one header cell quoted; each read a whole process",
+            agree=same,
+            notes=memory,
+            description="read_table of a synthetic drop-test log, block reader vs csv module",
+        ),
+        Case(
+            name=f"fit drop-test {rows:,} rows",
+            ecdsim=fit,
+            repeats=5,
+            description="ecdsim fit drop-test FILE end to end as a whole process (no baseline)",
+        ),
+    ]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run these cases alone and print their table."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
+    parser.add_argument("--quick", action="store_true", help="100,000 rows instead of 1,000,000")
+    parser.add_argument("--repeats", type=int, default=None)
+    args = parser.parse_args(argv)
+    rows = [measure(case, args.repeats) for case in cases(args.quick)]
+    print("\n".join(table(rows)))
+    return 0 if all(row.ok for row in rows) else 1
 
 
 if __name__ == "__main__":
