@@ -21,6 +21,7 @@ from ecdsim.physics.quasistatic import (
     segment_duration,
     segment_speed,
 )
+from ecdsim.solvers import exact_kernel
 from ecdsim.solvers.base import (
     DeploymentSolution,
     QuasiStaticProblem,
@@ -56,11 +57,33 @@ class ExactMethod:
     label: str = "exact quasi-static"
     needs_dynamics: bool = False
 
-    def solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
+    def solve(self, problem: QuasiStaticProblem, kernel: str | None = None) -> DeploymentSolution:
         """Deployment time, start, end and peak speed for every case of the batch.
 
-        Cases with no damping (BECD_T = 0) are returned as not solved.
+        Cases with no damping (BECD_T = 0) are returned as not solved. ``kernel`` is one
+        of :data:`ecdsim.solvers.exact_kernel.KERNELS`; None chooses by batch size and
+        what is installed (:func:`ecdsim.solvers.exact_kernel.choose`). The fast kernels
+        compute the same function as :meth:`solve_reference` (tests/test_exact_kernel.py).
         """
+        chosen = kernel or exact_kernel.choose(int(np.prod(problem.batch_shape, dtype=np.int64)))
+        if chosen == "reference":
+            return self.solve_reference(problem)
+        if chosen not in exact_kernel.KERNELS:
+            raise ValueError(f"kernel {chosen!r}: expected one of {list(exact_kernel.KERNELS)}")
+        found = exact_kernel.solve_fast(problem, chosen, self.solve_reference)
+        return DeploymentSolution(
+            method=self.name,
+            deployment_time=found.deployment_time,
+            start_speed=found.start_speed,
+            end_speed=found.end_speed,
+            max_speed=found.max_speed,
+            stalled=found.stalled,
+            stall_angle=found.stall_angle,
+            solved=found.solved,
+        )
+
+    def solve_reference(self, problem: QuasiStaticProblem) -> DeploymentSolution:
+        """:meth:`solve` by the reference implementation: whole-batch NumPy, for clarity."""
         problem, undamped = undamped_cases(problem)
         return mark_unsolved(self._solve(problem), undamped)
 
