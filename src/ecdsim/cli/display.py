@@ -101,14 +101,21 @@ def _needed(console: Console, table: Table) -> int:
         cells = [column.header, *column._cells]
         sizes = [Measurement.get(console, options, cell) for cell in cells if cell is not None]
         if sizes:
-            slack += max(m.maximum for m in sizes) - max(m.minimum for m in sizes)
+            # A wrapped text column keeps at least WRAP_WIDTH characters (or its full
+            # width, if narrower), so that a name is not cut into one word per line.
+            full = max(m.maximum for m in sizes)
+            least = max(max(m.minimum for m in sizes), min(full, WRAP_WIDTH))
+            slack += full - least
     return natural - slack
+
+
+WRAP_WIDTH = 16  # the narrowest a wrapped text column is made before columns are hidden
 
 
 def _unit_line(header: str) -> str:
     """A one-line header (rich markup) with its unit on a line of its own:
     "T [degC]" becomes "T" over "[degC]"."""
-    if "\n" in header:
+    if "\n" in header or not header.endswith("]"):
         return header
     cut = max(header.rfind(" \\["), header.rfind(" ["))
     if cut <= 0:

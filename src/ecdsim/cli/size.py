@@ -12,11 +12,17 @@ from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 
+from ecdsim.cli import display, failon
+from ecdsim.cli.display import PlainOpt, WideOpt
+
 if TYPE_CHECKING:
     from ecdsim.config import Config
 
 ConfigArg = Annotated[
-    Path, typer.Argument(help="TOML configuration file (see docs/config.md, docs/sizing.md).")
+    Path,
+    typer.Argument(
+        help="TOML configuration file (see docs/config.md, docs/sizing.md).", metavar="CONFIG"
+    ),
 ]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON on stdout (docs/sizing.md).")]
 PlotOpt = Annotated[
@@ -31,11 +37,15 @@ CatalogOpt = Annotated[
 ]  # fmt: skip
 DamperOpt = Annotated[
     str | None,
-    typer.Option("--damper", help="Damper for the ratio intervals (default: best-ranked)."),
+    typer.Option(
+        "--damper", help="Damper for the ratio intervals (default: best-ranked).", metavar="NAME"
+    ),
 ]
 GearboxOpt = Annotated[
     str | None,
-    typer.Option("--gearbox", help="Gearbox for the ratio intervals (default: best-ranked)."),
+    typer.Option(
+        "--gearbox", help="Gearbox for the ratio intervals (default: best-ranked).", metavar="NAME"
+    ),
 ]
 
 SIZE_EPILOG = (
@@ -62,21 +72,31 @@ def _config(path: Path, section: str) -> Config:
     return config
 
 
-def _print(tables: list[tuple[str, list[str], list[list[str]]]], notes: list[str]) -> None:
-    from rich.console import Console
+# Secondary columns of the sizing tables, hidden in this order when a table is wider than
+# the terminal (--wide shows them), and the text columns that may wrap at spaces.
+_DROP = ("at [deg", "torque margin", "spread", "mass", "at T", "value (worst)", "limited by")
+_FLUID_DROP = ("fluid deadband", "engage speed", "fluid t (damped)", "fluid c", "BECD")
+_WRAP = ("damper + gearbox", "requirement", "limit", "check", "N interval", "recommended")
+
+
+def _print(
+    tables: list[tuple[str, list[str], list[list[str]]]],
+    notes: list[str],
+    drop: tuple[str, ...] = _DROP,
+) -> None:
     from rich.markup import escape
     from rich.table import Table
 
-    console = Console(soft_wrap=False, width=max(170, Console().width))
+    console = display.make_console()
     for title, headers, rows in tables:
         table = Table(title=escape(title), title_justify="left")
         for header in headers:
-            table.add_column(escape(header), no_wrap=True)
+            table.add_column(escape(header))
         for row in rows:
             table.add_row(*[escape(cell) for cell in row])
-        console.print(table)
+        display.show(console, table, drop=drop, wrap=_WRAP)
     for note in notes:
-        console.print(escape(note), style="dim")
+        display.note(console, note)
 
 
 def _write_plots(plot: Path, make: Any) -> list[Path]:
@@ -93,8 +113,13 @@ def size(
     plot: PlotOpt = None,
     damper: DamperOpt = None,
     gearbox: GearboxOpt = None,
+    fail_on: failon.FailOnOpt = None,
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
 ) -> None:
     """Rank catalogue dampers and gear ratios against the requirements; exact ratio ranges."""
+    display.configure(wide=wide, plain=plain)
+    conditions = failon.parse(fail_on)
     import json
 
     import numpy as np
@@ -186,10 +211,47 @@ def size(
             typer.echo(f"warning: {c.candidate.label}: {warning}", err=True)
     for path in written:
         typer.echo(f"wrote {path}", err=as_json)
+    failon.finish(conditions, _size_failures(conditions, valid, chosen_damper, chosen_gearbox))
 
 
-def compare_fluid(config: ConfigArg, as_json: JsonOpt = False, plot: PlotOpt = None) -> None:
+def _size_failures(
+    conditions: frozenset[str], valid: list[Any], damper: str | None, gearbox: str | None
+) -> list[str]:
+    """Why ``--fail-on`` fails for the chosen candidate (best-ranked or --damper/--gearbox)."""
+    if not conditions:
+        return []
+    chosen = [
+        c
+        for c in valid
+        if c.candidate.damper.name == damper and c.candidate.gearbox.name == gearbox
+    ]
+    if not chosen:
+        return [f"{sorted(conditions)[0]}: no catalogue candidate could be evaluated"]
+    result = chosen[0]
+    label = result.candidate.label
+    reasons = []
+    if "stall" in conditions:
+        stalled = [f"{t:g}" for t, s in zip(result.temperatures, result.stalled, strict=True) if s]
+        if stalled:
+            reasons.append(f"stall: {label} stalls at {', '.join(stalled)} degC")
+    if "requirements" in conditions:
+        reasons += [
+            f"requirements: {label}: {check.label} missed (worst at {check.temperature_C:g} degC)"
+            for check in result.checks
+            if not check.passed
+        ]
+    return reasons
+
+
+def compare_fluid(
+    config: ConfigArg,
+    as_json: JsonOpt = False,
+    plot: PlotOpt = None,
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
+) -> None:
     """Compare the ECD with a viscous fluid damper matched to it (fluid_damper section)."""
+    display.configure(wide=wide, plain=plain)
     import json
 
     import numpy as np
@@ -243,7 +305,7 @@ def compare_fluid(config: ConfigArg, as_json: JsonOpt = False, plot: PlotOpt = N
                 "no load inertia given ([fluid_damper] load_inertia or [load] inertia): the "
                 "free time through the deadband is not computed"
             )
-        _print([report.fluid_table(comparison)], notes)
+        _print([report.fluid_table(comparison)], notes, _FLUID_DROP)
     for line in warnings:
         typer.echo(line, err=True)
     for path in written:
