@@ -248,3 +248,118 @@ def test_friction_law_reference_errors_name_the_field(law: str, message: str) ->
     with pytest.raises(ConfigError) as caught:
         parse_config(_with_laws(f"system_friction = {law}"))
     assert message in str(caught.value)
+
+
+# --- the command line ----------------------------------------------------------------------
+
+
+def _us_config(tmp_path: Any, output: str | None = None) -> Any:
+    text = _PAPER_TEXT.replace(
+        'temperatures = ["-40 degC", "25 degC", "100 degC"]',
+        'temperatures = ["-40 degF", "77 degF", "212 degF"]',
+    )
+    assert "77 degF" in text
+    if output is not None:
+        text += f'\n[output]\nunits = "{output}"\n'
+    path = tmp_path / "us.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _run(*args: str) -> Any:
+    from typer.testing import CliRunner
+
+    from ecdsim.cli.app import app
+
+    return CliRunner().invoke(app, list(args), env={"COLUMNS": "200"})
+
+
+def _row(stdout: str, first: str) -> list[str]:
+    """The cells of the table row whose first cell is ``first``."""
+    for line in stdout.splitlines():
+        cells = [c.strip() for c in line.strip("│┃ ").split("│")]
+        if cells and cells[0] == first:
+            return cells
+    raise AssertionError(f"no row {first!r} in:\n{stdout}")
+
+
+def test_deploy_table_in_us_units(tmp_path: Any) -> None:
+    result = _run("deploy", str(_us_config(tmp_path)), "--units", "us", "--wide")
+    assert result.exit_code == 0, result.output
+    assert "[degF]" in result.stdout
+    assert "[in*lbf*s/rad]" in result.stdout
+    assert "[lbf*in]" in result.stdout
+    assert "degC" not in result.stdout
+    assert "N*m" not in result.stdout
+    # The config's -40, 77, 212 degF come back as written, not as -39.99999999999997.
+    row = _row(result.stdout, "77")
+    # ECD table at 77 degF = 25 degC, by hand (paper section 6):
+    # BD_T = 1.3e-4 N*m*s/rad = 1.3e-4 / 0.1129848290276167 = 0.0011506 in*lbf*s/rad;
+    # BECD = 23.65272 N*m*s/rad -> 209.3 in*lbf*s/rad; FS = 0.47 N*m -> 4.160 lbf*in
+    # (4 significant digits, printed by %g as 4.16).
+    assert row[1:2] == ["0.001151"]
+    assert "209.3" in row
+    assert "4.16" in row
+    assert _row(result.stdout, "-40")[0] == "-40"
+    assert _row(result.stdout, "212")[0] == "212"
+
+
+def test_deploy_units_from_config_and_option_wins(tmp_path: Any) -> None:
+    path = _us_config(tmp_path, output="us")
+    result = _run("deploy", str(path))
+    assert result.exit_code == 0, result.output
+    assert "[degF]" in result.stdout
+    result = _run("deploy", str(path), "--units", "si")
+    assert result.exit_code == 0, result.output
+    assert "[degF]" not in result.stdout
+    assert "[degC]" in result.stdout
+    # -40 degF is -40 degC; 77 degF is 25 degC; 212 degF is 100 degC.
+    assert _row(result.stdout, "25")[0] == "25"
+
+
+def test_deploy_json_stays_si_and_records_units(tmp_path: Any) -> None:
+    import json
+
+    result = _run("deploy", str(_us_config(tmp_path)), "--units", "us", "--json")
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert document["display_units"] == "us"
+    # SI keys and SI numbers: BECD at 25 degC is 23.65272 N*m*s/rad (paper section 6:
+    # BT_T = 1.638e-4 N*m*s/rad times 380^2 = 23.65272), rel 1e-9 for the degF round trip.
+    case = document["cases"][1]
+    assert case["damping_rate_Nms_per_rad"] == pytest.approx(23.65272, rel=1e-9)
+
+
+def test_bad_units_option_exits_2_naming_it(tmp_path: Any) -> None:
+    result = _run("deploy", str(_us_config(tmp_path)), "--units", "imperial")
+    assert result.exit_code == 2
+    assert result.output.strip() == (
+        "error: --units: 'imperial' is not a unit system; expected 'si' or 'us'"
+    )
+    result = _run("deploy", str(_us_config(tmp_path, output="imperial")))
+    assert result.exit_code == 2
+    assert "output.units: 'imperial' is not a unit system; expected 'si' or 'us'" in (result.output)
+
+
+def test_us_plots_are_labelled_in_us_units(tmp_path: Any) -> None:
+    from ecdsim.config import load_config
+    from ecdsim.deployment import predict
+    from ecdsim.plotting import plot_deployment, plot_torque_speed
+
+    config = load_config(_us_config(tmp_path))
+    prediction = predict(config.system, config.temperatures, ("exact",))
+    fig = plot_torque_speed(prediction, units="us")
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "ECD reaction torque [lbf*in]"
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels[1].startswith("77 degF: BECD 209 in*lbf*s/rad, FECD 4.73 lbf*in")
+    # The 77 degF line starts at FECD_25 = N * FT_T = 380 * 1.407e-3 = 0.53466 N*m (paper
+    # section 6), 0.53466 / 0.11298483 = 4.7322 lbf*in; rel 1e-4 covers that rounding.
+    assert ax.get_lines()[2].get_ydata()[0] == pytest.approx(4.7322, rel=1e-4)
+    fig = plot_deployment(prediction, units="us")
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels == [
+        "-40 degF, exact quasi-static",
+        "77 degF, exact quasi-static",
+        "212 degF, exact quasi-static",
+    ]

@@ -14,6 +14,7 @@ import numpy as np
 from ecdsim.atomic import write_with
 from ecdsim.deployment import Prediction
 from ecdsim.methods import SOLVERS
+from ecdsim.units_display import Shown, UnitSystem
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -63,8 +64,10 @@ def _plot_against_time(
     ylabel: str,
     title: str,
     n_points: int,
+    units: UnitSystem = "si",
 ) -> Figure:
     """One line per (method, temperature) of a trajectory field against time."""
+    u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
     times = np.linspace(0.0, time_span(prediction), n_points)
@@ -85,7 +88,8 @@ def _plot_against_time(
                     [],
                     _LINESTYLES.get(name, ":"),
                     color=colors[j],
-                    label=f"{temp:g} degC, {SOLVERS[name].label}: not solved (BECD = 0)",
+                    label=f"{u.text(temp, 'temperature')}, {SOLVERS[name].label}: "
+                    "not solved (BECD = 0)",
                 )
                 continue
             ax.plot(
@@ -93,7 +97,7 @@ def _plot_against_time(
                 values[:, j],
                 _LINESTYLES.get(name, ":"),
                 color=colors[j],
-                label=f"{temp:g} degC, {SOLVERS[name].label}",
+                label=f"{u.text(temp, 'temperature')}, {SOLVERS[name].label}",
             )
     ax.set_xlabel("time since release [s]")
     ax.set_ylabel(ylabel)
@@ -103,26 +107,31 @@ def _plot_against_time(
     return fig
 
 
-def plot_deployment(prediction: Prediction, n_points: int = 400) -> Figure:
+def plot_deployment(
+    prediction: Prediction, n_points: int = 400, units: UnitSystem = "si"
+) -> Figure:
     """Deployed angle against time at each temperature, by each method (paper Fig. 4-6)."""
     return _plot_against_time(
-        prediction, "angle", "deployed angle [deg]", "angle against time", n_points
+        prediction, "angle", "deployed angle [deg]", "angle against time", n_points, units
     )
 
 
-def plot_speed(prediction: Prediction, n_points: int = 400) -> Figure:
+def plot_speed(prediction: Prediction, n_points: int = 400, units: UnitSystem = "si") -> Figure:
     """Input-shaft speed against time at each temperature, by each method."""
     return _plot_against_time(
-        prediction, "speed", "input shaft speed [rad/s]", "speed against time", n_points
+        prediction, "speed", "input shaft speed [rad/s]", "speed against time", n_points, units
     )
 
 
-def plot_torque_speed(prediction: Prediction, n_points: int = 50) -> Figure:
+def plot_torque_speed(
+    prediction: Prediction, n_points: int = 50, units: UnitSystem = "si"
+) -> Figure:
     """The ECD's input torque against speed at each temperature (paper Fig. 8).
 
     Each line is ``T = FECD_T + BECD_T * omega`` (Eq. 5 inverted); the markers show the
     deployment's operating range, from the start to the end speed of the exact solution.
     """
+    u = Shown(units, digits=3)
     fig = _figure()
     ax = fig.add_subplot()
     ecd = prediction.ecd
@@ -138,14 +147,15 @@ def plot_torque_speed(prediction: Prediction, n_points: int = 50) -> Figure:
     for j, temp in enumerate(temps):
         ax.plot(
             speeds,
-            friction[j] + damping[j] * speeds,
+            u.value(friction[j] + damping[j] * speeds, "torque"),
             color=colors[j],
-            label=f"{temp:g} degC: BECD {damping[j]:.3g} N*m*s/rad, FECD {friction[j]:.3g} N*m",
+            label=f"{Shown(units).text(temp, 'temperature')}: "
+            f"BECD {u.text(damping[j], 'damping_rate')}, FECD {u.text(friction[j], 'torque')}",
         )
         ends = np.array([end[j], start[j]])
-        ax.plot(ends, friction[j] + damping[j] * ends, "o", color=colors[j])
+        ax.plot(ends, u.value(friction[j] + damping[j] * ends, "torque"), "o", color=colors[j])
     ax.set_xlabel("input shaft speed [rad/s]")
-    ax.set_ylabel("ECD reaction torque [N*m]")
+    ax.set_ylabel(u.head("ECD reaction torque", "torque"))
     ax.set_title(plot_title(prediction.system.name, "ECD torque against speed"))
     ax.set_xlim(left=0.0)
     ax.set_ylim(bottom=0.0)
@@ -171,10 +181,12 @@ def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> Path:
     return write_with(target, lambda stream: fig.savefig(stream, format=fmt, dpi=dpi))
 
 
-def write_deployment_plots(prediction: Prediction, folder: str | Path) -> list[Path]:
-    """Write the standard plots of a prediction as PNG files into ``folder``."""
+def write_deployment_plots(
+    prediction: Prediction, folder: str | Path, units: UnitSystem = "si"
+) -> list[Path]:
+    """Write the standard plots of a prediction as PNG files into ``folder``, in ``units``."""
     out = Path(folder)
     return [
-        save_figure(plot_deployment(prediction), out / "angle_vs_time.png"),
-        save_figure(plot_torque_speed(prediction), out / "torque_vs_speed.png"),
+        save_figure(plot_deployment(prediction, units=units), out / "angle_vs_time.png"),
+        save_figure(plot_torque_speed(prediction, units=units), out / "torque_vs_speed.png"),
     ]

@@ -245,3 +245,41 @@ def header(name: str, kind: str, system: UnitSystem) -> str:
     """A table header or axis label: ``"name [unit]"`` ("T [degF]")."""
     unit_label = label(kind, system)
     return f"{name} [{unit_label}]" if unit_label else name
+
+
+@dataclass(frozen=True)
+class Shown:
+    """How one command shows numbers: its unit system and significant digits.
+
+    >>> us = Shown("us")
+    >>> us.head("T", "temperature"), us.num(-39.99999999999997, "temperature")
+    ('T [degF]', '-40')
+    >>> us.text(3.73, "torque")
+    '33.01 lbf*in'
+    """
+
+    system: UnitSystem = DEFAULT_SYSTEM
+    digits: int = 4
+
+    def unit(self, kind: str) -> str:
+        """The unit label of ``kind``."""
+        return label(kind, self.system)
+
+    def head(self, name: str, kind: str, sep: str = " ") -> str:
+        """A column header or axis label, ``"name [unit]"``; ``sep`` may be a newline."""
+        unit_label = label(kind, self.system)
+        return f"{name}{sep}[{unit_label}]" if unit_label else name
+
+    def value(self, si_value: float, kind: str) -> float:
+        """The SI value in this system's unit."""
+        return convert(si_value, kind, self.system)
+
+    def num(self, si_value: float | None, kind: str, none: str = "-") -> str:
+        """The SI value converted and formatted, without its unit (a table cell)."""
+        if si_value is None:
+            return none
+        return format_value(convert(si_value, kind, self.system), self.digits)
+
+    def text(self, si_value: float | None, kind: str, none: str = "-") -> str:
+        """The SI value converted and formatted with its unit ("77 degF")."""
+        return format_quantity(si_value, kind, self.system, self.digits, none)

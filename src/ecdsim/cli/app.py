@@ -17,7 +17,15 @@ import typer
 
 from ecdsim._version import __version__
 from ecdsim.cli import display, failon
-from ecdsim.cli.common import USER_ERROR, echo_warnings, fail, load_run, predict_run
+from ecdsim.cli.common import (
+    USER_ERROR,
+    UnitsOpt,
+    echo_warnings,
+    fail,
+    load_run,
+    predict_run,
+    units_option,
+)
 from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, WideOpt
 from ecdsim.cli.fit import fit_app
 from ecdsim.cli.montecarlo import EPILOG as MONTECARLO_EPILOG
@@ -27,6 +35,7 @@ from ecdsim.cli.size import FLUID_EPILOG, SIZE_EPILOG, compare_fluid, size
 
 if TYPE_CHECKING:
     from ecdsim.deployment import Prediction
+    from ecdsim.units_display import UnitSystem
 
 __all__ = ["USER_ERROR", "app", "main"]
 
@@ -77,22 +86,24 @@ def _write_timeseries(prediction: Prediction, path: Path, as_json: bool) -> None
     typer.echo(f"wrote {path}", err=as_json)
 
 
-def _render(prediction: Prediction, as_json: bool, plot_dir: Path | None) -> None:
+def _render(
+    prediction: Prediction, as_json: bool, plot_dir: Path | None, units: UnitSystem = "si"
+) -> None:
     from ecdsim.cli import render
 
     if plot_dir is not None:
         from ecdsim.plotting import write_deployment_plots
 
         try:
-            written = write_deployment_plots(prediction, plot_dir)
+            written = write_deployment_plots(prediction, plot_dir, units)
         except OSError as exc:
             fail([f"--plot {plot_dir}: cannot write plots ({exc.strerror or exc})"])
     else:
         written = []
     if as_json:
-        typer.echo(render.to_json(prediction))
+        typer.echo(render.to_json(prediction, units))
     else:
-        render.print_tables(prediction)
+        render.print_tables(prediction, units)
     echo_warnings(prediction)
     for path in written:
         typer.echo(f"wrote {path}", err=as_json)
@@ -149,6 +160,7 @@ def deploy(
     method: MethodOpt = None,
     timeseries: TimeseriesOpt = None,
     fail_on: failon.FailOnOpt = None,
+    units: UnitsOpt = None,
     wide: WideOpt = False,
     plain: PlainOpt = False,
 ) -> None:
@@ -156,11 +168,12 @@ def deploy(
     display.configure(wide=wide, plain=plain)
     conditions = failon.parse(fail_on)
     loaded = load_run(config, temperature, method)
+    system = units_option(units, loaded)
     failon.require_requirements(conditions, loaded)
     prediction = predict_run(loaded)
     if timeseries is not None:
         _write_timeseries(prediction, timeseries, as_json)
-    _render(prediction, as_json, plot)
+    _render(prediction, as_json, plot, system)
     reasons = failon.stall_reasons(prediction) if "stall" in conditions else []
     if "requirements" in conditions:
         reasons += failon.requirement_reasons(loaded)

@@ -9,13 +9,14 @@ inside the functions, so that ``ecdsim --help`` stays fast.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, NoReturn
+from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 
 if TYPE_CHECKING:
     from ecdsim.config import Config
     from ecdsim.deployment import Prediction
+    from ecdsim.units_display import UnitSystem
 
 USER_ERROR = 2
 
@@ -25,6 +26,34 @@ def fail(problems: list[str]) -> NoReturn:
     for problem in problems:
         typer.echo(f"error: {problem}", err=True)
     raise typer.Exit(USER_ERROR)
+
+
+UnitsOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--units",
+        help="Units of tables, plots and report: si or us (degF, lbf*in, in*lbf*s/rad, "
+        "lbm*in^2). Default: the config's \\[output] units, else si. JSON stays SI.",
+        metavar="si|us",
+    ),
+]
+
+
+def units_option(option: str | None, config: Config | None = None) -> UnitSystem:
+    """The display unit system: ``--units`` if given, else the config's ``[output] units``.
+
+    A value other than si or us exits with code 2 and one line naming ``--units``.
+    """
+    from ecdsim.units_display import UnitSystemError, check_system
+
+    try:
+        if option is not None:
+            return check_system(option, "--units")
+        if config is not None:
+            return check_system(config.spec.output.units, "output.units")
+    except UnitSystemError as exc:
+        fail([str(exc)])
+    return "si"
 
 
 def parse_temperature(text: str) -> float:

@@ -10,7 +10,7 @@ from ecdsim.cli import display
 from ecdsim.deployment import Prediction
 from ecdsim.formatting import format_number
 from ecdsim.methods import SOLVERS
-from ecdsim.units_display import UnitSystem
+from ecdsim.units_display import Shown, UnitSystem
 
 
 def to_json(prediction: Prediction, units: UnitSystem = "si") -> str:
@@ -24,42 +24,43 @@ def _fmt(value: float | None, digits: int = 4) -> str:
     return format_number(value, digits, signed_inf=False)
 
 
-def print_tables(prediction: Prediction) -> None:
-    """Print the component table and the deployment table on stdout."""
+def print_tables(prediction: Prediction, units: UnitSystem = "si") -> None:
+    """Print the component table and the deployment table on stdout, in ``units``."""
     from rich.markup import escape
     from rich.table import Table
 
+    u = Shown(units)
     document = prediction.to_dict()
     cases: list[dict[str, Any]] = document["cases"]
     console = display.make_console()
 
     ecd = Table(title="ECD referred to the input shaft (Eq. 1-4)", title_justify="left")
     for header in (
-        "T [degC]",
-        "BD_T [N*m*s/rad]",
-        "BT_T [N*m*s/rad]",
-        "FT_T [N*m]",
-        "BECD [N*m*s/rad]",
-        "FECD [N*m]",
-        "FS [N*m]",
+        u.head("T", "temperature"),
+        u.head("BD_T", "damping_rate"),
+        u.head("BT_T", "damping_rate"),
+        u.head("FT_T", "torque"),
+        u.head("BECD", "damping_rate"),
+        u.head("FECD", "torque"),
+        u.head("FS", "torque"),
     ):
         ecd.add_column(escape(header), justify="right")
     for case in cases:
         c = case["components"]
         ecd.add_row(
-            _fmt(case["temperature_C"]),
-            _fmt(c["damper_damping_rate_Nms_per_rad"]),
-            _fmt(c["high_speed_total_damping_rate_Nms_per_rad"]),
-            _fmt(c["high_speed_total_friction_Nm"]),
-            _fmt(case["damping_rate_Nms_per_rad"]),
-            _fmt(case["friction_Nm"]),
-            _fmt(case["system_friction_Nm"]),
+            u.num(case["temperature_C"], "temperature"),
+            u.num(c["damper_damping_rate_Nms_per_rad"], "damping_rate"),
+            u.num(c["high_speed_total_damping_rate_Nms_per_rad"], "damping_rate"),
+            u.num(c["high_speed_total_friction_Nm"], "torque"),
+            u.num(case["damping_rate_Nms_per_rad"], "damping_rate"),
+            u.num(case["friction_Nm"], "torque"),
+            u.num(case["system_friction_Nm"], "torque"),
         )
     # The summary (BECD, FECD, FS) stays; the components behind it go first at 80 columns.
     display.show(console, ecd, drop=("BD_T", "BT_T", "FT_T"))
 
     table = Table(title="Deployment", title_justify="left")
-    table.add_column(escape("T [degC]"), justify="right")
+    table.add_column(escape(u.head("T", "temperature")), justify="right")
     methods = document["methods"]
     for name in methods:
         table.add_column(escape(f"{name}\nt [s]"), justify="right")
@@ -71,7 +72,7 @@ def print_tables(prediction: Prediction) -> None:
     table.add_column("stall", justify="left", no_wrap=False)
     reference = "exact" if "exact" in methods else methods[0]
     for case in cases:
-        row = [_fmt(case["temperature_C"])]
+        row = [u.num(case["temperature_C"], "temperature")]
         row += [
             _fmt(case[m]["deployment_time_s"] if not case[m]["stalled"] else math.inf)
             for m in methods
@@ -91,7 +92,7 @@ def print_tables(prediction: Prediction) -> None:
     labels = ", ".join(f"{m} = {SOLVERS[m].label}" for m in methods)
     display.note(console, f"methods: {labels}; speeds from the {reference} method")
     if "dynamic" in methods:
-        print_dynamic_table(console, cases)
+        print_dynamic_table(console, cases, u)
 
 
 def _stop_text(outcome: dict[str, Any], method: str) -> str | None:
@@ -132,7 +133,7 @@ _OUTCOMES = {
 }
 
 
-def print_dynamic_table(console: Any, cases: list[dict[str, Any]]) -> None:
+def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | None = None) -> None:
     """The dynamic method's own results: latch speed and energy, impacts, sticking, heat.
 
     Columns that would only repeat a constant (no impacts, no lost motion, no heating)
@@ -141,6 +142,7 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]]) -> None:
     from rich.markup import escape
     from rich.table import Table
 
+    u = u or Shown()
     dyn = [case["dynamic"] for case in cases]
     temps = [case["temperature_C"] for case in cases]
     impacts = any(d["impacts"] > 0 or d["rebound_speed_rad_s"] != 0.0 for d in dyn)
@@ -148,23 +150,28 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]]) -> None:
     engage = any((d["engagement_time_s"] or 0.0) > 0.0 for d in dyn)
     heated = any(d["max_damper_temperature_C"] != t for d, t in zip(dyn, temps, strict=True))
     table = Table(title="Dynamic method", title_justify="left")
-    headers = ["T\n[degC]", "outcome", "latch speed\n[rad/s]", "KE at latch\n[J]"]
+    headers = [
+        u.head("T", "temperature", "\n"),
+        "outcome",
+        "latch speed\n[rad/s]",
+        u.head("KE at latch", "energy", "\n"),
+    ]
     headers += ["impacts", "rebound\n[rad/s]"] if impacts else []
     headers += ["stuck at\n[rad]", "stuck at\n[s]"] if stuck else []
     headers += ["engaged\nat [s]"] if engage else []
-    headers += ["peak damper\nT [degC]"] if heated else []
+    headers += [u.head("peak damper\nT", "temperature")] if heated else []
     for header in headers:
         left = header == "outcome"
         table.add_column(escape(header), justify="left" if left else "right", no_wrap=not left)
     for d, t in zip(dyn, temps, strict=True):
         arrived = d["deployment_time_s"] is not None
         row = [
-            _fmt(t),
+            u.num(t, "temperature"),
             "cannot start"
             if d["stuck"] and d["stuck_angle_rad"] == 0.0
             else _OUTCOMES.get(d["status"], d["status"]),
             _fmt(d["end_speed_rad_s"]) if arrived else "-",
-            _fmt(d["end_kinetic_energy_J"]) if arrived else "-",
+            u.num(d["end_kinetic_energy_J"], "energy") if arrived else "-",
         ]
         if impacts:
             row += [str(d["impacts"]), _fmt(d["rebound_speed_rad_s"])]
@@ -177,7 +184,7 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]]) -> None:
         if engage:
             row.append(_fmt(d["engagement_time_s"]))
         if heated:
-            row.append(_fmt(d["max_damper_temperature_C"]))
+            row.append(u.num(d["max_damper_temperature_C"], "temperature"))
         table.add_row(*row)
     display.show(console, table, drop=("rebound", "engaged", "impacts"), wrap=("outcome",))
     said = ["latch: speed and kinetic energy on arrival at the end of travel"]
