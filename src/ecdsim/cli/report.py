@@ -13,6 +13,7 @@ from typing import Annotated
 
 import typer
 
+from ecdsim.cli import failon
 from ecdsim.cli.common import echo_warnings, fail, load_run, predict_run
 from ecdsim.cli.montecarlo import INTERRUPTED
 
@@ -24,7 +25,10 @@ APP_EPILOG = (
 
 
 def report(
-    config: Annotated[Path, typer.Argument(help="TOML configuration file (see docs/config.md).")],
+    config: Annotated[
+        Path,
+        typer.Argument(help="TOML configuration file (see docs/config.md).", metavar="CONFIG"),
+    ],
     output: Annotated[
         Path, typer.Option("--output", "-o", help="HTML file to write.", metavar="FILE.html")
     ] = Path("report.html"),
@@ -38,18 +42,24 @@ def report(
             "--temperature",
             "-T",
             help="Analysis temperature, repeatable; overrides \\[analysis] (bare numbers: degC).",
+            metavar="TEMP",
         ),
     ] = None,
     method: Annotated[
         list[str] | None,
-        typer.Option("--method", "-m", help="Solver, repeatable; overrides \\[analysis]."),
+        typer.Option(
+            "--method", "-m", help="Solver, repeatable; overrides \\[analysis].", metavar="METHOD"
+        ),
     ] = None,
+    fail_on: failon.FailOnOpt = None,
 ) -> None:
     """Write a self-contained HTML report: inputs, components, deployment, plots, warnings."""
     from ecdsim.report import write_report
     from ecdsim.report.pdf import PdfUnavailable, html_to_pdf
 
+    conditions = failon.parse(fail_on)
     loaded = load_run(config, temperature, method)
+    failon.require_requirements(conditions, loaded)
     prediction = predict_run(loaded)
     text = config.read_text(encoding="utf-8")
     try:
@@ -73,6 +83,10 @@ def report(
         except OSError as exc:
             fail([f"--pdf {target}: cannot write ({exc.strerror or exc})"])
         typer.echo(f"wrote {target}")
+    reasons = failon.stall_reasons(prediction) if "stall" in conditions else []
+    if "requirements" in conditions:
+        reasons += failon.requirement_reasons(loaded)
+    failon.finish(conditions, reasons)
 
 
 def explore(
