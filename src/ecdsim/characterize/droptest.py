@@ -73,7 +73,7 @@ from ecdsim.characterize.linefit import (
     fit_line,
     summarise_line,
 )
-from ecdsim.characterize.stats import Estimate, finite_or_none, linearised
+from ecdsim.characterize.stats import Estimate, linearised
 from ecdsim.characterize.templaws import (
     MISFIT_LEVEL,
     LawFit,
@@ -81,6 +81,7 @@ from ecdsim.characterize.templaws import (
     fit_temperature_laws,
 )
 from ecdsim.config.units import ANGLE, TEMPERATURE, TORQUE
+from ecdsim.jsonrows import RowTable
 
 STANDARD_GRAVITY = 9.80665  # m/s**2, the conventional value (3rd CGPM, 1901)
 # A start-up correction above this fraction of a speed makes the result lean on the
@@ -320,27 +321,32 @@ class TemperatureFit:
         """True where the start-up transient was corrected for."""
         return bool(np.any(self.inertia > 0.0))
 
-    def to_dict(self) -> dict[str, Any]:
-        """One entry of the ``temperatures`` list of the JSON document."""
+    def to_dict(self, *, points_as_table: bool = False) -> dict[str, Any]:
+        """One entry of the ``temperatures`` list of the JSON document.
+
+        ``points_as_table`` keeps the points as columns (a :class:`RowTable` for
+        :func:`ecdsim.jsonrows.write_json`, which streams them) instead of a list of
+        dicts: the form for large files.
+        """
         line = self.line
         curvature = line.curvature
         # Whole columns first (the correction is a property computed over all points:
         # once per point made this quadratic in the number of drops).
-        columns = {
-            "row": self.rows.tolist(),
-            "torque_Nm": self.torque.tolist(),
-            "speed_rad_s": self.speed.tolist(),
-            "corrected_speed_rad_s": self.corrected.tolist(),
-            "relative_speed_correction": self.correction.tolist(),
-            "inertia_kg_m2": np.broadcast_to(self.inertia, self.rows.shape).tolist(),
-            "residual_Nm": (self.torque - line.fitted).tolist(),
-            "studentized_residual": [finite_or_none(v) for v in line.studentized.tolist()],
-            "outlier": np.asarray(line.outliers, dtype=bool).tolist(),
-        }
-        points = [
-            dict(zip(columns, values, strict=True))
-            for values in zip(*columns.values(), strict=True)
-        ]
+        studentized = np.asarray(line.studentized, dtype=float)
+        points = RowTable(
+            {
+                "row": self.rows,
+                "torque_Nm": self.torque,
+                "speed_rad_s": self.speed,
+                "corrected_speed_rad_s": self.corrected,
+                "relative_speed_correction": self.correction,
+                "inertia_kg_m2": np.broadcast_to(self.inertia, self.rows.shape),
+                "residual_Nm": self.torque - line.fitted,
+                # null where undefined (a point with leverage 1), as finite_or_none does
+                "studentized_residual": np.where(np.isfinite(studentized), studentized, np.nan),
+                "outlier": np.asarray(line.outliers, dtype=bool),
+            }
+        )
         return {
             "temperature_C": self.temperature,
             "n_points": line.n_points,
@@ -361,7 +367,7 @@ class TemperatureFit:
                 "applied": self.corrected_for_inertia,
                 "max_relative_speed_correction": float(np.max(np.abs(self.correction))),
             },
-            "points": points,
+            "points": points if points_as_table else points.records(),
         }
 
 
@@ -436,8 +442,11 @@ class DropTestResult:
     warnings: tuple[FitWarning, ...] = field(default=())
     noise: str = "torque"
 
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON document of ``ecdsim fit drop-test --json`` (docs/characterize.md)."""
+    def to_dict(self, *, points_as_table: bool = False) -> dict[str, Any]:
+        """The JSON document of ``ecdsim fit drop-test --json`` (docs/characterize.md).
+
+        ``points_as_table``: see :meth:`TemperatureFit.to_dict`.
+        """
         return {
             "ecdsim_version": __version__,
             "kind": "drop_test",
@@ -446,7 +455,7 @@ class DropTestResult:
             "gravity_m_per_s2": self.gravity,
             "reference_temperature_C": self.reference_temperature,
             "noise_model": self.noise,
-            "temperatures": [fit.to_dict() for fit in self.fits],
+            "temperatures": [fit.to_dict(points_as_table=points_as_table) for fit in self.fits],
             "failed_temperatures": [f.to_dict() for f in self.failed],
             "temperature_laws": self.laws.to_dict() if self.laws else None,
             "bad_rows": [b.to_dict() for b in self.table.bad_rows],

@@ -58,6 +58,7 @@ from ecdsim.characterize.stats import (
 from ecdsim.characterize.templaws import TemperatureLaws, fit_temperature_laws
 from ecdsim.config import Config
 from ecdsim.config.units import ANGLE, TEMPERATURE
+from ecdsim.jsonrows import RowTable
 from ecdsim.model import LinearSpring, Load
 from ecdsim.solvers import EXACT, QuasiStaticProblem
 
@@ -156,9 +157,19 @@ class TraceCurve:
         """The fitted model's deployment time [s]; inf where it stalls."""
         return float(np.reshape(EXACT.solve(self.problem).deployment_time, -1)[0])
 
-    def to_dict(self) -> dict[str, Any]:
-        """Residual summary and points for JSON."""
+    def to_dict(self, *, points_as_table: bool = False) -> dict[str, Any]:
+        """Residual summary and points for JSON (``points_as_table``: as columns, a
+        :class:`~ecdsim.jsonrows.RowTable` that :func:`ecdsim.jsonrows.write_json` streams).
+        """
         e = self.residuals
+        points = RowTable(
+            {
+                "row": self.trace.rows,
+                "time_s": self.trace.time,
+                "angle_rad": self.trace.angle,
+                "residual_rad": e,
+            }
+        )
         return {
             "temperature_C": self.trace.temperature,
             "n_points": int(self.trace.time.size),
@@ -166,12 +177,7 @@ class TraceCurve:
             "rms_residual_rad": float(np.sqrt(np.mean(e * e))),
             "durbin_watson": self.durbin_watson,
             "fitted_deployment_time_s": finite_or_none(self.deployment_time),
-            "points": [
-                {"row": int(r), "time_s": float(t), "angle_rad": float(a), "residual_rad": float(d)}
-                for r, t, a, d in zip(
-                    self.trace.rows, self.trace.time, self.trace.angle, e, strict=True
-                )
-            ],
+            "points": points if points_as_table else points.records(),
         }
 
 
@@ -201,7 +207,7 @@ class TraceFit:
         """T [degC]."""
         return self.curve.trace.temperature
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self, *, points_as_table: bool = False) -> dict[str, Any]:
         """One entry of the ``temperatures`` list of the JSON document."""
         out = {
             "temperature_C": self.temperature,
@@ -214,7 +220,7 @@ class TraceFit:
             "residual_std_rad": self.statistics.residual_std,
             "dof": self.statistics.dof,
         }
-        out.update(self.curve.to_dict())
+        out.update(self.curve.to_dict(points_as_table=points_as_table))
         return out
 
 
@@ -286,8 +292,11 @@ class TraceResult:
             return self.spring.curves
         return tuple(f.curve for f in self.fits)
 
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON document of ``ecdsim fit trace --json`` (docs/characterize.md)."""
+    def to_dict(self, *, points_as_table: bool = False) -> dict[str, Any]:
+        """The JSON document of ``ecdsim fit trace --json`` (docs/characterize.md).
+
+        ``points_as_table``: points as streamable columns (:meth:`TraceCurve.to_dict`).
+        """
         return {
             "ecdsim_version": __version__,
             "kind": "trace",
@@ -298,9 +307,9 @@ class TraceResult:
             "config_sha256": self.config.sha256,
             "reference_temperature_C": self.reference_temperature,
             "temperatures": (
-                [f.to_dict() for f in self.fits]
+                [f.to_dict(points_as_table=points_as_table) for f in self.fits]
                 if self.spring is None
-                else [c.to_dict() for c in self.spring.curves]
+                else [c.to_dict(points_as_table=points_as_table) for c in self.spring.curves]
             ),
             "spring": self.spring.to_dict() if self.spring else None,
             "failed_temperatures": [f.to_dict() for f in self.failed],

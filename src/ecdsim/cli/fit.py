@@ -90,11 +90,23 @@ def _load_config(path: Path) -> Config:
         fail([f"--config: {line}" for line in str(exc).splitlines()])
 
 
+# Rows with problems listed one per line on stderr before the rest are summarised.
+MAX_BAD_ROW_LINES = 20
+
+
 def _report(
     bad_rows: list[str], failed: tuple[FailedTemperature, ...], warnings: list[FitWarning]
 ) -> None:
-    for line in bad_rows:
+    for line in bad_rows[:MAX_BAD_ROW_LINES]:
         typer.echo(f"warning: {line}", err=True)
+    if len(bad_rows) > MAX_BAD_ROW_LINES:
+        # A large log can have thousands; all are in the --json document's bad_rows.
+        hidden = len(bad_rows) - MAX_BAD_ROW_LINES
+        typer.echo(
+            f"warning: {hidden} more rows with problems not shown (all are listed under "
+            "bad_rows with --json)",
+            err=True,
+        )
     for item in failed:
         typer.echo(f"error: not fitted: {item.message()}", err=True)
     for warning in warnings:
@@ -156,9 +168,11 @@ def _write_outputs(
 
 
 def _emit_json(document: dict[str, Any]) -> None:
-    import json
+    # Points stay columns and are streamed: a million-row log writes in seconds, in
+    # bounded memory (ecdsim.jsonrows).
+    from ecdsim.jsonrows import write_json
 
-    typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
+    write_json(document, lambda text: typer.echo(text, nl=False))
 
 
 def _finish(
@@ -175,7 +189,7 @@ def _finish(
     """Write the -o file and plots, render the result, then warnings and written paths."""
     written, plots = _write_outputs(text, output, plot, plotter)
     if as_json:
-        document = result.to_dict()
+        document = result.to_dict(points_as_table=True)
         document["warnings"] = [w.to_dict() for w in warnings]
         document["parameter_file"] = written
         document["plots"] = plots
