@@ -381,11 +381,15 @@ def test_cli_json_summary_progress_and_plots(tmp_path: Path, saved_figures: Save
     assert "ETA" in result.stderr
     for name in ("time_histogram", "time_cdf", "end_speed_histogram", "tornado"):
         assert (out / "plots" / f"{name}.png").read_bytes()[:4] == b"\x89PNG"
-    title = "CDA Cc-16 test deployment (paper section 6): 3,000 samples, exact method"
-    for name, quantity in (
-        ("time_histogram.png", "deployment time [s]"),
-        ("time_cdf.png", "deployment time [s]"),
-        ("end_speed_histogram.png", "end (latch) speed [rad/s]"),
+    system = "CDA Cc-16 test deployment (paper section 6)"
+    time_title = f"{system}\ndeployment time, 3,000 samples, exact method"
+    speed_title = (
+        f"{system}\nend (latch) speed of the samples that arrive, 3,000 samples, exact method"
+    )
+    for name, title, quantity in (
+        ("time_histogram.png", time_title, "deployment time [s]"),
+        ("time_cdf.png", time_title, "deployment time [s]"),
+        ("end_speed_histogram.png", speed_title, "end (latch) speed [rad/s]"),
     ):
         (axes,) = saved_figures.axes(name)
         assert (axes.get_title(), axes.get_xlabel()) == (title, quantity)
@@ -396,7 +400,7 @@ def test_cli_json_summary_progress_and_plots(tmp_path: Path, saved_figures: Save
     (histogram,) = saved_figures.axes("time_histogram.png")
     assert histogram.get_ylabel() == "probability density [1/s]"
     (speeds,) = saved_figures.axes("end_speed_histogram.png")
-    assert speeds.get_ylabel() == "probability density [1/(rad/s)]"
+    assert speeds.get_ylabel() == "probability density [s/rad]"
     # The empirical CDF: level (r + 1)/n at the r-th smallest time, times by hand.
     step = cdf.get_lines()[0]
     levels = np.asarray(step.get_ydata(), float)
@@ -406,7 +410,7 @@ def test_cli_json_summary_progress_and_plots(tmp_path: Path, saved_figures: Save
     assert levels[-1] == 1.0
     (tornado,) = saved_figures.axes("tornado.png")
     assert tornado.get_xlabel() == "standardised regression coefficient of deployment time [-]"
-    assert tornado.get_title().endswith("sensitivity (exact method)")
+    assert tornado.get_title().endswith("sensitivity of deployment time (exact method)")
     from matplotlib.patches import Rectangle
 
     rectangles = [patch for patch in tornado.patches if isinstance(patch, Rectangle)]

@@ -8,6 +8,7 @@ disk, prints the command that resumes, and exits with code 130.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import shlex
 from pathlib import Path
@@ -15,7 +16,9 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from ecdsim.cli import display
 from ecdsim.cli.common import fail, load_run
+from ecdsim.cli.display import PlainOpt, WideOpt
 from ecdsim.formatting import format_number
 
 if TYPE_CHECKING:
@@ -35,13 +38,18 @@ EPILOG = (
 
 def montecarlo(
     config: Annotated[
-        Path, typer.Argument(help="TOML configuration with a \\[tolerances] section.")
+        Path,
+        typer.Argument(help="TOML configuration with a \\[tolerances] section.", metavar="CONFIG"),
     ],
     samples: Annotated[
-        int, typer.Option("--samples", "-n", help="Number of samples (parameter sets).")
+        int,
+        typer.Option("--samples", "-n", help="Number of samples (parameter sets).", metavar="N"),
     ],
     method: Annotated[
-        str, typer.Option("--method", "-m", help="Solver: exact, dynamic (if installed), paper.")
+        str,
+        typer.Option(
+            "--method", "-m", help="Solver: exact, dynamic (if installed), paper.", metavar="METHOD"
+        ),
     ] = "exact",
     workers: Annotated[
         int | None,
@@ -49,6 +57,7 @@ def montecarlo(
             "--workers",
             help="Dask LocalCluster workers; 0 runs in this process. Default: in process, "
             "or one worker per CPU for 2,000,000 samples and more on 2 or more CPUs.",
+            metavar="N",
         ),
     ] = None,
     scheduler: Annotated[
@@ -64,19 +73,32 @@ def montecarlo(
     resume: Annotated[
         bool, typer.Option("--resume", help="Continue an interrupted run in --out.")
     ] = False,
+    overwrite: Annotated[
+        bool,
+        typer.Option(
+            "--overwrite",
+            help="Replace the run already in --out (its manifest, chunks, summary and plots; "
+            "other files are kept).",
+        ),
+    ] = False,
     as_json: Annotated[
         bool, typer.Option("--json", help="Print the summary as JSON on stdout.")
     ] = False,
     seed: Annotated[
-        int | None, typer.Option("--seed", help="Seed; overrides \\[tolerances] seed.")
+        int | None,
+        typer.Option("--seed", help="Seed; overrides \\[tolerances] seed.", metavar="SEED"),
     ] = None,
     sampling: Annotated[
         str | None,
-        typer.Option("--sampling", help="random, lhs or sobol; overrides \\[tolerances]."),
+        typer.Option(
+            "--sampling", help="random, lhs or sobol; overrides \\[tolerances].", metavar="SCHEME"
+        ),
     ] = None,
     chunk_size: Annotated[
         int | None,
-        typer.Option("--chunk-size", help="Samples per chunk; overrides \\[tolerances]."),
+        typer.Option(
+            "--chunk-size", help="Samples per chunk; overrides \\[tolerances].", metavar="N"
+        ),
     ] = None,
     temperature: Annotated[
         list[str] | None,
@@ -84,6 +106,7 @@ def montecarlo(
             "--temperature",
             "-T",
             help="Temperature, repeatable; overrides \\[analysis] (bare numbers are degC).",
+            metavar="TEMP",
         ),
     ] = None,
     plot: Annotated[
@@ -92,8 +115,11 @@ def montecarlo(
     show_progress: Annotated[
         bool, typer.Option("--progress/--no-progress", help="Show the progress bar.")
     ] = True,
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
 ) -> None:
     """Monte Carlo tolerance study: percentiles, stall probability, sensitivities."""
+    display.configure(wide=wide, plain=plain)
     from ecdsim.config import ConfigError
     from ecdsim.deployment import ModelDomainError
     from ecdsim.montecarlo import (
@@ -107,6 +133,9 @@ def montecarlo(
 
     loaded = load_run(config, temperature, None)
     folder = out if out is not None else Path(f"{config.stem}-montecarlo")
+    if resume and overwrite:
+        fail(["--resume continues the run in --out and --overwrite replaces it: give one"])
+    _check_folder(folder, resume, overwrite)
     try:
         plan = build_plan(
             loaded,
@@ -124,6 +153,10 @@ def montecarlo(
     except RunError as exc:
         fail(exc.problems)
     console = _console()
+    if overwrite:
+        removed = _clear_run(folder)
+        if removed:
+            console.print(f"--overwrite: removed the earlier run's {removed} file(s) in {folder}")
     console.print(
         f"{plan.samples:,} samples x {len(plan.temperatures)} temperatures, {plan.method} "
         f"method, {plan.sampling} sampling, seed {plan.seed}, {plan.chunks:,} chunk(s) of "
@@ -168,6 +201,46 @@ def montecarlo(
         typer.echo(json.dumps(summary, indent=2, sort_keys=True, allow_nan=False))
     else:
         _print_tables(summary)
+
+
+def _check_folder(folder: Path, resume: bool, overwrite: bool) -> None:
+    """Exit 2 with one line naming both ways on when ``folder`` holds a run already."""
+    from ecdsim.montecarlo.store import MANIFEST
+
+    if (folder / MANIFEST).exists() and not (resume or overwrite):
+        fail(
+            [
+                f"--out {folder}: this folder already holds a Monte Carlo run; add --resume "
+                "to continue it, --overwrite to replace it, or choose another --out"
+            ]
+        )
+
+
+def _clear_run(folder: Path) -> int:
+    """Delete what a run writes into ``folder`` (nothing else); the number of files.
+
+    The manifest goes first, so that a run stopped half-way through the deletion leaves
+    a folder without a run rather than one with a run missing its chunks.
+    """
+    from ecdsim.montecarlo.plots import PLOT_NAMES
+    from ecdsim.montecarlo.store import CHUNKS, MANIFEST, SUMMARY
+
+    targets = [folder / MANIFEST, folder / SUMMARY]
+    targets += sorted(folder.glob(f".{MANIFEST}.*.tmp")) + sorted(folder.glob(f".{SUMMARY}.*.tmp"))
+    chunks, plots = folder / CHUNKS, folder / "plots"
+    if chunks.is_dir():
+        targets += sorted(chunks.glob("chunk-*.parquet")) + sorted(chunks.glob(".chunk-*.tmp"))
+    if plots.is_dir():
+        targets += [plots / f"{name}.png" for name in PLOT_NAMES]
+    removed = 0
+    for path in targets:
+        if path.is_file():
+            path.unlink()
+            removed += 1
+    for empty in (chunks, plots):
+        with contextlib.suppress(OSError):  # absent, or holding the user's own files
+            empty.rmdir()
+    return removed
 
 
 def _console() -> Console:
@@ -281,11 +354,10 @@ def _fmt(value: float | None, digits: int = 4) -> str:
 
 
 def _print_tables(summary: dict[str, Any]) -> None:
-    from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
-    console = Console(soft_wrap=False, width=max(120, Console().width))
+    console = display.make_console()
     cases = summary["cases"]
     title = (
         f"{summary['system']}: {summary['samples']:,} samples, {summary['method']} method, "
@@ -311,7 +383,7 @@ def _print_tables(summary: dict[str, Any]) -> None:
             _fmt(std) + marker,
             f"{100 * s['probability']:.3g} [{100 * low:.2g}, {100 * high:.2g}]",
         )
-    console.print(times)
+    display.show(console, times, drop=("P5", "P95", "std", "mean"), wrap=("stall",))
     if any(c["deployment_time_s"]["mean"] is None for c in cases):
         console.print(
             escape(
@@ -338,7 +410,7 @@ def _print_tables(summary: dict[str, Any]) -> None:
             _fmt(e["mean"]),
             _fmt(e["std"]),
         )
-    console.print(speeds)
+    display.show(console, speeds, drop=("std", "mean"))
 
     if all("min_torque_margin" in case for case in cases):
         margins = Table(
@@ -360,7 +432,7 @@ def _print_tables(summary: dict[str, Any]) -> None:
                 _fmt(m["mean"] if m["mean"] is not None else m["mean_arriving"]),
                 "-" if below is None else f"{100 * below:.3g}",
             )
-        console.print(margins)
+        display.show(console, margins, drop=("P5", "mean"))
 
     sensitivity = Table(
         title="Sensitivity of deployment time: SRC / first-order index (docs/montecarlo.md)",
@@ -380,42 +452,10 @@ def _print_tables(summary: dict[str, Any]) -> None:
             first = "-" if row["first_order"] is None else f"{row['first_order']:.3f}"
             cells.append(f"{src} / {first}")
         sensitivity.add_row(key, *cells)
-    console.print(sensitivity)
+    display.show(console, sensitivity, wrap=("quantity",))
 
-    repeat = Table(title="Repeatability (paper section 6: 500 deployments)", title_justify="left")
-    for header in (
-        "T [degC]",
-        "within [s]",
-        "runs",
-        "P(one within) [%]",
-        "P(all within) [%]",
-        "typical max dev. [s]",
-        "meets",
-    ):
-        repeat.add_column(escape(header), justify="right")
-    for case in cases:
-        r = case["repeatability"]
-        if "fraction_within" not in r:
-            repeat.add_row(
-                f"{case['temperature_C']:g}",
-                _fmt(r["within_s"]),
-                str(r["runs"]),
-                "-",
-                "-",
-                "-",
-                "no (nominal stalls)",
-            )
-            continue
-        repeat.add_row(
-            f"{case['temperature_C']:g}",
-            _fmt(r["within_s"]),
-            str(r["runs"]),
-            f"{100 * r['fraction_within']:.4g}",
-            f"{100 * r['probability_all_within']:.3g}",
-            _fmt(r["typical_max_deviation_s"]),
-            "yes" if r["meets_stated_spread"] else "no",
-        )
-    console.print(repeat)
+    if cases:
+        _print_repeatability(console, cases)
     for warning in summary["warnings"]:
         console.print(
             escape(
@@ -426,3 +466,115 @@ def _print_tables(summary: dict[str, Any]) -> None:
         )
     for note in summary["notes"]:
         console.print(escape(f"note: {note}"), style="dim")
+
+
+def _chance(probability: float, possible: bool) -> str:
+    """A probability in percent, in plain terms: tiny or near-certain values as bounds.
+
+    ``possible`` is False when no sample at all stayed within (the chance is then 0, not
+    merely small).
+    """
+    if not possible or probability <= 0.0:
+        return "0" if not possible else "< 0.01"
+    if probability >= 1.0:
+        return "100"
+    if probability < 1e-4:
+        return "< 0.01"
+    if probability > 1.0 - 1e-4:
+        return "> 99.99"
+    return f"{100 * probability:.3g}"
+
+
+def _print_repeatability(console: Console, cases: list[dict[str, Any]]) -> None:
+    """The repeated-deployment table and what it means, in words (docs/montecarlo.md)."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    first = cases[0]["repeatability"]
+    runs, within, required = first["runs"], first["within_s"], first.get("required_std_s")
+    window = f"+-{_fmt(within)} s"
+    table = Table(
+        title=escape(f"Repeatability: {runs} deployments of one unit, each within {window}"),
+        title_justify="left",
+    )
+    headers = (
+        "T [degC]",
+        "nominal [s]",
+        "spread [s]",
+        "one within [%]",
+        f"all {runs} within [%]",
+        f"worst of {runs} [s]",
+        "as paper",
+    )
+    for header in headers:
+        table.add_column(escape(header), justify="right")
+    spreads: list[tuple[float, float]] = []  # (temperature, spread) of the rows shown
+    bounded = False  # some row shows lower bounds (every sample within)
+    for case in cases:
+        r = case["repeatability"]
+        d = case["deployment_time_s"]
+        spread = d["std"] if d["std"] is not None else d["std_arriving"]
+        marker = "" if d["std"] is not None else "*"
+        if "fraction_within" not in r:
+            table.add_row(f"{case['temperature_C']:g}", "stalls", "-", "-", "-", "-", "no")
+            continue
+        if spread is not None:
+            spreads.append((case["temperature_C"], spread))
+        possible = r["fraction_within"] > 0.0
+        one = _chance(r["fraction_within"], possible)
+        every = _chance(r["probability_all_within"], possible)
+        if r["fraction_within"] >= 1.0:  # every sample within: the lower 95 % bounds
+            one, every = (
+                "> " + (f"{100 * low:.3g}" if low >= 1e-4 else "0")
+                for low in (
+                    r["fraction_within_interval95"][0],
+                    r["probability_all_within_interval95"][0],
+                )
+            )
+            bounded = True
+        table.add_row(
+            f"{case['temperature_C']:g}",
+            _fmt(r["nominal_time_s"]),
+            _fmt(spread) + marker,
+            one,
+            every,
+            _fmt(r["typical_max_deviation_s"]),
+            "yes" if r["meets_stated_spread"] else "no",
+        )
+    console.print(table)
+    lines = [
+        "Each sample is read as one deployment of the same unit: the tolerances should then be "
+        "its run-to-run scatter. 'spread': the standard deviation of one deployment's time "
+        f"(1 sigma); 'one within': the chance that one deployment ends within {window} of the "
+        f"nominal time; 'all {runs} within': the chance that {runs} deployments all do; "
+        f"'worst of {runs}': the largest deviation among {runs}, typically (the median).",
+        "The paper (section 6) deployed one unit over 500 times at each temperature extreme, "
+        "every time within 0.5 s of the original tests ('as paper': the typical worst of "
+        f"{runs} is within {window}).",
+    ]
+    if required is not None:
+        lines.append(
+            f"For that, one unit's spread must be at most {_fmt(required, 3)} s (1 sigma, "
+            "normal scatter centred on the nominal time)."
+        )
+        wide = [(t, x) for t, x in spreads if x > 3.0 * required]
+        if wide:
+            low = min(x for _, x in wide) / required
+            high = max(x for _, x in wide) / required
+            ratio = f"{low:.2g}" if f"{low:.2g}" == f"{high:.2g}" else f"{low:.2g} to {high:.2g}"
+            where = ", ".join(f"{t:g}" for t, _ in wide)
+            lines.append(
+                f"At {where} degC the spread is {ratio} times that: wider than one unit's "
+                "run-to-run scatter usually is. If these are unit-to-unit (manufacturing) "
+                "tolerances, 'no' says that different units differ by more than "
+                f"{window}, not that one unit repeats badly (docs/montecarlo.md)."
+            )
+    if bounded:
+        lines.append(
+            "'> x': every sample was within; x is the lower end of the 95 % interval "
+            "(more samples raise it)."
+        )
+    if any(c["deployment_time_s"]["std"] is None for c in cases):
+        lines.append("* over the samples that arrive (some stall)")
+    for line in lines:
+        console.print(escape(line), style="dim")

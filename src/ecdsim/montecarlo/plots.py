@@ -6,6 +6,7 @@ matplotlib is imported lazily; files are written atomically by
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -21,6 +22,13 @@ if TYPE_CHECKING:
     from ecdsim.montecarlo.run import Plan
 
 CDF_POINTS = 2001
+# The files write_plots writes into OUT/plots (and montecarlo --overwrite removes).
+PLOT_NAMES = ("time_histogram", "time_cdf", "end_speed_histogram", "tornado")
+
+
+# Characters per title line (10 pt on 7.5 in): full-width axes, and the tornado's, which
+# its long input names narrow.
+TITLE_WIDTH, NARROW_TITLE_WIDTH = 80, 60
 
 
 def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
@@ -29,50 +37,81 @@ def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
     return Figure(figsize=(width, height), layout="constrained")
 
 
+def study_title(system: str, what: str, width: int = TITLE_WIDTH) -> str:
+    """A plot title: the system's name, then what is shown, each wrapped to fit the axes.
+
+    >>> print(study_title("A rather long system name", "deployment time: 10 samples"))
+    A rather long system name
+    deployment time: 10 samples
+    """
+    import textwrap
+
+    return "\n".join([*textwrap.wrap(system, width), *textwrap.wrap(what, width)])
+
+
+def bin_count(n: int) -> int:
+    """Histogram bins for ``n`` finite samples: Rice's rule 2 n^(1/3), kept within 10..80.
+
+    >>> [bin_count(n) for n in (100, 20_000, 1_000_000)]
+    [10, 55, 80]
+    """
+    return int(min(80, max(10, math.ceil(2.0 * n ** (1.0 / 3.0)))))
+
+
 def density_label(quantity: str) -> str:
     """The y label of a density of ``quantity``: its unit inverted.
+
+    A quotient unit is turned over (a density of a speed in rad/s is in s/rad).
 
     >>> density_label("deployment time [s]")
     'probability density [1/s]'
     >>> density_label("latch speed [rad/s]")
-    'probability density [1/(rad/s)]'
+    'probability density [s/rad]'
+    >>> density_label("torque [N*m]")
+    'probability density [1/(N*m)]'
     """
     unit = quantity[quantity.rfind("[") + 1 : -1] if quantity.endswith("]") else ""
     if not unit:
         return "probability density [1/unit of x]"
-    return (
-        f"probability density [1/({unit})]"
-        if "/" in unit or "*" in unit
-        else (f"probability density [1/{unit}]")
-    )
+    if unit.count("/") == 1 and "*" not in unit and "(" not in unit:
+        numerator, denominator = unit.split("/")
+        inverted = denominator if numerator == "1" else f"{denominator}/{numerator}"
+        return f"probability density [{inverted}]"
+    return f"probability density [1/({unit})]" if "*" in unit else f"probability density [1/{unit}]"
 
 
 def plot_histogram(
-    samples: Mapping[float, FloatArray], quantity: str, title: str, bins: int = 60
+    samples: Mapping[float, FloatArray], quantity: str, title: str, bins: int | None = None
 ) -> Figure:
     """Histogram of a quantity's finite samples at each temperature [degC].
 
-    The legend gives each temperature's share of non-finite (stalled) samples, which a
-    histogram cannot show.
+    Each temperature has its own bins over its own range (``bins`` of them, or
+    :func:`bin_count` of its finite samples), so that a narrow distribution beside a wide
+    one is resolved too; as densities, the areas stay comparable. The legend gives each
+    temperature's share of non-finite (stalled) samples, which a histogram cannot show.
     """
     fig = _figure()
     ax = fig.add_subplot()
-    finite_all = [x[np.isfinite(x)] for x in samples.values()]
-    joined = np.concatenate(finite_all) if finite_all else np.zeros(0)
-    if joined.size:
-        low, high = float(joined.min()), float(joined.max())
-        edges = np.linspace(low, high if high > low else low + 1.0, bins + 1)
-        for color, (temperature, x), finite in zip(
-            temperature_colors(len(samples)), samples.items(), finite_all, strict=True
-        ):
-            stalled = 1.0 - finite.size / x.size if x.size else 0.0
-            label = f"{temperature:g} degC" + (f" ({100 * stalled:.2g} % stall)" if stalled else "")
-            ax.hist(
-                finite, bins=edges.tolist(), histtype="step", color=color, label=label, density=True
-            )
+    for color, (temperature, x) in zip(
+        temperature_colors(len(samples)), samples.items(), strict=True
+    ):
+        finite = x[np.isfinite(x)]
+        stalled = 1.0 - finite.size / x.size if x.size else 0.0
+        label = f"{temperature:g} degC" + (f" ({100 * stalled:.2g} % stall)" if stalled else "")
+        if finite.size == 0:
+            ax.plot([], [], color=color, label=f"{temperature:g} degC: every sample stalls")
+            continue
+        low, high = float(finite.min()), float(finite.max())
+        if not high > low:  # one value: a bin of 1 % of it (or of 1) around it
+            half = 0.005 * abs(low) or 0.5
+            low, high = low - half, high + half
+        edges = np.linspace(low, high, (bins or bin_count(finite.size)) + 1)
+        ax.hist(
+            finite, bins=edges.tolist(), histtype="step", color=color, label=label, density=True
+        )
     ax.set_xlabel(quantity)
     ax.set_ylabel(density_label(quantity))
-    ax.set_title(title)
+    ax.set_title(title, fontsize="medium")
     ax.grid(True, alpha=0.3)
     if samples:
         ax.legend(fontsize="small")
@@ -101,7 +140,7 @@ def plot_cdf(samples: Mapping[float, FloatArray], quantity: str, title: str) -> 
     ax.set_xlabel(quantity)
     ax.set_ylabel("cumulative probability [-]")
     ax.set_ylim(0.0, 1.0)
-    ax.set_title(title)
+    ax.set_title(title, fontsize="medium")
     ax.grid(True, alpha=0.3)
     if samples:
         ax.legend(fontsize="small")
@@ -134,7 +173,8 @@ def plot_tornado(summary: Mapping[str, Any]) -> Figure:
     ax.set_yticks(positions, [keys[j] for j in order])
     ax.axvline(0.0, color="black", linewidth=0.8)
     ax.set_xlabel("standardised regression coefficient of deployment time [-]")
-    ax.set_title(f"{summary['system']}: sensitivity ({summary['method']} method)")
+    what = f"sensitivity of deployment time ({summary['method']} method)"
+    ax.set_title(study_title(summary["system"], what, NARROW_TITLE_WIDTH), fontsize="medium")
     ax.grid(True, axis="x", alpha=0.3)
     if cases:
         ax.legend(fontsize="small")
@@ -153,16 +193,15 @@ def write_plots(plan: Plan, out: Path, summary: Mapping[str, Any]) -> list[Path]
     for t in plan.temperatures:
         stalled = np.asarray(reader.column(output_column("stalled", t)), dtype=bool)
         speeds[t] = reader.floats(output_column("end_speed_rad_s", t))[~stalled]
-    name = f"{plan.system.name}: {plan.samples:,} samples, {plan.method} method"
-    folder = out / "plots"
-    return [
-        save_figure(
-            plot_histogram(times, "deployment time [s]", name), folder / "time_histogram.png"
-        ),
-        save_figure(plot_cdf(times, "deployment time [s]", name), folder / "time_cdf.png"),
-        save_figure(
-            plot_histogram(speeds, "end (latch) speed [rad/s]", name),
-            folder / "end_speed_histogram.png",
-        ),
-        save_figure(plot_tornado(summary), folder / "tornado.png"),
-    ]
+    study = f"{plan.samples:,} samples, {plan.method} method"
+    time_title = study_title(plan.system.name, f"deployment time, {study}")
+    speed_title = study_title(
+        plan.system.name, f"end (latch) speed of the samples that arrive, {study}"
+    )
+    figures = {
+        "time_histogram": plot_histogram(times, "deployment time [s]", time_title),
+        "time_cdf": plot_cdf(times, "deployment time [s]", time_title),
+        "end_speed_histogram": plot_histogram(speeds, "end (latch) speed [rad/s]", speed_title),
+        "tornado": plot_tornado(summary),
+    }
+    return [save_figure(figures[name], out / "plots" / f"{name}.png") for name in PLOT_NAMES]
