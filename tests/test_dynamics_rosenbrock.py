@@ -85,23 +85,16 @@ def test_cases_in_a_batch_do_not_influence_each_other() -> None:
     length, cap = np.full(3, 0.8), np.full(3, np.inf)
     creep, creeps = np.full(3, 1e-12), np.zeros(3, dtype=bool)
     atol, first = np.full((4, 3), 1e-12), np.full(3, 1e-5)
-    batch = rosenbrock.integrate_batch(
-        model, y0, length, cap, 1e9, creep, creeps, atol, 1e-9, first, False, 4
-    )
+    segments = rosenbrock.Segments(y0, length, cap, creep, creeps, atol, first)
+    control = rosenbrock.Control(rtol=1e-9, horizon=1e9, horizon_kind=4)
+    batch = rosenbrock.integrate_batch(model, segments, control)
     one = np.array([1])
     alone = rosenbrock.integrate_batch(
         model.take(one),
-        y0[:, one],
-        length[one],
-        cap[one],
-        1e9,
-        creep[one],
-        creeps[one],
-        atol[:, one],
-        1e-9,
-        first[one],
-        False,
-        4,
+        rosenbrock.Segments(
+            y0[:, one], length[one], cap[one], creep[one], creeps[one], atol[:, one], first[one]
+        ),
+        control,
     )
     assert batch.kind[1] == alone.kind[0]
     assert batch.duration[1] == alone.duration[0]

@@ -15,8 +15,10 @@ beyond its damping law's zero (Eq. 1's ``BD_T = 0``): the state s keeps it out o
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
@@ -203,30 +205,47 @@ class _InTemperature:
         return y
 
 
+def compiled_kernel() -> ModuleType | None:
+    """:mod:`ecdsim.dynamics.compiled` when numba is installed and not switched off.
+
+    ``ECDSIM_NUMBA=0`` in the environment selects the NumPy integrator (the reference
+    implementation); so does a missing numba. numba is imported here, on first use, not
+    at start-up.
+    """
+    if os.environ.get("ECDSIM_NUMBA", "1").strip() == "0":
+        return None
+    try:
+        from ecdsim.dynamics import compiled
+    except ImportError:
+        return None
+    return compiled
+
+
 def _advance_batched(
     segs: NonlinearSegments, model: Model, rtol: float, record: bool
 ) -> NonlinearAdvance:
-    """All segments at once with the vectorised Rosenbrock integrator."""
+    """All segments with the RODAS4 integrator: compiled per segment, or NumPy batched."""
     from ecdsim.dynamics import rosenbrock
 
     scales = _scales(segs, rtol)
     y0 = np.stack(
         [np.zeros_like(segs.speed0), segs.speed0, segs.state0, np.zeros_like(segs.speed0)]
     )
-    out = rosenbrock.integrate_batch(
-        model,
-        y0,
-        segs.length,
-        segs.cap,
-        HORIZON_TIME,
-        scales.creep_speed,
-        scales.creeps,
-        scales.atol,
-        rtol,
-        scales.first_step,
-        record,
-        HORIZON,
+    segments = rosenbrock.Segments(
+        y0=y0,
+        length=segs.length,
+        cap=segs.cap,
+        creep_speed=scales.creep_speed,
+        creeps=scales.creeps,
+        atol=scales.atol,
+        first_step=scales.first_step,
     )
+    control = rosenbrock.Control(
+        rtol=rtol, horizon=HORIZON_TIME, horizon_kind=HORIZON, record=record
+    )
+    kernel = compiled_kernel()
+    integrate_batch = rosenbrock.integrate_batch if kernel is None else kernel.integrate_batch
+    out = integrate_batch(model, segments, control)
     stopped = (out.kind == linear.ZERO) | (out.kind == linear.REST)
     hottest = np.maximum(out.max_thermal_state, out.state[2])
     return NonlinearAdvance(

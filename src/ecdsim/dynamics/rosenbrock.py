@@ -42,7 +42,7 @@ from ecdsim._types import BoolArray, FloatArray
 from ecdsim.dynamics import linear
 from ecdsim.dynamics.equations import Model
 
-__all__ = ["Model", "Outcome", "Trajectory", "integrate_batch"]
+__all__ = ["Control", "Model", "Outcome", "Segments", "Trajectory", "integrate_batch"]
 
 GAMMA = 0.25
 _A21, _A31, _A32 = 1.544, 0.9466785280815826, 0.2557011698983284
@@ -70,10 +70,10 @@ C = (
         -6.058818238834054,
     ),
 )
-M = (_A51, _A52, _A53, _A54, 1.0, 1.0)
-E = (0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
-ERROR_EXPONENT = -1.0 / 4.0  # local order of the error estimate
-MAX_STEPS = 200_000
+# RODAS4 is stiffly accurate: the solution weights are the last row of A plus the last
+# stage (y1 = stage 6's state + K6) and the error estimate is K6 alone, so neither has a
+# table of its own here. The step size follows the estimate's order 4 (the fourth root).
+MAX_STEPS = 200_000  # step attempts per segment before it is reported as cut short
 
 
 class _Solver:
@@ -203,7 +203,7 @@ def _step(
         value += coupling
         solver.solve(value, k[i], scratch[0])
     y1 = last + k[5]
-    return y1, k[5], solver.ok  # E = (0, 0, 0, 0, 0, 1)
+    return y1, k[5], solver.ok  # the error estimate is K6 (stiffly accurate)
 
 
 def _hermite(
@@ -333,189 +333,297 @@ class Outcome:
     trajectories: list[Trajectory | None]
 
 
-def integrate_batch(
-    model: Model,
-    y0: FloatArray,
-    length: FloatArray,
-    cap: FloatArray,
-    horizon: float,
-    creep_speed: FloatArray,
-    creeps: BoolArray,
-    atol: FloatArray,
-    rtol: float,
-    first_step: FloatArray,
-    record: bool,
-    horizon_kind: int,
-) -> Outcome:
-    """Integrate every segment from ``y0`` (4, n) to its first event; see the module doc.
+@dataclass(frozen=True)
+class Segments:
+    """The segments to integrate, in their forward frames; arrays over n segments.
 
-    Events: x reaches ``length`` (REACH), u falls to 0 (ZERO), u falls to
-    ``creep_speed`` where ``creeps`` (REST), the time reaches ``cap`` (CAP) or
-    ``horizon`` (``horizon_kind``). The damper cannot leave its damping law's domain:
-    the temperature state is the law's log factor (:mod:`ecdsim.dynamics.equations`).
-
-    The running cases' arrays are kept compact (a case leaves them when it ends); a
-    rejected step leaves its case's state unchanged, so every step needs no gathering
-    of the accepted cases.
+    Attributes
+    ----------
+    y0 : start states ``[x, u, s, E]``, shape (4, n)
+    length : x at which the segment ends (REACH) [rad]
+    cap : time available (CAP) [s]; inf for none
+    creep_speed : speed taken as at rest (REST) where ``creeps`` [rad/s]
+    creeps : whether the segment can approach rest asymptotically (equilibrium ahead)
+    atol : absolute tolerances, shape (4, n)
+    first_step : first trial step [s]
     """
-    n = y0.shape[1]
-    kind = np.full(n, -1, dtype=np.int8)
-    duration = np.zeros(n)
-    final = y0.copy()
-    max_speed = y0[1].copy()
-    max_temp = y0[2].copy()
-    steps: list[tuple[NDArray[np.intp], FloatArray, FloatArray, FloatArray]] = []
-    # Steps inside which the speed or the temperature peaks: (row, cases, fraction of the
-    # step the peak may lie within, the step's y0, f0, y1, f1, h); resolved at the end.
-    peaks: list[tuple[int, NDArray[np.intp], FloatArray, FloatArray, FloatArray]] = []
 
-    work = np.arange(n)
-    sub = model
-    tol = atol.copy()
-    y = y0.copy()
-    f = sub.rhs(y)
-    t = np.zeros(n)
-    h = np.minimum(first_step, np.where(np.isfinite(cap), cap, np.inf))
-    end = np.minimum(cap, horizon)
-    level = length.copy()
-    creep = creep_speed.copy()
-    creeping = creeps.copy()
-    top_speed = y0[1].copy()
-    top_temp = y0[2].copy()
-    buffers = _Work(n)
-    rows = (1, 2) if model.heating else (1,)
-    if record:
-        steps.append((work.copy(), t.copy(), y.copy(), f.copy()))
-    for _ in range(MAX_STEPS):
-        if work.size == 0:
-            break
-        np.minimum(h, end - t, out=h)
-        y1, error, sound = _step(sub, y, f, h, buffers)
-        scale = np.maximum(np.abs(y), np.abs(y1))
-        scale *= rtol
-        scale += tol
-        np.abs(error, out=error)
-        error /= scale
-        err = np.max(error, axis=0)
-        with np.errstate(over="ignore", invalid="ignore"):
-            finite = np.isfinite(err + np.sum(y1, axis=0))
-        accept = sound & finite & (err <= 1.0)
-        factor = np.where(
-            finite & sound,
-            np.clip(0.9 / np.sqrt(np.sqrt(np.maximum(err, 1e-10))), 0.2, 5.0),
-            0.25,
+    y0: FloatArray
+    length: FloatArray
+    cap: FloatArray
+    creep_speed: FloatArray
+    creeps: BoolArray
+    atol: FloatArray
+    first_step: FloatArray
+
+
+@dataclass(frozen=True)
+class Control:
+    """How to integrate: tolerance, horizon and recording.
+
+    Attributes
+    ----------
+    rtol : relative tolerance [-]
+    horizon : time after which a segment without an event ends [s]
+    horizon_kind : the event code it then ends with
+    record : keep every accepted step for dense output
+    """
+
+    rtol: float
+    horizon: float
+    horizon_kind: int
+    record: bool = False
+
+
+# A step whose record is (cases, times, states, slopes).
+_Steps = list[tuple[NDArray[np.intp], FloatArray, FloatArray, FloatArray]]
+# A step inside which a row peaks: (row, cases, fraction the peak must lie before,
+# stacked (y0, f0, y1) of the row, stacked (f1, h)); resolved after the loop.
+_Peaks = list[tuple[int, NDArray[np.intp], FloatArray, FloatArray, FloatArray]]
+
+
+class _Running:
+    """The running segments' arrays, compact: a segment leaves them when it ends."""
+
+    def __init__(self, model: Model, segments: Segments) -> None:
+        n = segments.y0.shape[1]
+        cap = segments.cap
+        self.work = np.arange(n)
+        self.model = model
+        self.tol = segments.atol.copy()
+        self.y = segments.y0.copy()
+        self.f = model.rhs(self.y)
+        self.t = np.zeros(n)
+        self.h = np.minimum(segments.first_step, np.where(np.isfinite(cap), cap, np.inf))
+        self.level = segments.length.copy()
+        self.creep = segments.creep_speed.copy()
+        self.creeping = segments.creeps.copy()
+        self.top_speed = segments.y0[1].copy()
+        self.top_temp = segments.y0[2].copy()
+        self.buffers = _Work(n)
+
+    def keep(self, keep: NDArray[np.intp], end: FloatArray) -> FloatArray:
+        """Keep only the segments ``keep``; returns ``end`` restricted to them."""
+        self.work, self.y, self.f = self.work[keep], self.y[:, keep], self.f[:, keep]
+        self.t, self.h, self.tol = self.t[keep], self.h[keep], self.tol[:, keep]
+        self.level, self.creep, self.creeping = (
+            self.level[keep],
+            self.creep[keep],
+            self.creeping[keep],
         )
-        h_next = h * factor
-        if not np.any(accept):
-            h = h_next
-            continue
-        # A rejected step leaves its case where it was (and its slope unchanged).
-        rejected = ~accept
-        np.copyto(y1, y, where=rejected)
-        fb = sub.rhs(y1)
-        np.copyto(fb, f, where=rejected)
-        ya, fa, yb = y, f, y1
-        event_s = np.full(work.size, np.inf)
-        event_kind = np.full(work.size, -1, dtype=np.int8)
-        crossings = [
-            (linear.REACH, 0, level, (ya[0] < level) & (yb[0] >= level)),
-            (linear.ZERO, 1, None, (ya[1] > 0.0) & (yb[1] <= 0.0)),
-            (linear.REST, 1, creep, creeping & (ya[1] > creep) & (yb[1] <= creep)),
-        ]
-        for code, row, target, crossed in crossings:
-            hit = np.flatnonzero(crossed)
-            if hit.size:
-                c0, c1, c2, c3 = _cubic(
-                    ya[row, hit], fa[row, hit], yb[row, hit], fb[row, hit], h[hit]
+        self.top_speed, self.top_temp = self.top_speed[keep], self.top_temp[keep]
+        self.model = self.model.take(keep)
+        self.buffers = _Work(keep.size)
+        return end[keep]
+
+
+class _Results:
+    """Per-segment outcome arrays, filled as segments end."""
+
+    def __init__(self, segments: Segments) -> None:
+        y0 = segments.y0
+        n = y0.shape[1]
+        self.kind = np.full(n, -1, dtype=np.int8)
+        self.duration = np.zeros(n)
+        self.final = y0.copy()
+        self.max_speed = y0[1].copy()
+        self.max_temp = y0[2].copy()
+
+
+def _attempt(run: _Running, rtol: float) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """One trial step of every running segment: new states, next step sizes, accepted.
+
+    A rejected step's state is its start state (the caller can then treat it like an
+    accepted step of length 0).
+    """
+    y, h = run.y, run.h
+    y1, error, sound = _step(run.model, y, run.f, h, run.buffers)
+    scale = np.maximum(np.abs(y), np.abs(y1))
+    scale *= rtol
+    scale += run.tol
+    np.abs(error, out=error)
+    error /= scale
+    err = np.max(error, axis=0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        finite = np.isfinite(err + np.sum(y1, axis=0))
+    accept = sound & finite & (err <= 1.0)
+    factor = np.where(
+        finite & sound,
+        np.clip(0.9 / np.sqrt(np.sqrt(np.maximum(err, 1e-10))), 0.2, 5.0),
+        0.25,
+    )
+    np.copyto(y1, y, where=~accept)
+    return y1, h * factor, accept
+
+
+def _find_events(
+    run: _Running, y1: FloatArray, f1: FloatArray
+) -> tuple[FloatArray, NDArray[np.int8]]:
+    """Per running segment, the earliest event inside its step: fraction and kind (-1)."""
+    ya, fa, h = run.y, run.f, run.h
+    event_s = np.full(run.work.size, np.inf)
+    event_kind = np.full(run.work.size, -1, dtype=np.int8)
+    level, creep = run.level, run.creep
+    crossings = [
+        (linear.REACH, 0, level, (ya[0] < level) & (y1[0] >= level)),
+        (linear.ZERO, 1, None, (ya[1] > 0.0) & (y1[1] <= 0.0)),
+        (linear.REST, 1, creep, run.creeping & (ya[1] > creep) & (y1[1] <= creep)),
+    ]
+    for code, row, target, crossed in crossings:
+        hit = np.flatnonzero(crossed)
+        if hit.size:
+            c0, c1, c2, c3 = _cubic(ya[row, hit], fa[row, hit], y1[row, hit], f1[row, hit], h[hit])
+            if target is not None:
+                c0 = c0 - target[hit]
+            _earliest(event_s, event_kind, hit, _root((c0, c1, c2, c3)), code)
+    return event_s, event_kind
+
+
+def _track_extremes(
+    run: _Running,
+    y1: FloatArray,
+    f1: FloatArray,
+    event_s: FloatArray,
+    event_kind: NDArray[np.int8],
+    peaks: _Peaks,
+) -> None:
+    """The step's end value, and steps whose slope turns from + to - before the event
+    (their interior maximum is resolved after the loop)."""
+    ya, fa, h = run.y, run.f, run.h
+    rows = (1, 2) if run.model.heating else (1,)
+    for row, tracker in zip(rows, (run.top_speed, run.top_temp), strict=False):
+        np.maximum(tracker, y1[row], out=tracker, where=event_kind < 0)
+        turning = np.flatnonzero((fa[row] > 0.0) & (f1[row] < 0.0))
+        if turning.size:
+            peaks.append(
+                (
+                    row,
+                    run.work[turning],
+                    np.minimum(event_s[turning], 1.0),
+                    np.stack([ya[row, turning], fa[row, turning], y1[row, turning]]),
+                    np.stack([f1[row, turning], h[turning]]),
                 )
-                if target is not None:
-                    c0 = c0 - target[hit]
-                _earliest(event_s, event_kind, hit, _root((c0, c1, c2, c3)), code)
-        e_idx = np.flatnonzero(event_kind >= 0)
-        # Extremes: the step's end (or event) value, and an interior maximum where the
-        # derivative changes sign from + to - before that point (found at the end).
-        for row, tracker in zip(rows, (top_speed, top_temp), strict=False):
-            np.maximum(tracker, yb[row], out=tracker, where=event_kind < 0)
-            turning = np.flatnonzero((fa[row] > 0.0) & (fb[row] < 0.0))
-            if turning.size:
-                stop = np.minimum(event_s[turning], 1.0)
-                peaks.append(
-                    (
-                        row,
-                        work[turning],
-                        stop,
-                        np.stack([ya[row, turning], fa[row, turning], yb[row, turning]]),
-                        np.stack([fb[row, turning], h[turning]]),
-                    )
-                )
-        # Finish the cases with an event inside this step.
-        if e_idx.size:
-            s_e = event_s[e_idx]
-            h_e = h[e_idx]
-            state = _hermite(ya[:, e_idx], fa[:, e_idx], yb[:, e_idx], fb[:, e_idx], h_e, s_e)
-            top_speed[e_idx] = np.maximum(top_speed[e_idx], state[1])
-            if model.heating:
-                top_temp[e_idx] = np.maximum(top_temp[e_idx], state[2])
-            codes = event_kind[e_idx]
-            state[0] = np.where(codes == linear.REACH, level[e_idx], state[0])
-            state[1] = np.where(codes == linear.ZERO, 0.0, state[1])
-            g = work[e_idx]
-            kind[g] = codes
-            duration[g] = t[e_idx] + s_e * h_e
-            final[:, g] = state
-            if record:
-                slope = sub.take(e_idx).rhs(state)
-                steps.append((g, duration[g].copy(), state, slope))
-        # Advance the others; those that reached the cap or the horizon end there.
-        t += np.where(accept, h, 0.0)
-        y, f = y1, fb
-        ended = event_kind >= 0
-        going = accept & ~ended
-        if record and np.any(going):
-            go = np.flatnonzero(going)
-            steps.append((work[go], t[go], y[:, go], f[:, go]))
-        at_end = np.flatnonzero(going & (t >= end * (1.0 - 1e-15)))
-        if at_end.size:
-            g = work[at_end]
-            kind[g] = np.where(cap[g] <= horizon, linear.CAP, horizon_kind)
-            duration[g] = t[at_end]
-            final[:, g] = y[:, at_end]
-        h = h_next
-        if e_idx.size or at_end.size:
-            ended[at_end] = True
-            gone = work[ended]
-            max_speed[gone] = np.maximum(max_speed[gone], top_speed[ended])
-            max_temp[gone] = np.maximum(max_temp[gone], top_temp[ended])
-            keep = np.flatnonzero(~ended)
-            work, y, f, t, h = work[keep], y[:, keep], f[:, keep], t[keep], h[keep]
-            tol, end, level = tol[:, keep], end[keep], level[keep]
-            creep, creeping = creep[keep], creeping[keep]
-            top_speed, top_temp = top_speed[keep], top_temp[keep]
-            sub = sub.take(keep)
-            buffers = _Work(keep.size)
-    # Anything still running after MAX_STEPS is reported as cut short.
-    if work.size:
-        kind[work] = horizon_kind
-        duration[work] = t
-        final[:, work] = y
-        max_speed[work] = np.maximum(max_speed[work], top_speed)
-        max_temp[work] = np.maximum(max_temp[work], top_temp)
+            )
+
+
+def _finish_events(
+    run: _Running,
+    y1: FloatArray,
+    f1: FloatArray,
+    event_s: FloatArray,
+    event_kind: NDArray[np.int8],
+    out: _Results,
+    steps: _Steps | None,
+) -> NDArray[np.intp]:
+    """End the segments with an event inside their step, at the event; their indices."""
+    e_idx = np.flatnonzero(event_kind >= 0)
+    if e_idx.size == 0:
+        return e_idx
+    ya, fa = run.y, run.f
+    s_e = event_s[e_idx]
+    h_e = run.h[e_idx]
+    state = _hermite(ya[:, e_idx], fa[:, e_idx], y1[:, e_idx], f1[:, e_idx], h_e, s_e)
+    run.top_speed[e_idx] = np.maximum(run.top_speed[e_idx], state[1])
+    if run.model.heating:
+        run.top_temp[e_idx] = np.maximum(run.top_temp[e_idx], state[2])
+    codes = event_kind[e_idx]
+    state[0] = np.where(codes == linear.REACH, run.level[e_idx], state[0])
+    state[1] = np.where(codes == linear.ZERO, 0.0, state[1])
+    g = run.work[e_idx]
+    out.kind[g] = codes
+    out.duration[g] = run.t[e_idx] + s_e * h_e
+    out.final[:, g] = state
+    if steps is not None:
+        steps.append((g, out.duration[g].copy(), state, run.model.take(e_idx).rhs(state)))
+    return e_idx
+
+
+def _resolve_peaks(peaks: _Peaks, out: _Results) -> None:
+    """Interior maxima of the speed and temperature state on the steps' interpolants."""
     for row, cases, stop, ends, rest in peaks:
         coef = _cubic(ends[0], ends[1], ends[2], rest[0], rest[1])
         s_turn = _root((coef[1], 2.0 * coef[2], 3.0 * coef[3]))
         top = _hermite(ends[0], ends[1], ends[2], rest[0], rest[1], s_turn)
-        tracker = max_speed if row == 1 else max_temp
+        tracker = out.max_speed if row == 1 else out.max_temp
         inside = s_turn <= stop
         np.maximum.at(tracker, cases[inside], top[inside])
+
+
+def integrate_batch(model: Model, segments: Segments, control: Control) -> Outcome:
+    """Integrate every segment from ``segments.y0`` to its first event; see the module doc.
+
+    Events: x reaches ``length`` (REACH), u falls to 0 (ZERO), u falls to
+    ``creep_speed`` where ``creeps`` (REST), the time reaches ``cap`` (CAP) or
+    ``control.horizon`` (``control.horizon_kind``). The damper cannot leave its damping
+    law's domain: the temperature state is the law's log factor
+    (:mod:`ecdsim.dynamics.equations`).
+
+    Each pass of the loop steps every running segment (:func:`_attempt`), finds the
+    events inside the accepted steps (:func:`_find_events`), tracks the maxima
+    (:func:`_track_extremes`) and ends the segments whose event, cap or horizon came
+    (:func:`_finish_events`); the running arrays are then compacted (:class:`_Running`).
+    A rejected step leaves its segment unchanged, so no step gathers the accepted ones.
+    :mod:`ecdsim.dynamics.compiled` is the same algorithm, compiled, one segment at a time.
+    """
+    n = segments.y0.shape[1]
+    out = _Results(segments)
+    run = _Running(model, segments)
+    end = np.minimum(segments.cap, control.horizon)
+    steps: _Steps | None = [] if control.record else None
+    peaks: _Peaks = []
+    if steps is not None:
+        steps.append((run.work.copy(), run.t.copy(), run.y.copy(), run.f.copy()))
+    for _ in range(MAX_STEPS):
+        if run.work.size == 0:
+            break
+        np.minimum(run.h, end - run.t, out=run.h)
+        y1, h_next, accept = _attempt(run, control.rtol)
+        if not np.any(accept):
+            run.h = h_next
+            continue
+        f1 = run.model.rhs(y1)
+        np.copyto(f1, run.f, where=~accept)  # a rejected step keeps its slope too
+        event_s, event_kind = _find_events(run, y1, f1)
+        _track_extremes(run, y1, f1, event_s, event_kind, peaks)
+        e_idx = _finish_events(run, y1, f1, event_s, event_kind, out, steps)
+        # Advance the others; those that reached the cap or the horizon end there.
+        run.t += np.where(accept, run.h, 0.0)
+        run.y, run.f = y1, f1
+        ended = event_kind >= 0
+        going = accept & ~ended
+        if steps is not None and np.any(going):
+            go = np.flatnonzero(going)
+            steps.append((run.work[go], run.t[go], run.y[:, go], run.f[:, go]))
+        at_end = np.flatnonzero(going & (run.t >= end * (1.0 - 1e-15)))
+        if at_end.size:
+            g = run.work[at_end]
+            out.kind[g] = np.where(
+                segments.cap[g] <= control.horizon, linear.CAP, control.horizon_kind
+            )
+            out.duration[g] = run.t[at_end]
+            out.final[:, g] = run.y[:, at_end]
+        run.h = h_next
+        if e_idx.size or at_end.size:
+            ended[at_end] = True
+            gone = run.work[ended]
+            out.max_speed[gone] = np.maximum(out.max_speed[gone], run.top_speed[ended])
+            out.max_temp[gone] = np.maximum(out.max_temp[gone], run.top_temp[ended])
+            end = run.keep(np.flatnonzero(~ended), end)
+    # Anything still running after MAX_STEPS is reported as cut short.
+    if run.work.size:
+        out.kind[run.work] = control.horizon_kind
+        out.duration[run.work] = run.t
+        out.final[:, run.work] = run.y
+        out.max_speed[run.work] = np.maximum(out.max_speed[run.work], run.top_speed)
+        out.max_temp[run.work] = np.maximum(out.max_temp[run.work], run.top_temp)
+    _resolve_peaks(peaks, out)
     trajectories: list[Trajectory | None] = [None] * n
-    if record:
+    if steps is not None:
         trajectories = _trajectories(steps, n)
-    return Outcome(kind, duration, final, max_speed, max_temp, trajectories)
+    return Outcome(out.kind, out.duration, out.final, out.max_speed, out.max_temp, trajectories)
 
 
-def _trajectories(
-    steps: list[tuple[NDArray[np.intp], FloatArray, FloatArray, FloatArray]], n: int
-) -> list[Trajectory | None]:
+def _trajectories(steps: _Steps, n: int) -> list[Trajectory | None]:
     cases = np.concatenate([s[0] for s in steps])
     times = np.concatenate([s[1] for s in steps])
     states = np.concatenate([s[2] for s in steps], axis=1)
