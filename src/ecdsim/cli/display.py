@@ -179,9 +179,15 @@ def show(
     _style(table, wrap)
     hidden = fit(console, table, drop)
     if not _DISPLAY.wide and _needed(console, table) > console.width:
-        # Still too wide: let every column wrap at spaces before rich squeezes numbers.
+        # Still too wide: let every column with spaces in its cells wrap there, so that
+        # rich narrows those rather than cutting a number or a name without spaces.
+        from rich.measure import Measurement
+
+        options = console.options.update(width=100_000)
         for column in table.columns:
-            column.no_wrap = False
+            cells = [c for c in [column.header, *column._cells] if c is not None]
+            sizes = [Measurement.get(console, options, cell) for cell in cells]
+            column.no_wrap = all(m.minimum == m.maximum for m in sizes)
     if _DISPLAY.wide:
         # As wide as the table needs: --wide cuts nothing, even beyond the terminal.
         options = console.options.update(width=100_000)

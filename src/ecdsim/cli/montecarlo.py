@@ -541,7 +541,7 @@ def _print_repeatability(console: Console, cases: list[dict[str, Any]]) -> None:
             _fmt(r["typical_max_deviation_s"]),
             "yes" if r["meets_stated_spread"] else "no",
         )
-    console.print(table)
+    display.show(console, table)
     lines = [
         "Each sample is read as one deployment of the same unit: the tolerances should then be "
         "its run-to-run scatter. 'spread': the standard deviation of one deployment's time "
