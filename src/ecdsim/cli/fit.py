@@ -17,7 +17,9 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from ecdsim.cli import display
 from ecdsim.cli.common import fail, temperature_option
+from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, WideOpt
 
 if TYPE_CHECKING:
     from ecdsim.characterize.droptest import DropTestResult, FailedTemperature
@@ -34,11 +36,15 @@ fit_app = typer.Typer(
         "(paper section 7) and write them as a configuration file."
     ),
     rich_markup_mode="rich",
+    cls=HelpGroup,
     no_args_is_help=True,
 )
 
 DataArg = Annotated[
-    Path, typer.Argument(help="CSV file with unit-bearing headers (docs/characterize.md).")
+    Path,
+    typer.Argument(
+        help="CSV file with unit-bearing headers (docs/characterize.md).", metavar="CSV"
+    ),
 ]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON on stdout.")]
 PlotOpt = Annotated[
@@ -203,6 +209,7 @@ def _finish(
 
 @fit_app.command(
     "drop-test",
+    cls=HelpCommand,
     epilog=(
         "Example: [bold]ecdsim fit drop-test examples/drop_test.csv --plot plots "
         "-o fitted.toml[/bold]"
@@ -234,8 +241,11 @@ def drop_test(
         ),
     ] = "torque",
     strict: StrictOpt = False,
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
 ) -> None:
     """Fit BECD and FECD per temperature from drop tests, then laws over temperature."""
+    display.configure(wide=wide, plain=plain)
     from ecdsim.characterize.droptest import fit_drop_test, noise_model
     from ecdsim.characterize.export import fitted_parameter_text, largest_torque, provenance
     from ecdsim.config import ConfigError
@@ -305,11 +315,10 @@ def drop_test(
 
 
 def _print_drop_test(result: DropTestResult) -> None:
-    from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
-    console = Console(soft_wrap=False, width=max(120, Console().width))
+    console = display.make_console()
     name = result.noise
     table = Table(
         title=(f"Drop test: torque = FECD + BECD * speed (paper Eq. 5, Figure 8), --noise {name}"),
@@ -347,7 +356,8 @@ def _print_drop_test(result: DropTestResult) -> None:
             f"{correction:.2f}" if fit.corrected_for_inertia else "not corrected",
             escape("; ".join(flags)) or "-",
         )
-    console.print(table)
+    drop = ("start-up corr.", "R^2", "n", "95 % CI", "95 % CI")
+    display.show(console, table, drop=drop, wrap=("flags",))
     _print_footer(console, result)
 
 
@@ -387,7 +397,7 @@ def _print_laws(console: Any, laws: Any) -> None:
                 (f"{fit.chi_square:.3g} / {fit.dof}" if i == 0 else ""),
                 (_fmt(fit.p_value, 3) if i == 0 else ""),
             )
-    console.print(table)
+    display.show(console, table, drop=("p", "chi^2 / dof"), wrap=("law",))
     console.print(escape(f"BECD laws: {laws.comparison.statement}"))
     for name, why in laws.damping_failures.items():
         console.print(escape(f"{name} law not fitted: {why}"))
@@ -395,6 +405,7 @@ def _print_laws(console: Any, laws: Any) -> None:
 
 @fit_app.command(
     "trace",
+    cls=HelpCommand,
     epilog=(
         "Example: [bold]ecdsim fit trace examples/deployment_trace.csv "
         "--config examples/paper_cc16.toml --plot plots[/bold]"
@@ -434,8 +445,11 @@ def trace(
     ] = None,
     reference_temperature: ReferenceOpt = "25",
     strict: StrictOpt = False,
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
 ) -> None:
     """Fit recorded deployments (angle against time) against the exact solution."""
+    display.configure(wide=wide, plain=plain)
     from ecdsim.characterize.export import (
         fitted_parameter_text,
         provenance,
@@ -501,11 +515,10 @@ def trace(
 
 
 def _print_traces(result: TraceResult) -> None:
-    from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
-    console = Console(soft_wrap=False, width=max(120, Console().width))
+    console = display.make_console()
     if result.spring is not None:
         spring = result.spring
         table = Table(
@@ -519,7 +532,7 @@ def _print_traces(result: TraceResult) -> None:
             table.add_column(escape(header), justify="right")
         table.add_row("start_torque", _fmt(spring.start_torque.value, 5), _ci(spring.start_torque))
         table.add_row("end_torque", _fmt(spring.end_torque.value, 5), _ci(spring.end_torque))
-        console.print(table)
+        display.show(console, table)
     else:
         table = Table(
             title="Trace fit: BECD and total friction against the exact solution",
@@ -548,7 +561,7 @@ def _print_traces(result: TraceResult) -> None:
                 _fmt(fit.system_friction),
                 _fmt(fit.friction.value),
             )
-        console.print(table)
+        display.show(console, table, drop=("n", "FS", "95 % CI", "95 % CI"))
     residuals = Table(title="Residuals", title_justify="left")
     for header in ("T [degC]", "rms [deg]", "R^2", "Durbin-Watson", "fitted time [s]"):
         residuals.add_column(escape(header), justify="right")
@@ -561,5 +574,5 @@ def _print_traces(result: TraceResult) -> None:
             _fmt(curve.durbin_watson, 3),
             _fmt(curve.deployment_time),
         )
-    console.print(residuals)
+    display.show(console, residuals, drop=("Durbin-Watson",))
     _print_footer(console, result)
