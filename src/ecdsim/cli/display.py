@@ -153,14 +153,16 @@ def fit(console: Console, table: Table, drop: Sequence[str] = ()) -> list[str]:
         return []
     hidden: list[str] = []
     for prefix in drop:
-        if _needed(console, table) <= console.width:
+        if _needed(console, table) <= console.width or len(table.columns) < 2:
             break
-        for column in table.columns:
-            name = header_text(column)
-            if name.startswith(prefix) and len(table.columns) > 1:
-                table.columns.remove(column)
-                hidden.append(name)
-                break
+        # The header itself, else the first one that starts with it ("p" is not "parameter").
+        names = [header_text(column) for column in table.columns]
+        exact = [j for j, name in enumerate(names) if name == prefix]
+        starts = [j for j, name in enumerate(names) if name.startswith(prefix)]
+        found = (exact or starts)[:1]
+        for j in found:
+            hidden.append(names[j])
+            del table.columns[j]
     return hidden
 
 
