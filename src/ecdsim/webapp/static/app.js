@@ -1,4 +1,10 @@
 // ecdsim explorer: edits a config (JSON with unit strings), asks /api/deploy, plots with plotly.js.
+//
+// Units: the config's quantities keep their unit strings (what the user wrote) in both
+// directions; a field shows the number of its own quantity with that unit, and a bare
+// number typed into it gets that same unit back. Results arrive in SI (keys say their
+// unit); they are shown in the display system (the server's `display_units` and `units`
+// table: shown = SI * scale + offset), converted, never relabelled.
 "use strict";
 
 const CONTROLS = [
@@ -14,11 +20,54 @@ const CONTROLS = [
   { path: ["load", "inertia"], label: "load inertia (dynamic method)" },
 ];
 const STEPS = 1000;
+const DIGITS = 6; // significant digits of every number shown
 const COLORS = ["#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2"];
 const DASH = { exact: "solid", paper: "dash", dynamic: "dot" };
+const METHOD_COLORS = { paper: "#1f77b4", exact: "#ff7f0e", dynamic: "#2ca02c" };
+const METHOD_NOTES = {
+  paper: "paper: the paper's Eq. 8-11, quasi-static, with the arithmetic mean of the start and end speeds (no inertia).",
+  exact: "exact: the exact solution of the same quasi-static equations (speed set by the torque balance at each angle; no inertia).",
+  dynamic: "dynamic: integrates the equation of motion in time with the load and reflected rotor inertia, stick-slip friction and the end stop (docs/dynamics.md); it needs [load] inertia and is the only method that uses it.",
+};
+// SI display table, used until the server sends its own (`units` in its answers).
+const SI_UNITS = {
+  temperature: { unit: "degC", scale: 1, offset: 0 },
+  torque: { unit: "N*m", scale: 1, offset: 0 },
+  damping_rate: { unit: "N*m*s/rad", scale: 1, offset: 0 },
+  angular_speed: { unit: "rad/s", scale: 1, offset: 0 },
+  time: { unit: "s", scale: 1, offset: 0 },
+  energy: { unit: "J", scale: 1, offset: 0 },
+};
 
-const state = { config: null, response: null, requests: 0, inFlight: false, pending: false };
+const state = {
+  config: null, response: null, sentConfig: null, requests: 0, inFlight: false, pending: false,
+  units: SI_UNITS, displayUnits: "si", choice: "config", pinned: null, stale: false, fit: null, fits: 0,
+};
 window.ecdsim = state;
+
+// ---------------------------------------------------------------- numbers and units
+
+// A number to DIGITS significant digits without float noise: -39.99999999999997 -> "-40".
+function sig(v, digits = DIGITS) {
+  if (v === null || v === undefined || !Number.isFinite(Number(v))) return "-";
+  const text = String(Number(Number(v).toPrecision(digits)));
+  return text === "-0" ? "0" : text;
+}
+
+function unitOf(kind) {
+  const u = (state.units && state.units[kind]) || SI_UNITS[kind] || { unit: "", scale: 1, offset: 0 };
+  return u;
+}
+function show(kind, si) { // SI value -> display number (null stays null)
+  if (si === null || si === undefined) return null;
+  const u = unitOf(kind);
+  return si * u.scale + u.offset;
+}
+function label(kind) { return unitOf(kind).unit; }
+function showDiff(kind, si) { // a difference: scale only, no offset
+  if (si === null || si === undefined) return null;
+  return si * unitOf(kind).scale;
+}
 
 function getPath(obj, path) {
   let node = obj;
@@ -31,7 +80,10 @@ function getPath(obj, path) {
 
 function setPath(obj, path, value) {
   let node = obj;
-  for (const part of path.slice(0, -1)) node = node[part];
+  for (const part of path.slice(0, -1)) {
+    if (node[part] === null || typeof node[part] !== "object") node[part] = {};
+    node = node[part];
+  }
   node[path[path.length - 1]] = value;
 }
 
@@ -45,9 +97,15 @@ function splitQuantity(value) {
 }
 
 function joinQuantity(number, unit) {
-  const text = Number(number.toPrecision(6)).toString();
+  const text = sig(number);
   return unit === null ? Number(text) : `${text} ${unit}`;
 }
+
+function escapeHtml(text) {
+  return String(text).replace(/[&<>"']/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" })[c]);
+}
+
+// ---------------------------------------------------------------- controls
 
 function buildControls() {
   const box = document.getElementById("sliders");
@@ -58,30 +116,40 @@ function buildControls() {
     if (q === null) continue;
     if (c.path.join(".") === "load.inertia") hasInertia = true;
     const id = c.path.join(".");
+    const unitText = q.unit === null || q.unit === "" ? "-" : q.unit;
     const span = Math.abs(q.number) || 1;
     const lo = q.number - 0.95 * span;
     const hi = q.number + 2 * span;
     const div = document.createElement("div");
     div.className = "control";
     div.innerHTML =
-      `<label for="slider-${id}">${c.label} <span class="unit">[${q.unit === null ? "-" : q.unit}]</span></label>` +
+      `<label for="slider-${id}">${escapeHtml(c.label)} <span class="unit">[${escapeHtml(unitText)}]</span></label>` +
       `<input type="range" id="slider-${id}" data-path="${id}" min="0" max="${STEPS}" step="1">` +
-      ` <input type="text" id="field-${id}" data-path="${id}">`;
+      ` <input type="text" id="field-${id}" data-path="${id}" inputmode="decimal">`;
     box.appendChild(div);
     const slider = div.querySelector("input[type=range]");
     const field = div.querySelector("input[type=text]");
+    field.setAttribute("aria-label", `${c.label} value [${unitText}]`);
     const toValue = (s) => lo + ((hi - lo) * s) / STEPS;
+    const setText = (v) => {
+      slider.setAttribute("aria-valuetext", `${sig(v)} ${unitText}`);
+      field.value = sig(v);
+    };
     slider.value = String(Math.round(((q.number - lo) / (hi - lo)) * STEPS));
-    field.value = Number(q.number.toPrecision(6)).toString();
+    setText(q.number);
     slider.addEventListener("input", () => {
       const v = toValue(Number(slider.value));
-      field.value = Number(v.toPrecision(6)).toString();
+      setText(v);
       setPath(state.config, c.path, joinQuantity(v, q.unit));
       requestDeploy();
     });
     field.addEventListener("change", () => {
       const v = Number(field.value);
-      if (!Number.isFinite(v)) { showErrors([`${id}: '${field.value}' is not a number`]); return; }
+      if (field.value.trim() === "" || !Number.isFinite(v)) {
+        failed([`${id}: '${field.value}' is not a number`]);
+        return;
+      }
+      slider.setAttribute("aria-valuetext", `${sig(v)} ${unitText}`);
       setPath(state.config, c.path, joinQuantity(v, q.unit));
       requestDeploy();
     });
@@ -89,18 +157,64 @@ function buildControls() {
   document.getElementById("inertia-note").textContent = hasInertia
     ? "The inertia acts in the dynamic method only; the quasi-static methods ignore it."
     : "No inertia slider: this config has no [load] inertia (the quasi-static methods do not use it; add it and method \"dynamic\" in the config for the dynamic method).";
-  const temps = getPath(state.config, ["analysis", "temperatures"]) || ["25 degC"];
-  document.getElementById("temperatures").value = temps
-    .map((t) => { const q = splitQuantity(t); return q ? q.number : t; }).join(", ");
+  buildTemperatureField();
 }
+
+// The temperatures keep the config's own unit: "-40 degF" shows as -40 under [degF], and
+// a bare number typed there is sent back as degF.
+function temperatureUnit(temps) {
+  const units = new Set(temps.map((t) => { const q = splitQuantity(t); return q ? q.unit || "degC" : null; }));
+  return units.size === 1 && !units.has(null) ? [...units][0] : null;
+}
+
+function buildTemperatureField() {
+  const temps = getPath(state.config, ["analysis", "temperatures"]) || ["25 degC"];
+  const unit = temperatureUnit(temps);
+  const field = document.getElementById("temperatures");
+  const lab = document.getElementById("temperatures-label");
+  if (unit !== null) {
+    lab.textContent = `temperatures [${unit}], comma-separated`;
+    field.value = temps.map((t) => sig(splitQuantity(t).number)).join(", ");
+    field.dataset.unit = unit;
+    document.getElementById("temperatures-help").textContent =
+      `Bare numbers are ${unit}; another unit may be written with the number (e.g. 25 degC).`;
+  } else {
+    lab.textContent = "temperatures (each with its unit), comma-separated";
+    field.value = temps.map((t) => { const q = splitQuantity(t); return q ? `${sig(q.number)} ${q.unit}`.trim() : String(t); }).join(", ");
+    field.dataset.unit = "degC";
+    document.getElementById("temperatures-help").textContent = "Bare numbers are degC.";
+  }
+}
+
+function onTemperatures(e) {
+  const items = e.target.value.split(",").map((s) => s.trim()).filter((s) => s.length);
+  const unit = e.target.dataset.unit || "degC";
+  if (!state.config.analysis) state.config.analysis = {};
+  state.config.analysis.temperatures = items.map((s) => (/[a-zA-Z]/.test(s) ? s : `${s} ${unit}`));
+  requestDeploy();
+}
+
+// ---------------------------------------------------------------- requests and state
 
 function showErrors(errors) {
   document.getElementById("errors").textContent = errors.length ? "error: " + errors.join("\nerror: ") : "";
 }
 
+// An error: say it, and mark the results on the page as stale (they are the last valid case).
+function failed(errors) {
+  showErrors(errors);
+  state.stale = true;
+  document.getElementById("results-section").dataset.stale = "true";
+}
+
 async function postJson(url, body) {
-  const r = await fetch(url, { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
-  return r;
+  return fetch(url, { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
+}
+
+function deployBody(config) {
+  const body = { config };
+  if (state.choice !== "config") body.units = state.choice;
+  return body;
 }
 
 async function requestDeploy() {
@@ -109,12 +223,21 @@ async function requestDeploy() {
   state.pending = false;
   const sent = JSON.parse(JSON.stringify(state.config));
   try {
-    const r = await postJson("/api/deploy", { config: sent });
+    const r = await postJson("/api/deploy", deployBody(sent));
     const body = await r.json();
-    if (r.ok) { state.response = body; state.sentConfig = sent; showErrors([]); render(body); }
-    else showErrors(body.errors || [`HTTP ${r.status}`]);
+    if (r.ok) {
+      state.response = body;
+      state.sentConfig = sent;
+      if (body.units) state.units = body.units;
+      if (body.display_units) state.displayUnits = body.display_units;
+      state.stale = false;
+      document.getElementById("results-section").dataset.stale = "false";
+      showErrors([]);
+      render();
+      saveToUrl();
+    } else failed(body.errors || [`HTTP ${r.status}`]);
   } catch (e) {
-    showErrors([String(e)]);
+    failed([String(e)]);
   } finally {
     state.inFlight = false;
     state.requests += 1;
@@ -123,69 +246,267 @@ async function requestDeploy() {
   }
 }
 
-function fmt(v) { return v === null || v === undefined ? "stall" : Number(v).toPrecision(6); }
+// ---------------------------------------------------------------- the case in the URL
 
-function render(body) {
+function encodeCase(obj) {
+  const bytes = new TextEncoder().encode(JSON.stringify(obj));
+  let text = "";
+  for (const b of bytes) text += String.fromCharCode(b);
+  return btoa(text).replace(/\+/g, "-").replace(/\//g, "_").replace(/=+$/, "");
+}
+
+function decodeCase(text) {
+  const b64 = text.replace(/-/g, "+").replace(/_/g, "/");
+  const raw = atob(b64 + "===".slice((b64.length + 3) % 4));
+  return JSON.parse(new TextDecoder().decode(Uint8Array.from(raw, (c) => c.charCodeAt(0))));
+}
+
+function saveToUrl() {
+  const params = new URLSearchParams();
+  params.set("case", encodeCase(state.sentConfig));
+  if (state.choice !== "config") params.set("units", state.choice);
+  if (state.pinned) params.set("a", encodeCase(state.pinned.config));
+  history.replaceState(null, "", "#" + params.toString());
+}
+
+// ---------------------------------------------------------------- rendering
+
+function layout(title, xlabel, ylabel, extra = {}) {
+  return {
+    title: { text: title }, margin: { t: 50, r: 10 },
+    xaxis: { title: { text: xlabel } }, yaxis: { title: { text: ylabel } },
+    legend: { font: { size: 11 } }, ...extra,
+  };
+}
+// No "share" button: it would upload the chart to Plotly's cloud (the explorer makes no
+// network requests); the selection tools have nothing to select here.
+const PLOT_CONFIG = {
+  responsive: true, displaylogo: false,
+  modeBarButtonsToRemove: ["sendChartToCloud", "sendDataToCloud", "lasso2d", "select2d"],
+};
+
+function caseTemperature(c) { return `${sig(show("temperature", c.temperature_C))} ${label("temperature")}`; }
+
+function stallText(result) {
+  if (result.stall_angle_rad === null || result.stall_angle_rad === undefined) return "stalls";
+  return `stalls at ${sig((result.stall_angle_rad * 180) / Math.PI, 4)} deg`;
+}
+
+function angleTraces(body, prefix, faded) {
   const doc = body.prediction;
   const time = body.trajectories.time_s;
   const traces = [];
   doc.methods.forEach((m) => {
     doc.cases.forEach((c, j) => {
+      const r = c[m] || {};
+      const stalled = r.stalled === true;
       traces.push({
         x: time, y: body.trajectories.methods[m].angle_rad[j].map((a) => (a === null ? null : (a * 180) / Math.PI)),
-        name: `${c.temperature_C} degC, ${m}`, mode: "lines",
-        line: { color: COLORS[j % COLORS.length], dash: DASH[m] || "dashdot" },
+        name: `${prefix}${caseTemperature(c)}, ${m}${stalled ? ": " + stallText(r).toUpperCase() : ""}`,
+        mode: "lines", legendgroup: prefix,
+        opacity: faded ? 0.45 : 1,
+        line: { color: COLORS[j % COLORS.length], dash: DASH[m] || "dashdot", width: faded ? 1.5 : 2.2 },
       });
+      if (stalled && r.stall_angle_rad !== null && r.stall_angle_rad !== undefined) {
+        traces.push({
+          x: [time[time.length - 1]], y: [(r.stall_angle_rad * 180) / Math.PI], mode: "markers",
+          name: `${prefix}${caseTemperature(c)}, ${m}: ${stallText(r)}`, legendgroup: prefix,
+          marker: { symbol: "x", size: 12, color: "#b00020" }, opacity: faded ? 0.45 : 1,
+        });
+      }
     });
   });
-  Plotly.react("angle-plot", traces, {
-    title: "deployed angle against time", margin: { t: 40 },
-    xaxis: { title: "time since release [s]" }, yaxis: { title: "angle [deg]" },
-  });
+  return traces;
+}
+
+function sweepTraces(body, prefix, faded) {
+  const doc = body.prediction;
   const sweep = body.sweep;
-  const sweepTraces = doc.methods.map((m) => ({
-    x: sweep.temperature_C, y: sweep.methods[m].deployment_time_s, name: m, mode: "lines+markers",
-    line: { dash: DASH[m] || "dashdot" },
-  }));
-  Plotly.react("sweep-plot", sweepTraces, {
-    title: "deployment time against temperature", margin: { t: 40 },
-    xaxis: { title: "temperature [degC]" }, yaxis: { title: "deployment time [s]" },
+  const x = sweep.temperature_C.map((t) => show("temperature", t));
+  const traces = [];
+  const finite = doc.methods.flatMap((m) => sweep.methods[m].deployment_time_s.filter((v) => v !== null));
+  const top = finite.length ? Math.max(...finite) * 1.05 : 1;
+  doc.methods.forEach((m) => {
+    const y = sweep.methods[m].deployment_time_s;
+    traces.push({
+      x, y, name: `${prefix}${m}`, mode: "lines+markers", legendgroup: prefix, opacity: faded ? 0.45 : 1,
+      line: { dash: DASH[m] || "dashdot", color: METHOD_COLORS[m] || "#555" },
+      marker: { color: METHOD_COLORS[m] || "#555" },
+    });
+    const stallX = x.filter((_, i) => y[i] === null);
+    if (stallX.length) {
+      // Stalled temperatures have no deployment time: marked along the top, not dropped.
+      traces.push({
+        x: stallX, y: stallX.map(() => top), mode: "markers", name: `${prefix}${m}: stalls (no deployment)`,
+        legendgroup: prefix, marker: { symbol: "x", size: 11, color: "#b00020" }, opacity: faded ? 0.45 : 1,
+        hovertemplate: `stalls at %{x} ${label("temperature")}<extra>${m}</extra>`,
+      });
+    }
   });
-  const head = document.querySelector("#results thead");
-  const rows = document.querySelector("#results tbody");
-  head.innerHTML = "<tr><th>T [degC]</th>" + doc.methods.map((m) => `<th>${m}: t [s]</th><th>${m}: end speed [rad/s]</th>`).join("") + "<th>BECD [N*m*s/rad]</th><th>FECD [N*m]</th></tr>";
-  rows.innerHTML = doc.cases.map((c, i) =>
-    `<tr><td class="num">${c.temperature_C}</td>` +
-    doc.methods.map((m) =>
-      `<td class="num" data-case="${i}" data-key="${m}.deployment_time_s">${fmt(c[m].deployment_time_s)}</td>` +
-      `<td class="num" data-case="${i}" data-key="${m}.end_speed_rad_s">${fmt(c[m].end_speed_rad_s)}</td>`).join("") +
-    `<td class="num" data-case="${i}" data-key="damping_rate_Nms_per_rad">${fmt(c.damping_rate_Nms_per_rad)}</td>` +
-    `<td class="num" data-case="${i}" data-key="friction_Nm">${fmt(c.friction_Nm)}</td></tr>`).join("");
-  document.getElementById("warnings").innerHTML = "";
+  return traces;
+}
+
+function render() {
+  const body = state.response;
+  const doc = body.prediction;
+  const pinned = state.pinned;
+  const pb = pinned ? "B: " : "";
+  const angle = angleTraces(body, pb, false);
+  const sweep = sweepTraces(body, pb, false);
+  if (pinned) {
+    angle.push(...angleTraces(pinned.response, "A: ", true));
+    sweep.push(...sweepTraces(pinned.response, "A: ", true));
+  }
+  const suffix = pinned ? " (B solid, pinned A faded)" : "";
+  Plotly.react("angle-plot", angle, layout(`Deployed angle against time${suffix}`, "time since release [s]", "angle [deg]"), PLOT_CONFIG);
+  Plotly.react("sweep-plot", sweep,
+    layout(`Deployment time against temperature${suffix}`, `temperature [${label("temperature")}]`, "deployment time [s]"), PLOT_CONFIG);
+  renderTable(doc, pinned ? pinned.response.prediction : null);
+  renderMethodsNote(doc.methods);
+  const warnings = document.getElementById("warnings");
+  warnings.innerHTML = "";
   for (const w of doc.warnings) {
     const div = document.createElement("div");
     div.textContent = (w.method ? `[${w.method}] ` : "") + w.message;
-    document.getElementById("warnings").appendChild(div);
+    warnings.appendChild(div);
   }
-  document.getElementById("timing").textContent = `last computation ${body.compute_ms.toFixed(1)} ms on the server.`;
+  document.getElementById("timing").textContent = `Last computation ${sig(body.compute_ms, 3)} ms on the server.`;
+  renderCompareSummary();
 }
+
+function renderMethodsNote(methods) {
+  const box = document.getElementById("methods-note");
+  box.innerHTML = "<p>Each change is computed on the server with the configured methods:</p><ul>" +
+    methods.map((m) => `<li>${escapeHtml(METHOD_NOTES[m] || m)}</li>`).join("") + "</ul>";
+}
+
+// Columns of the results table: [key path in a case, kind, heading].
+function tableColumns(methods) {
+  const cols = [];
+  for (const m of methods) {
+    cols.push([`${m}.deployment_time_s`, "time", `${m}: t`]);
+    cols.push([`${m}.end_speed_rad_s`, "angular_speed", `${m}: end speed`]);
+  }
+  cols.push(["damping_rate_Nms_per_rad", "damping_rate", "BECD"]);
+  cols.push(["friction_Nm", "torque", "FECD"]);
+  return cols;
+}
+
+function caseValue(c, key) { return getPath(c, key.split(".")); }
+
+function cellText(c, key, kind) {
+  const v = caseValue(c, key);
+  const method = key.includes(".") ? key.split(".")[0] : null;
+  if ((v === null || v === undefined) && method && c[method] && c[method].stalled) return stallText(c[method]);
+  return sig(show(kind, v));
+}
+
+function renderTable(doc, pinnedDoc) {
+  const head = document.querySelector("#results thead");
+  const rows = document.querySelector("#results tbody");
+  const cols = tableColumns(doc.methods);
+  const tl = label("temperature");
+  const unitText = (kind) => `[${label(kind)}]`;
+  if (!pinnedDoc) {
+    head.innerHTML = `<tr><th scope="col">T [${tl}]</th>` +
+      cols.map(([, kind, name]) => `<th scope="col">${name} ${unitText(kind)}</th>`).join("") + "</tr>";
+  } else {
+    head.innerHTML = `<tr><th scope="col" rowspan="2">T [${tl}]</th>` +
+      cols.map(([, kind, name]) => `<th scope="colgroup" colspan="3">${name} ${unitText(kind)}</th>`).join("") +
+      "</tr><tr>" + cols.map(() => '<th scope="col">A</th><th scope="col">B</th><th scope="col">B - A</th>').join("") + "</tr>";
+  }
+  rows.innerHTML = doc.cases.map((c, i) => {
+    const match = pinnedDoc ? pinnedDoc.cases.find((a) => Math.abs(a.temperature_C - c.temperature_C) < 1e-9) : null;
+    let html = `<tr><th scope="row" class="num" data-case="${i}" data-key="temperature">${sig(show("temperature", c.temperature_C))}</th>`;
+    for (const [key, kind] of cols) {
+      const method = key.includes(".") ? key.split(".")[0] : null;
+      const stalled = method && c[method] && c[method].stalled && caseValue(c, key) === null;
+      const current = `<td class="num${stalled ? " stalled" : ""}" data-case="${i}" data-key="${key}">${escapeHtml(cellText(c, key, kind))}</td>`;
+      if (!pinnedDoc) { html += current; continue; }
+      const a = match ? caseValue(match, key) : undefined;
+      const b = caseValue(c, key);
+      const diff = a !== null && a !== undefined && b !== null && b !== undefined ? showDiff(kind, b - a) : null;
+      const aText = match ? cellText(match, key, kind) : "-";
+      html += `<td class="num pinned" data-case="${i}" data-pinned-key="${key}">${escapeHtml(aText)}</td>` + current +
+        `<td class="num diff" data-case="${i}" data-diff-key="${key}">${diff === null ? "-" : (diff > 0 ? "+" : "") + sig(diff, 4)}</td>`;
+    }
+    return html + "</tr>";
+  }).join("");
+}
+
+// ---------------------------------------------------------------- compare (A pinned, B current)
+
+function flatten(obj, prefix = "", out = {}) {
+  for (const [k, v] of Object.entries(obj || {})) {
+    const key = prefix ? `${prefix}.${k}` : k;
+    if (v !== null && typeof v === "object" && !Array.isArray(v)) flatten(v, key, out);
+    else out[key] = Array.isArray(v) ? v.join(", ") : String(v);
+  }
+  return out;
+}
+
+function renderCompareSummary() {
+  const box = document.getElementById("compare-summary");
+  if (!state.pinned) {
+    box.textContent = "Pin a case, then change the inputs: the current case (B) is drawn over A in every plot and table, with B - A.";
+    return;
+  }
+  const a = flatten(state.pinned.config);
+  const b = flatten(state.sentConfig);
+  const keys = [...new Set([...Object.keys(a), ...Object.keys(b)])].sort();
+  const changed = keys.filter((k) => a[k] !== b[k]);
+  box.innerHTML = `<p>A: pinned (${escapeHtml(state.pinned.source)}). B: the current inputs. Inputs that differ:</p>` +
+    (changed.length
+      ? "<ul id=\"compare-diffs\">" + changed.map((k) => `<li><code>${escapeHtml(k)}</code>: A ${escapeHtml(a[k] ?? "(absent)")} &rarr; B ${escapeHtml(b[k] ?? "(absent)")}</li>`).join("") + "</ul>"
+      : "<p id=\"compare-diffs\">none (B equals A)</p>");
+}
+
+function pin() {
+  if (!state.response) return;
+  state.pinned = {
+    config: JSON.parse(JSON.stringify(state.sentConfig)),
+    response: JSON.parse(JSON.stringify(state.response)),
+    source: document.getElementById("source").textContent || "case",
+  };
+  document.getElementById("unpin").disabled = false;
+  render();
+  saveToUrl();
+}
+
+function unpin() {
+  state.pinned = null;
+  document.getElementById("unpin").disabled = true;
+  if (state.response) { render(); saveToUrl(); }
+}
+
+// Pin a config given by a link: compute it once, then hold it as A.
+async function pinConfig(config) {
+  const r = await postJson("/api/deploy", deployBody(config));
+  if (!r.ok) return;
+  const body = await r.json();
+  state.pinned = { config, response: body, source: "from the link" };
+  document.getElementById("unpin").disabled = false;
+}
+
+// ---------------------------------------------------------------- loading and exporting
 
 async function loadExample(which) {
   const r = await fetch(`/api/example?which=${which}`);
   const body = await r.json();
-  useConfig(body.config, body.source);
+  useConfig(body.config, body.source, body.units);
 }
 
-function useConfig(config, source) {
+function useConfig(config, source, units) {
   state.config = config;
+  if (units && state.choice === "config") state.units = units;
   document.getElementById("source").textContent = source;
   buildControls();
   requestDeploy();
 }
 
 async function download(url, filename) {
-  const r = await postJson(url, { config: state.config });
-  if (!r.ok) { const body = await r.json(); showErrors(body.errors || [`HTTP ${r.status}`]); return; }
+  const r = await postJson(url, url === "/api/report" ? deployBody(state.config) : { config: state.config });
+  if (!r.ok) { const body = await r.json(); failed(body.errors || [`HTTP ${r.status}`]); return; }
   const blob = await r.blob();
   const a = document.createElement("a");
   a.href = URL.createObjectURL(blob);
@@ -195,22 +516,222 @@ async function download(url, filename) {
   a.remove();
 }
 
-document.getElementById("temperatures").addEventListener("change", (e) => {
-  const items = e.target.value.split(",").map((s) => s.trim()).filter((s) => s.length);
-  if (!state.config.analysis) state.config.analysis = {};
-  state.config.analysis.temperatures = items.map((s) => (/[a-zA-Z]/.test(s) ? s : `${s} degC`));
-  requestDeploy();
-});
+async function copyLink() {
+  const button = document.getElementById("copy-link");
+  try {
+    await navigator.clipboard.writeText(location.href);
+    button.textContent = "Link copied";
+  } catch (e) {
+    button.textContent = "Link is in the address bar";
+  }
+  setTimeout(() => { button.textContent = "Copy link to this case"; }, 2500);
+}
+
+// ---------------------------------------------------------------- fit from the bench
+
+function fitLayout(title, xlabel, ylabel, yrange = null) {
+  const out = layout(title, xlabel, ylabel, { margin: { t: 45, r: 10, b: 45 }, legend: { font: { size: 10 } } });
+  if (yrange) out.yaxis.range = yrange;
+  return out;
+}
+
+function band(x, curve, name, color) {
+  if (!curve.low || !curve.high) return [];
+  return [{
+    x: [...x, ...[...x].reverse()], y: [...curve.high, ...[...curve.low].reverse()], fill: "toself",
+    fillcolor: color, opacity: 0.18, line: { width: 0 }, name: `${name} 95 % band`, hoverinfo: "skip", mode: "lines",
+  }];
+}
+
+function renderFit() {
+  const body = state.fit;
+  const curves = body.curves;
+  const tk = (v) => show("torque", v);
+  const torque = [];
+  curves.torque_speed.forEach((line, j) => {
+    const color = COLORS[j % COLORS.length];
+    const t = `${sig(show("temperature", line.temperature_C))} ${label("temperature")}`;
+    torque.push({ x: line.speed_rad_s, y: line.torque_Nm.map(tk), mode: "markers", name: `${t} tests`, marker: { color, size: 7 } });
+    torque.push({
+      x: line.line_speed_rad_s, y: line.line_torque_Nm.map(tk), mode: "lines", line: { color },
+      name: `${t}: BECD ${sig(show("damping_rate", line.damping_rate_Nms_per_rad.value), 4)}, FECD ${sig(tk(line.friction_Nm.value), 3)}`,
+    });
+    const out = line.outlier.map((o, i) => (o ? i : -1)).filter((i) => i >= 0);
+    if (out.length) {
+      torque.push({ x: out.map((i) => line.speed_rad_s[i]), y: out.map((i) => tk(line.torque_Nm[i])), mode: "markers",
+        name: `outlier (${t})`, marker: { size: 15, color: "rgba(0,0,0,0)", line: { color: "black", width: 1.5 } } });
+    }
+  });
+  Plotly.react("fit-torque-plot", torque,
+    fitLayout("Drop test: drive torque against speed (Fig. 8)", "speed [rad/s]", `drive torque [${label("torque")}]`), PLOT_CONFIG);
+
+  const temps = curves.torque_speed.map((l) => show("temperature", l.temperature_C));
+  const grid = curves.laws.temperature_C.map((t) => show("temperature", t));
+  const perTemp = (key, kind) => {
+    const est = curves.torque_speed.map((l) => l[key]);
+    return {
+      x: temps, y: est.map((e) => show(kind, e.value)), mode: "markers", name: "per temperature (95 %)",
+      marker: { color: "black", size: 7 },
+      error_y: {
+        type: "data", symmetric: false,
+        array: est.map((e) => (e.ci95 ? showDiff(kind, e.ci95[1] - e.value) : 0)),
+        arrayminus: est.map((e) => (e.ci95 ? showDiff(kind, e.value - e.ci95[0]) : 0)),
+      },
+    };
+  };
+  const lawColors = { linear: "#1f77b4", resistivity: "#ff7f0e" };
+  const damping = [perTemp("damping_rate_Nms_per_rad", "damping_rate")];
+  for (const [name, curve] of Object.entries(curves.laws.damping_rate)) {
+    const conv = { value: curve.value.map((v) => show("damping_rate", v)),
+      low: curve.low && curve.low.map((v) => show("damping_rate", v)), high: curve.high && curve.high.map((v) => show("damping_rate", v)) };
+    damping.push(...band(grid, conv, `${name} law`, lawColors[name] || "#555"));
+    damping.push({ x: grid, y: conv.value, mode: "lines", name: `${name} law`, line: { color: lawColors[name] || "#555", dash: name === "linear" ? "solid" : "dash" } });
+  }
+  // The y range holds the per-temperature intervals and the laws, not a wide band (a law
+  // that misses the values has its band widened by the scatter).
+  const span = (traces) => {
+    const ys = traces.filter((t) => t.fill !== "toself").flatMap((t) => [...t.y, ...(t.error_y ? t.y.map((y, i) => y + t.error_y.array[i]) : []),
+      ...(t.error_y ? t.y.map((y, i) => y - t.error_y.arrayminus[i]) : [])]).filter((v) => v !== null && Number.isFinite(v));
+    const lo = Math.min(...ys); const hi = Math.max(...ys); const pad = 0.15 * (hi - lo || Math.abs(hi) || 1);
+    return [lo - pad, hi + pad];
+  };
+  Plotly.react("fit-damping-plot", damping,
+    fitLayout("Damping rate BECD against temperature", `temperature [${label("temperature")}]`, `BECD [${label("damping_rate")}]`,
+      span(damping)), PLOT_CONFIG);
+  const friction = [perTemp("friction_Nm", "torque")];
+  if (curves.laws.friction) {
+    const f = curves.laws.friction;
+    const conv = { value: f.value.map(tk), low: f.low && f.low.map(tk), high: f.high && f.high.map(tk) };
+    friction.push(...band(grid, conv, "line", "#2ca02c"));
+    friction.push({ x: grid, y: conv.value, mode: "lines", name: "line FECD(T)", line: { color: "#2ca02c" } });
+  }
+  Plotly.react("fit-friction-plot", friction,
+    fitLayout("Friction FECD against temperature", `temperature [${label("temperature")}]`, `FECD [${label("torque")}]`), PLOT_CONFIG);
+
+  const ci = (e, kind) => (e.ci95 ? `[${sig(show(kind, e.ci95[0]), 4)}, ${sig(show(kind, e.ci95[1]), 4)}]` : "-");
+  document.querySelector("#fit-table thead").innerHTML =
+    `<tr><th scope="col">T [${label("temperature")}]</th><th scope="col">points</th><th scope="col">BECD [${label("damping_rate")}]</th><th scope="col">95 % interval</th><th scope="col">FECD [${label("torque")}]</th><th scope="col">95 % interval</th></tr>`;
+  document.querySelector("#fit-table tbody").innerHTML = body.fit.temperatures.map((t, i) =>
+    `<tr><th scope="row" class="num">${sig(show("temperature", t.temperature_C))}</th><td class="num">${t.n_points}</td>` +
+    `<td class="num" data-fit="${i}" data-key="damping_rate_Nms_per_rad">${sig(show("damping_rate", t.damping_rate_Nms_per_rad))}</td>` +
+    `<td class="num">${ci({ value: t.damping_rate_Nms_per_rad, ci95: t.damping_rate_ci95 }, "damping_rate")}</td>` +
+    `<td class="num" data-fit="${i}" data-key="friction_Nm">${sig(show("torque", t.friction_Nm))}</td>` +
+    `<td class="num">${ci({ value: t.friction_Nm, ci95: t.friction_ci95 }, "torque")}</td></tr>`).join("");
+  const laws = body.fit.temperature_laws;
+  const lawRows = [];
+  if (laws) {
+    const lin = laws.damping_rate.linear;
+    if (lin) {
+      lawRows.push(["B_ref (linear law, at " + sig(show("temperature", lin.reference_temperature_C)) + " " + label("temperature") + ")", sig(show("damping_rate", lin.damping_rate_ref_Nms_per_rad)), ci({ value: 0, ci95: lin.damping_rate_ref_Nms_per_rad_ci95 }, "damping_rate"), label("damping_rate"), "b_ref"]);
+      lawRows.push(["c (linear law)", sig(lin.temperature_coefficient_per_K), lin.temperature_coefficient_per_K_ci95 ? `[${sig(lin.temperature_coefficient_per_K_ci95[0], 4)}, ${sig(lin.temperature_coefficient_per_K_ci95[1], 4)}]` : "-", "1/K", "c"]);
+    }
+    if (laws.friction) {
+      lawRows.push(["FECD slope", sig(laws.friction.slope_Nm_per_K), laws.friction.slope_Nm_per_K_ci95 ? `[${sig(laws.friction.slope_Nm_per_K_ci95[0], 4)}, ${sig(laws.friction.slope_Nm_per_K_ci95[1], 4)}]` : "-", "N*m/K", "slope"]);
+      lawRows.push(["FECD at 0 degC", sig(show("torque", laws.friction.at_0C_Nm)), ci({ value: 0, ci95: laws.friction.at_0C_Nm_ci95 }, "torque"), label("torque"), "at_0C"]);
+    }
+  }
+  document.querySelector("#fit-laws thead").innerHTML = '<tr><th scope="col">parameter</th><th scope="col">value</th><th scope="col">95 % interval</th><th scope="col">unit</th></tr>';
+  document.querySelector("#fit-laws tbody").innerHTML = lawRows.map(([n, v, c, u, key]) =>
+    `<tr><th scope="row">${escapeHtml(n)}</th><td class="num" data-law="${key}">${v}</td><td class="num">${c}</td><td>${escapeHtml(u)}</td></tr>`).join("");
+  const summary = laws ? laws.comparison.statement : "one temperature only: no law over temperature";
+  document.getElementById("fit-summary").textContent = `${body.fit.source}: ${body.fit.temperatures.length} temperatures fitted (noise model: ${body.fit.noise_model}); ${summary}.`;
+  const warn = document.getElementById("fit-warnings");
+  warn.innerHTML = "";
+  for (const w of [...body.fit.warnings.map((x) => x.message), ...body.fit.bad_rows.map((b) => b.message || JSON.stringify(b))]) {
+    const div = document.createElement("div");
+    div.className = "note";
+    div.textContent = "warning: " + w;
+    warn.appendChild(div);
+  }
+  const use = document.getElementById("fit-use");
+  use.disabled = body.config === null;
+  use.title = body.export_error ? `cannot use: ${body.export_error}` : "replace [damper] and [gearbox] by the fitted ECD (N = 1), keeping [load]";
+}
+
+async function runFit(file) {
+  const errors = document.getElementById("fit-errors");
+  errors.textContent = "";
+  const reference = Number(document.getElementById("fit-reference").value);
+  if (!Number.isFinite(reference)) { errors.textContent = "error: reference temperature: not a number"; return; }
+  try {
+    const body = {
+      csv: await file.text(), filename: file.name || "drop_test.csv",
+      noise: document.getElementById("fit-noise").value, reference_temperature: reference,
+    };
+    if (state.config) body.config = state.config;
+    const r = await postJson("/api/fit/drop-test", body);
+    const answer = await r.json();
+    if (r.ok) {
+      state.fit = answer;
+      document.getElementById("fit-results").hidden = false;
+      renderFit();
+    } else {
+      errors.textContent = "error: " + (answer.errors || [`HTTP ${r.status}`]).join("\nerror: ");
+    }
+  } catch (e) {
+    errors.textContent = "error: " + String(e);
+  } finally {
+    state.fits += 1;
+    document.body.dataset.fits = String(state.fits);
+  }
+}
+
+function useFit() {
+  if (!state.fit || !state.fit.config) return;
+  const config = JSON.parse(JSON.stringify(state.fit.config));
+  // Keep the current case's analysis (temperatures, methods) and output: only the ECD changes.
+  if (state.config && state.config.analysis) config.analysis = JSON.parse(JSON.stringify(state.config.analysis));
+  if (state.config && state.config.output) config.output = JSON.parse(JSON.stringify(state.config.output));
+  useConfig(config, `ECD fitted from ${state.fit.fit.source}`);
+}
+
+// ---------------------------------------------------------------- wiring
+
+document.getElementById("temperatures").addEventListener("change", onTemperatures);
 document.getElementById("load-example").addEventListener("click", () => loadExample("paper"));
 document.getElementById("load-start").addEventListener("click", () => loadExample("start"));
 document.getElementById("download-toml").addEventListener("click", () => download("/api/config.toml", "ecdsim-config.toml"));
 document.getElementById("download-report").addEventListener("click", () => download("/api/report", "ecdsim-report.html"));
+document.getElementById("copy-link").addEventListener("click", copyLink);
+document.getElementById("pin").addEventListener("click", pin);
+document.getElementById("unpin").addEventListener("click", unpin);
+document.getElementById("units").addEventListener("change", (e) => {
+  state.choice = e.target.value;
+  requestDeploy();
+});
 document.getElementById("upload").addEventListener("change", async (e) => {
   const file = e.target.files[0];
   if (!file) return;
   const r = await postJson("/api/config/parse", { toml: await file.text() });
   const body = await r.json();
-  if (r.ok) useConfig(body.config, file.name); else showErrors(body.errors || [`HTTP ${r.status}`]);
+  if (r.ok) useConfig(body.config, file.name, body.units); else failed(body.errors || [`HTTP ${r.status}`]);
+});
+document.getElementById("fit-file").addEventListener("change", (e) => { if (e.target.files[0]) runFit(e.target.files[0]); });
+document.getElementById("fit-use").addEventListener("click", useFit);
+const zone = document.getElementById("fit-section");
+zone.addEventListener("dragover", (e) => { e.preventDefault(); document.getElementById("dropzone").classList.add("over"); });
+zone.addEventListener("dragleave", () => document.getElementById("dropzone").classList.remove("over"));
+zone.addEventListener("drop", (e) => {
+  e.preventDefault();
+  document.getElementById("dropzone").classList.remove("over");
+  const file = e.dataTransfer && e.dataTransfer.files[0];
+  if (file) runFit(file);
 });
 
-loadExample("start");
+async function start() {
+  const params = new URLSearchParams(location.hash.slice(1));
+  const units = params.get("units");
+  if (units === "si" || units === "us") { state.choice = units; document.getElementById("units").value = units; }
+  if (params.has("case")) {
+    let config = null;
+    try { config = decodeCase(params.get("case")); } catch (e) { failed(["link: the case in the address cannot be read; starting from the start config"]); }
+    if (config && typeof config === "object") {
+      if (params.has("a")) { try { await pinConfig(decodeCase(params.get("a"))); } catch (e) { /* A is optional */ } }
+      useConfig(config, "from the link");
+      return;
+    }
+  }
+  loadExample("start");
+}
+
+start();
