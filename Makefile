@@ -39,9 +39,11 @@ typecheck: $(STAMP_TEST)
 	$(BIN)/mypy
 
 # The explorer's browser tests drive Debian's chromium: install it when missing, or stop
-# at once naming the package (they are never skipped).
+# at once naming the package (they are never skipped). They also run axe-core, which
+# scripts/ensure-axe.sh installs with npm (pinned) into .venv/axe.
 browser:
 	@bash scripts/ensure-chromium.sh
+	@bash scripts/ensure-axe.sh
 
 pytest: $(STAMP_TEST) browser
 	$(BIN)/python -m pytest
