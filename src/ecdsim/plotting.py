@@ -184,9 +184,16 @@ def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> Path:
 def write_deployment_plots(
     prediction: Prediction, folder: str | Path, units: UnitSystem = "si"
 ) -> list[Path]:
-    """Write the standard plots of a prediction as PNG files into ``folder``, in ``units``."""
+    """Write the standard plots of a prediction as PNG files into ``folder``, in ``units``.
+
+    With the dynamic method, also its angle and speed against time with the events
+    marked, and the damper's temperature when it heats (:mod:`ecdsim.plotting_dynamic`).
+    """
+    from ecdsim.plotting_dynamic import write_dynamic_plots
+
     out = Path(folder)
     return [
         save_figure(plot_deployment(prediction, units=units), out / "angle_vs_time.png"),
         save_figure(plot_torque_speed(prediction, units=units), out / "torque_vs_speed.png"),
+        *write_dynamic_plots(prediction, out, units),
     ]

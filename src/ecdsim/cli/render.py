@@ -123,7 +123,7 @@ def stall_text(case: dict[str, Any], methods: list[str]) -> str:
 
 _OUTCOMES = {
     "latched": "latched",
-    "settled": "settled on the stop",
+    "settled": "settled",  # rebounds died out on the end stop
     "stuck": "stuck",
     "creep": "creeps to rest",
     "stop_time": "stop time reached",
@@ -134,14 +134,14 @@ _OUTCOMES = {
 
 
 def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | None = None) -> None:
-    """The dynamic method's own results: latch speed and energy, impacts, sticking, heat.
+    """The dynamic method's own results, in two tables that each fit 80 columns.
 
-    Columns that would only repeat a constant (no impacts, no lost motion, no heating)
-    are replaced by one line saying so, so that the table fits 80 columns.
+    "Dynamic method: end of travel": outcome, latch speed and kinetic energy, impacts and
+    rebound, where and when it stuck. "Dynamic method: damper": when it engaged (lost
+    motion), its peak temperature (self-heating). Columns that would only repeat a
+    constant (no impacts, never stuck, no lost motion, no heating) are replaced by one
+    line saying so.
     """
-    from rich.markup import escape
-    from rich.table import Table
-
     u = u or Shown()
     dyn = [case["dynamic"] for case in cases]
     temps = [case["temperature_C"] for case in cases]
@@ -149,20 +149,15 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | No
     stuck = any(d["stuck"] for d in dyn)
     engage = any((d["engagement_time_s"] or 0.0) > 0.0 for d in dyn)
     heated = any(d["max_damper_temperature_C"] != t for d, t in zip(dyn, temps, strict=True))
-    table = Table(title="Dynamic method", title_justify="left")
     headers = [
         u.head("T", "temperature", "\n"),
         "outcome",
-        "latch speed\n[rad/s]",
-        u.head("KE at latch", "energy", "\n"),
+        "latch\nspeed\n[rad/s]",
+        u.head("KE at\nlatch", "energy", "\n"),
     ]
-    headers += ["impacts", "rebound\n[rad/s]"] if impacts else []
-    headers += ["stuck at\n[rad]", "stuck at\n[s]"] if stuck else []
-    headers += ["engaged\nat [s]"] if engage else []
-    headers += [u.head("peak damper\nT", "temperature")] if heated else []
-    for header in headers:
-        left = header == "outcome"
-        table.add_column(escape(header), justify="left" if left else "right", no_wrap=not left)
+    headers += ["im-\npacts", "rebound\n[rad/s]"] if impacts else []
+    headers += ["stuck\nat\n[rad]", "stuck\nat\n[s]"] if stuck else []
+    rows = []
     for d, t in zip(dyn, temps, strict=True):
         arrived = d["deployment_time_s"] is not None
         row = [
@@ -181,12 +176,19 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | No
                 _fmt(d["stuck_angle_rad"]),
                 ("inf" if when is None else _fmt(when)) if d["stuck"] else "-",
             ]
-        if engage:
-            row.append(_fmt(d["engagement_time_s"]))
-        if heated:
-            row.append(u.num(d["max_damper_temperature_C"], "temperature"))
-        table.add_row(*row)
-    display.show(console, table, drop=("rebound", "engaged", "impacts"), wrap=("outcome",))
+        rows.append(row)
+    _simple_table(console, "Dynamic method: end of travel", headers, rows)
+    if engage or heated:
+        headers = [u.head("T", "temperature", "\n")]
+        headers += ["engaged at\n[s]"] if engage else []
+        headers += [u.head("peak damper\nT", "temperature", "\n")] if heated else []
+        rows = []
+        for d, t in zip(dyn, temps, strict=True):
+            row = [u.num(t, "temperature")]
+            row += [_fmt(d["engagement_time_s"])] if engage else []
+            row += [u.num(d["max_damper_temperature_C"], "temperature")] if heated else []
+            rows.append(row)
+        _simple_table(console, "Dynamic method: damper", headers, rows)
     said = ["latch: speed and kinetic energy on arrival at the end of travel"]
     if not impacts:
         said.append("no impacts (no rebound)")
@@ -197,3 +199,15 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | No
     if not heated:
         said.append("damper at the ambient temperature (no self-heating)")
     display.note(console, "; ".join(said))
+
+
+def _simple_table(console: Any, title: str, headers: list[str], rows: list[list[str]]) -> None:
+    from rich.markup import escape
+    from rich.table import Table
+
+    table = Table(title=title, title_justify="left")
+    for header in headers:
+        table.add_column(escape(header), justify="left" if header == "outcome" else "right")
+    for row in rows:
+        table.add_row(*row)
+    display.show(console, table, wrap=("outcome",))

@@ -1,0 +1,228 @@
+"""Plots of the dynamic method: angle and speed against time with the events marked,
+and the damper's temperature when self-heating is modelled (``ecdsim deploy --plot``).
+
+Each curve is one temperature, sampled on its own time grid, which contains every event
+time exactly (:meth:`ecdsim.dynamics.result.DynamicResult.default_times`). Events are
+marked where they happen: a stick (the mechanism comes to rest for good), an impact on an
+end stop that rebounds, the latch at the end of travel (or the rebounds settling on the
+stop), and the damper engaging after lost motion. matplotlib is imported lazily, through
+:mod:`ecdsim.plotting`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+
+from ecdsim._types import FloatArray
+from ecdsim.deployment import Prediction
+from ecdsim.dynamics.result import EVENT_KINDS, DynamicResult, TimeSeries
+from ecdsim.plotting import _figure, plot_title, save_figure, temperature_colors
+from ecdsim.units_display import Shown, UnitSystem
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+
+@dataclass(frozen=True)
+class _Marker:
+    """How one kind of event is drawn, and its legend text."""
+
+    symbol: str
+    size: float
+    label: str
+
+
+# Drawn in this order, so that a latch at the instant of arrival shows on top.
+MARKERS: dict[str, _Marker] = {
+    "engage": _Marker("D", 6.0, "damper engages (lost motion closed)"),
+    "impact": _Marker("^", 8.0, "impact on a stop (rebounds)"),
+    "stick": _Marker("X", 9.0, "sticks (at rest for good)"),
+    "creep": _Marker(">", 8.0, "creeps to rest (only asymptotically)"),
+    "settle": _Marker("s", 7.0, "settles on the end stop"),
+    "latch": _Marker("o", 7.0, "latch at the end of travel"),
+}
+
+
+def dynamic_result(prediction: Prediction) -> DynamicResult | None:
+    """The dynamic method's full result, with its time series recorded; None without it."""
+    from ecdsim.dynamics.method import DynamicSolution
+    from ecdsim.dynamics.solver import solve_dynamic
+
+    solution = prediction.solutions.get("dynamic")
+    if not isinstance(solution, DynamicSolution):
+        return None
+    result = solution.result
+    if result.trajectory is None:  # a large batch is solved without recording
+        result = solve_dynamic(solution.problem, record=True)
+    return result
+
+
+def events_by_kind(result: DynamicResult) -> dict[str, list[tuple[int, float, float, float]]]:
+    """The events to mark, by marker kind: (flat case, time [s], angle [rad], speed [rad/s]).
+
+    An ``arrive`` or ``start_stop`` event is an impact unless a ``latch`` or ``settle``
+    of the same case happens at the same instant (restitution 0: caught on arrival).
+    A ``creep`` (an asymptotic approach to rest, at an infinite time) is drawn at the
+    end of its curve; other events at an infinite time are not drawn.
+    """
+    ev = result.events
+    names = [EVENT_KINDS[k] for k in ev.kind]
+    caught = {
+        (int(c), float(t))
+        for c, t, n in zip(ev.case, ev.time, names, strict=True)
+        if n in ("latch", "settle")
+    }
+    out: dict[str, list[tuple[int, float, float, float]]] = {kind: [] for kind in MARKERS}
+    for c, t, n, a, s in zip(ev.case, ev.time, names, ev.angle, ev.speed, strict=True):
+        if n == "creep" and result.trajectory is not None:
+            t = result.trajectory.display_end[int(c)]
+        if not math.isfinite(float(t)):
+            continue
+        row = (int(c), float(t), float(a), float(s))
+        if n in ("arrive", "start_stop"):
+            if (int(c), float(t)) not in caught:
+                out["impact"].append(row)
+        elif n in MARKERS and not (n == "engage" and float(t) == 0.0):
+            out[n].append(row)
+    return out
+
+
+def _columns(series: TimeSeries, field: FloatArray) -> tuple[FloatArray, FloatArray]:
+    n_t = series.time.shape[0]
+    return series.time.reshape(n_t, -1), np.asarray(field).reshape(n_t, -1)
+
+
+def _mark_events(
+    ax: Axes,
+    result: DynamicResult,
+    quantity: Literal["angle", "speed"],
+    colors: list[tuple[float, float, float, float]],
+) -> None:
+    """The event markers (edged in black, filled in the case's colour) and their legend."""
+    for kind, rows in events_by_kind(result).items():
+        if not rows:
+            continue
+        marker = MARKERS[kind]
+        for case, time, angle, speed in rows:
+            y = math.degrees(angle) if quantity == "angle" else speed
+            ax.plot(
+                [time],
+                [y],
+                marker.symbol,
+                markersize=marker.size,
+                markerfacecolor=colors[case],
+                markeredgecolor="black",
+                linestyle="none",
+                zorder=3,
+            )
+        # One legend entry per kind of event, in neutral grey.
+        ax.plot(
+            [],
+            [],
+            marker.symbol,
+            markersize=marker.size,
+            markerfacecolor="0.8",
+            markeredgecolor="black",
+            linestyle="none",
+            label=marker.label,
+        )
+
+
+def _result(prediction: Prediction, result: DynamicResult | None) -> DynamicResult:
+    found = result if result is not None else dynamic_result(prediction)
+    if found is None:
+        raise ValueError("the prediction has no dynamic method")
+    return found
+
+
+def plot_dynamic(
+    prediction: Prediction,
+    quantity: Literal["angle", "speed"],
+    units: UnitSystem = "si",
+    n_points: int = 801,
+    result: DynamicResult | None = None,
+) -> Figure:
+    """Angle [deg] or speed [rad/s] against time, each temperature, events marked.
+
+    ``result``: the dynamic result with its time series (default: the prediction's).
+    """
+    result = _result(prediction, result)
+    u = Shown(units)
+    series = result.sample(n_points=n_points)
+    times, values = _columns(series, series.angle if quantity == "angle" else series.speed)
+    temps = np.ravel(result.temperature)
+    colors = temperature_colors(len(temps))
+    fig = _figure()
+    ax = fig.add_subplot()
+    for j, temp in enumerate(temps):
+        y = np.degrees(values[:, j]) if quantity == "angle" else values[:, j]
+        ax.plot(times[:, j], y, color=colors[j], label=u.text(float(temp), "temperature"))
+    _mark_events(ax, result, quantity, colors)
+    what = "angle" if quantity == "angle" else "load speed"
+    ax.set_title(plot_title(prediction.system.name, f"dynamic method, {what} against time"))
+    ax.set_xlabel("time since release [s]")
+    ax.set_ylabel("deployed angle [deg]" if quantity == "angle" else "load speed [rad/s]")
+    ax.set_xlim(left=0.0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return fig
+
+
+def heated(result: DynamicResult) -> bool:
+    """True when the damper warms above its ambient temperature (self-heating modelled)."""
+    return bool(np.any(np.ravel(result.max_damper_temperature) > np.ravel(result.temperature)))
+
+
+def plot_damper_temperature(
+    prediction: Prediction,
+    units: UnitSystem = "si",
+    n_points: int = 801,
+    result: DynamicResult | None = None,
+) -> Figure:
+    """The damper's temperature against time at each ambient temperature (self-heating)."""
+    result = _result(prediction, result)
+    u = Shown(units)
+    series = result.sample(n_points=n_points)
+    times, values = _columns(series, series.damper_temperature)
+    temps = np.ravel(result.temperature)
+    colors = temperature_colors(len(temps))
+    fig = _figure()
+    ax = fig.add_subplot()
+    for j, temp in enumerate(temps):
+        shown = [u.value(float(v), "temperature") for v in values[:, j]]
+        label = f"ambient {u.text(float(temp), 'temperature')}"
+        ax.plot(times[:, j], shown, color=colors[j], label=label)
+    ax.set_title(plot_title(prediction.system.name, "damper temperature (self-heating)"))
+    ax.set_xlabel("time since release [s]")
+    ax.set_ylabel(u.head("damper temperature", "temperature"))
+    ax.set_xlim(left=0.0)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return fig
+
+
+def write_dynamic_plots(
+    prediction: Prediction, folder: str | Path, units: UnitSystem = "si"
+) -> list[Path]:
+    """The dynamic method's plots as PNG files in ``folder`` (none without that method)."""
+    result = dynamic_result(prediction)
+    if result is None:
+        return []
+    out = Path(folder)
+    written = [
+        save_figure(
+            plot_dynamic(prediction, quantity, units, result=result),
+            out / f"dynamic_{quantity}_vs_time.png",
+        )
+        for quantity in ("angle", "speed")
+    ]
+    if heated(result):
+        figure = plot_damper_temperature(prediction, units, result=result)
+        written.append(save_figure(figure, out / "dynamic_damper_temperature.png"))
+    return written
