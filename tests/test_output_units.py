@@ -363,3 +363,40 @@ def test_us_plots_are_labelled_in_us_units(tmp_path: Any) -> None:
         "77 degF, exact quasi-static",
         "212 degF, exact quasi-static",
     ]
+
+
+def test_report_in_us_units(tmp_path: Any) -> None:
+    import re
+
+    out = tmp_path / "report.html"
+    result = _run("report", str(_us_config(tmp_path, output="us")), "-o", str(out))
+    assert result.exit_code == 0, result.output
+    html = out.read_text(encoding="utf-8")
+    assert "<th>T [degF]</th>" in html
+    assert "<th>BECD [in*lbf*s/rad]</th>" in html
+    # The components row at 77 degF, 6 significant digits: BECD 23.65272 N*m*s/rad is
+    # 23.65272 / 0.1129848290276167 = 209.3442 in*lbf*s/rad; FS 0.47 N*m is 4.159851 lbf*in.
+    row = re.search(r'<tr data-case="1"><td class="num">77</td>(.*?)</tr>', html, re.S)
+    assert row is not None
+    assert ">209.344<" in row.group(1)
+    assert ">4.15985<" in row.group(1)
+    # Inputs in the display system too: the analysis temperatures read back as written.
+    assert "[-40, 77, 212]" in html
+    # --units si wins over the config's [output] units.
+    result = _run("report", str(_us_config(tmp_path, output="us")), "-o", str(out), "--units", "si")
+    assert result.exit_code == 0, result.output
+    assert "<th>T [degC]</th>" in out.read_text(encoding="utf-8")
+
+
+def test_api_report_and_app_default_units() -> None:
+    response = client.post("/api/report", json={"config": _degf_config(), "units": "us"})
+    assert response.status_code == 200
+    assert "<th>T [degF]</th>" in response.text
+    # ecdsim app --units us: the system of requests that do not choose one.
+    us_client = TestClient(create_app(units="us"))
+    assert us_client.get("/api/example").json()["display_units"] == "us"
+    small = {"config": _degf_config(), "time_points": 2, "sweep_points": 0}
+    assert us_client.post("/api/deploy", json=small).json()["display_units"] == "us"
+    assert (
+        us_client.post("/api/deploy", json={**small, "units": "si"}).json()["display_units"] == "si"
+    )

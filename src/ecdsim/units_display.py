@@ -137,6 +137,23 @@ KEY_SUFFIXES: tuple[tuple[str, str], ...] = (
 )
 
 
+# The kind of each SI unit a config field is read in (ecdsim.config.units.Kind.unit).
+KIND_BY_SI_UNIT: dict[str, str] = {
+    "degC": "temperature",
+    "N*m": "torque",
+    "N*m*s/rad": "damping_rate",
+    "N*m/K": "torque_per_kelvin",
+    "1/K": "per_kelvin",
+    "kg*m^2": "inertia",
+    "kg": "mass",
+    "m": "length",
+    "J/K": "heat_capacity",
+    "rad": "angle",
+    "rad/s": "angular_speed",
+    "s": "time",
+}
+
+
 class UnitSystemError(ValueError):
     """A unit system that is not one of :data:`UNIT_SYSTEMS`; the message says so."""
 

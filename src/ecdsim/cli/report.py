@@ -14,7 +14,7 @@ from typing import Annotated
 import typer
 
 from ecdsim.cli import failon
-from ecdsim.cli.common import echo_warnings, fail, load_run, predict_run
+from ecdsim.cli.common import UnitsOpt, echo_warnings, fail, load_run, predict_run, units_option
 from ecdsim.cli.montecarlo import INTERRUPTED
 
 REPORT_EPILOG = "Example: [bold]ecdsim report examples/paper_cc16.toml -o report.html --pdf[/bold]"
@@ -52,6 +52,7 @@ def report(
         ),
     ] = None,
     fail_on: failon.FailOnOpt = None,
+    units: UnitsOpt = None,
 ) -> None:
     """Write a self-contained HTML report: inputs, components, deployment, plots, warnings."""
     from ecdsim.report import write_report
@@ -59,11 +60,12 @@ def report(
 
     conditions = failon.parse(fail_on)
     loaded = load_run(config, temperature, method)
+    system = units_option(units, loaded)
     failon.require_requirements(conditions, loaded)
     prediction = predict_run(loaded)
     text = config.read_text(encoding="utf-8")
     try:
-        written = write_report(loaded, prediction, text, output)
+        written = write_report(loaded, prediction, text, output, system)
     except OSError as exc:
         fail([f"--output {output}: cannot write ({exc.strerror or exc})"])
     except KeyboardInterrupt:
@@ -98,6 +100,7 @@ def explore(
         str, typer.Option("--host", help="Interface to bind; keep 127.0.0.1 (local only).")
     ] = "127.0.0.1",
     port: Annotated[int, typer.Option("--port", help="TCP port.")] = 8765,
+    units: UnitsOpt = None,
 ) -> None:
     """Start the local explorer (web app + JSON API with OpenAPI docs at /docs)."""
     try:
@@ -112,9 +115,12 @@ def explore(
             ]
         )
     text = None
+    loaded = None
     if config is not None:
-        load_run(config, None, None)  # validate first: errors exit 2 like every command
+        loaded = load_run(config, None, None)  # validate first: errors exit 2 like every command
         text = config.read_text(encoding="utf-8")
-    application = create_app(text)
+    # The page starts in --units if given (else the config's [output] units) and may switch.
+    system = units_option(units, loaded) if units is not None else None
+    application = create_app(text, units=system)
     typer.echo(f"ecdsim explorer on http://{host}:{port}/ (Ctrl-C stops it)")
     uvicorn.run(application, host=host, port=port, log_level="warning")

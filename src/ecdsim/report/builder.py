@@ -27,6 +27,7 @@ from ecdsim.config.units import Kind
 from ecdsim.deployment import Prediction, predict
 from ecdsim.formatting import format_number
 from ecdsim.methods import SOLVERS
+from ecdsim.units_display import KIND_BY_SI_UNIT, Shown, UnitSystem, kind_of_key
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -78,11 +79,14 @@ def fmt(value: float | None, digits: int = 6) -> str:
     return format_number(value, digits)
 
 
-def input_rows(spec: BaseModel, prefix: str = "") -> Iterator[tuple[str, str, str]]:
-    """(key, value, unit) for every field of the validated config, in SI units.
+def input_rows(
+    spec: BaseModel, prefix: str = "", shown: Shown | None = None
+) -> Iterator[tuple[str, str, str]]:
+    """(key, value, unit) for every field of the validated config, in ``shown``'s units.
 
-    Units come from each field's :class:`~ecdsim.config.units.Kind`; sections without a
-    scalar quantity (tables, lists) are shown as they were validated.
+    Units come from each field's :class:`~ecdsim.config.units.Kind` (SI by default);
+    sections without a scalar quantity (tables, lists) are shown as they were validated,
+    in SI.
     """
     for name, info in type(spec).model_fields.items():
         value = getattr(spec, name)
@@ -90,14 +94,47 @@ def input_rows(spec: BaseModel, prefix: str = "") -> Iterator[tuple[str, str, st
         if value is None:
             continue
         if isinstance(value, BaseModel):
-            yield from input_rows(value, f"{key}.")
+            yield from input_rows(value, f"{key}.", shown)
             continue
         kinds = [m for m in info.metadata if isinstance(m, Kind)]
         unit = (kinds[0].unit or "-") if kinds else _units_of(info.annotation)
+        kind = KIND_BY_SI_UNIT.get(unit)
         if isinstance(value, float | int) and not isinstance(value, bool):
+            if shown is not None and kind is not None:
+                yield key, shown.num(float(value), kind), shown.unit(kind)
+                continue
             yield key, fmt(float(value)), unit
+        elif shown is not None and isinstance(value, list | tuple):
+            yield _shown_list(key, value, info.annotation, shown)
         else:
             yield key, _plain(value), _units_of(info.annotation)
+
+
+def _shown_list(key: str, value: Any, annotation: Any, shown: Shown) -> tuple[str, str, str]:
+    """A list field (temperatures, friction or spring table rows) in ``shown``'s units."""
+    units = _units_of(annotation).strip("()").split(", ")
+    kinds = [KIND_BY_SI_UNIT.get(unit) for unit in units]
+
+    def one(item: Any, kind: str | None) -> str:
+        if isinstance(item, float | int) and not isinstance(item, bool) and kind is not None:
+            return shown.num(float(item), kind)
+        return _plain(item)
+
+    if len(kinds) == 1 and not any(isinstance(item, list | tuple) for item in value):
+        text = "[" + ", ".join(one(item, kinds[0]) for item in value) + "]"
+        return key, text, shown.unit(kinds[0]) if kinds[0] else units[0]
+    if len(value) == len(kinds) and not any(isinstance(item, list | tuple) for item in value):
+        # A fixed pair such as a temperature range: each item in its own unit.
+        text = "[" + ", ".join(one(x, k) for x, k in zip(value, kinds, strict=True)) + "]"
+        labels = [shown.unit(k) if k else u for k, u in zip(kinds, units, strict=True)]
+        return key, text, "(" + ", ".join(labels) + ")"
+    if not all(isinstance(row, list | tuple) and len(row) == len(kinds) for row in value):
+        return key, _plain(value), _units_of(annotation)  # another shape: as validated, SI
+    rows = [
+        "[" + ", ".join(one(x, k) for x, k in zip(row, kinds, strict=False)) + "]" for row in value
+    ]
+    labels = [shown.unit(k) if k else u for k, u in zip(kinds, units, strict=True)]
+    return key, "[" + ", ".join(rows) + "]", "(" + ", ".join(labels) + ")"
 
 
 def _plain(value: Any) -> str:
@@ -133,16 +170,20 @@ def figure_data_uri(fig: Figure) -> str:
     return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
 
 
-def _figures(prediction: Prediction) -> list[dict[str, str]]:
+def _figures(prediction: Prediction, units: UnitSystem = "si") -> list[dict[str, str]]:
     from ecdsim.plotting import plot_deployment, plot_speed, plot_torque_speed
 
     made = [
-        ("angle", "Deployed angle against time (paper Fig. 4-6)", plot_deployment(prediction)),
-        ("speed", "Input shaft speed against time", plot_speed(prediction)),
+        (
+            "angle",
+            "Deployed angle against time (paper Fig. 4-6)",
+            plot_deployment(prediction, units=units),
+        ),
+        ("speed", "Input shaft speed against time", plot_speed(prediction, units=units)),
         (
             "torque_speed",
             "ECD torque against speed at each temperature (paper Fig. 8)",
-            plot_torque_speed(prediction),
+            plot_torque_speed(prediction, units=units),
         ),
     ]
     return [
@@ -150,8 +191,9 @@ def _figures(prediction: Prediction) -> list[dict[str, str]]:
     ]
 
 
-def _deployment_rows(document: dict[str, Any]) -> list[dict[str, Any]]:
+def _deployment_rows(document: dict[str, Any], shown: Shown | None = None) -> list[dict[str, Any]]:
     """One row per (temperature, method): the method's numbers and its difference to exact."""
+    u = shown or Shown(digits=6)
     methods: list[str] = document["methods"]
     reference = "exact" if "exact" in methods else methods[0]
     rows = []
@@ -172,7 +214,7 @@ def _deployment_rows(document: dict[str, Any]) -> list[dict[str, Any]]:
             rows.append(
                 {
                     "case": i,
-                    "temperature": fmt(case["temperature_C"]),
+                    "temperature": u.num(case["temperature_C"], "temperature"),
                     "method": method,
                     "label": SOLVERS[method].label,
                     "cells": cells,
@@ -303,9 +345,17 @@ def montecarlo_section(config: Config, samples: int = REPORT_MC_SAMPLES) -> dict
     return section
 
 
-def build_context(config: Config, prediction: Prediction, config_text: str) -> dict[str, Any]:
-    """Everything the template shows, from the prediction and the config."""
+def _kind(key: str) -> str:
+    return kind_of_key(key.rsplit(".", 1)[-1]) or "number"
+
+
+def build_context(
+    config: Config, prediction: Prediction, config_text: str, units: UnitSystem = "si"
+) -> dict[str, Any]:
+    """Everything the template shows, from the prediction and the config, in ``units``."""
+    u = Shown(units, digits=6)
     document = prediction.to_dict()
+    document["display_units"] = units
     provenance = {
         "ecdsim_version": __version__,
         "config_source": config.source,
@@ -323,9 +373,10 @@ def build_context(config: Config, prediction: Prediction, config_text: str) -> d
     components = [
         {
             "case": i,
-            "temperature": fmt(case["temperature_C"]),
+            "temperature": u.num(case["temperature_C"], "temperature"),
             "cells": [
-                {"key": key, "text": fmt(lookup(case, key))} for key, _, _ in COMPONENT_COLUMNS
+                {"key": key, "text": u.num(lookup(case, key), _kind(key))}
+                for key, _, _ in COMPONENT_COLUMNS
             ],
         }
         for i, case in enumerate(document["cases"])
@@ -333,14 +384,18 @@ def build_context(config: Config, prediction: Prediction, config_text: str) -> d
     return {
         "title": config.system.name,
         "provenance": provenance,
-        "inputs": list(input_rows(config.spec)),
+        "inputs": list(input_rows(config.spec, shown=u)),
         "config_text": config_text,
-        "component_columns": COMPONENT_COLUMNS,
+        "component_columns": [
+            (key, symbol, u.unit(_kind(key))) for key, symbol, _ in COMPONENT_COLUMNS
+        ],
         "components": components,
         "method_columns": METHOD_COLUMNS,
-        "deployment": _deployment_rows(document),
+        "deployment": _deployment_rows(document, u),
         "methods": [(m, SOLVERS[m].label) for m in document["methods"]],
-        "figures": _figures(prediction),
+        "figures": _figures(prediction, units),
+        "u": u,
+        "t_unit": u.unit("temperature"),
         "warnings": document["warnings"],
         "margins": margins,
         "montecarlo": montecarlo,
@@ -351,7 +406,9 @@ def build_context(config: Config, prediction: Prediction, config_text: str) -> d
     }
 
 
-def render_html(config: Config, prediction: Prediction, config_text: str) -> str:
+def render_html(
+    config: Config, prediction: Prediction, config_text: str, units: UnitSystem = "si"
+) -> str:
     """The report as one self-contained HTML document (figures inline, no network)."""
     import jinja2
 
@@ -364,9 +421,15 @@ def render_html(config: Config, prediction: Prediction, config_text: str) -> str
     )
     env.globals["fmt"] = fmt
     template = env.get_template("report.html.j2")
-    return template.render(**build_context(config, prediction, config_text))
+    return template.render(**build_context(config, prediction, config_text, units))
 
 
-def write_report(config: Config, prediction: Prediction, config_text: str, path: Path) -> Path:
-    """Render the report and write it atomically to ``path``."""
-    return write_text(path, render_html(config, prediction, config_text))
+def write_report(
+    config: Config,
+    prediction: Prediction,
+    config_text: str,
+    path: Path,
+    units: UnitSystem = "si",
+) -> Path:
+    """Render the report in ``units`` and write it atomically to ``path``."""
+    return write_text(path, render_html(config, prediction, config_text, units))

@@ -221,9 +221,14 @@ def load_body(raw: dict[str, Any]) -> tuple[Config, str]:
     return config, text
 
 
-def display_system(config: Config, asked: str | None) -> UnitSystem:
-    """The unit system to show: the request's, else the config's ``[output] units``."""
-    return check_system(asked if asked is not None else config.spec.output.units)
+def display_system(
+    config: Config, asked: str | None, default: UnitSystem | None = None
+) -> UnitSystem:
+    """The unit system to show: the request's, else ``default`` (``ecdsim app --units``),
+    else the config's ``[output] units``."""
+    if asked is not None:
+        return check_system(asked)
+    return default if default is not None else check_system(config.spec.output.units)
 
 
 def display_block(system: UnitSystem, *documents: Any) -> dict[str, Any]:
@@ -383,8 +388,12 @@ async def _json_response(status: int, content: Any, send: Any) -> None:
     await send({"type": "http.response.body", "body": payload})
 
 
-def create_app(config_text: str | None = None) -> FastAPI:
-    """The explorer app, starting from ``config_text`` (TOML) or the paper's example."""
+def create_app(config_text: str | None = None, units: UnitSystem | None = None) -> FastAPI:
+    """The explorer app, starting from ``config_text`` (TOML) or the paper's example.
+
+    ``units`` (``ecdsim app --units``) is the display unit system of a request that does
+    not choose one; None leaves it to each config's ``[output] units``.
+    """
     start_text = config_text if config_text is not None else EXAMPLE_CONFIG.read_text("utf-8")
     source = "your config" if config_text is not None else "paper example (section 6)"
     example_text = EXAMPLE_CONFIG.read_text("utf-8")
@@ -447,7 +456,7 @@ def create_app(config_text: str | None = None) -> FastAPI:
             raise _refuse([f"which: {which!r} is not one of 'start', 'paper'"])
         text = example_text if which == "paper" else start_text
         raw = tomllib.loads(text)
-        system = _raw_system(raw)
+        system = units if units is not None else _raw_system(raw)
         return {
             "config": raw,
             "toml": text,
@@ -467,7 +476,7 @@ def create_app(config_text: str | None = None) -> FastAPI:
             document = prediction.to_dict()
             extra = curves(prediction, config, body.time_points, body.sweep_points)
             elapsed = 1000.0 * (time.perf_counter() - began)
-            system = display_system(config, body.units)
+            system = display_system(config, body.units, units)
             document["display_units"] = system
             payload = {
                 "prediction": document,
@@ -490,7 +499,7 @@ def create_app(config_text: str | None = None) -> FastAPI:
         except RecursionError:
             raise _refuse([f"toml: nested too deeply (at most {MAX_NESTING} levels)"]) from None
         config, _ = load_body(raw)
-        system = display_system(config, None)
+        system = display_system(config, None, units)
         return {
             "config": raw,
             "toml": body.toml,
@@ -523,7 +532,8 @@ def create_app(config_text: str | None = None) -> FastAPI:
 
         def compute() -> Response:
             config, text = load_body(body.config)
-            html = render_html(config, _predict(config), text)
+            system = display_system(config, body.units, units)
+            html = render_html(config, _predict(config), text, system)
             return HTMLResponse(
                 html, headers={"Content-Disposition": 'attachment; filename="ecdsim-report.html"'}
             )
