@@ -42,7 +42,7 @@ def test_size_json_structure() -> None:
     assert cc16["passed"] is True
     for check in cc16["checks"].values():
         assert set(check) == {"name", "label", "margin", "passed", "cannot_start",
-                              "temperature_C", "value", "unit"}  # fmt: skip
+                              "temperature_C", "value", "unit", "margins", "values"}  # fmt: skip
     intervals = document["ratio_intervals"]
     assert intervals["damper"] == "CDA Cc-16 damper"
     (interval,) = intervals["intervals"]
@@ -224,7 +224,8 @@ def test_size_shows_torque_margin_per_temperature_and_unknown_masses() -> None:
         assert float(cells[3]) == pytest.approx(hand.fecd(t), rel=5e-4)  # 4 digits printed
         assert float(cells[4]) == pytest.approx(hand.fs(t), rel=5e-4)
         assert float(cells[-1]) == pytest.approx(expected, rel=5e-4)
-    assert "│ unknown " in result.stdout  # a Cc-16 part with a Demo part: no mass known
+    # A Cc-16 part with a Demo part: no mass known, shown as '-' and explained.
+    assert "mass '-': unknown" in " ".join(result.stdout.split())
     document = json.loads(
         runner.invoke(
             app, ["size", str(SIZING), "--catalog", str(CATALOGUE), "--json", *CC16]

@@ -83,11 +83,14 @@ def _print(
     tables: list[tuple[str, list[str], list[list[str]]]],
     notes: list[str],
     drop: tuple[str, ...] = _DROP,
+    lead: list[str] | None = None,
 ) -> None:
     from rich.markup import escape
     from rich.table import Table
 
     console = display.make_console()
+    for line in lead or []:  # the answer first (size: the recommended choice and why)
+        console.print(escape(line), highlight=False)
     for title, headers, rows in tables:
         table = Table(title=escape(title), title_justify="left")
         for header in headers:
@@ -167,6 +170,11 @@ def size(
     notes = []
     if any(c.candidate.illustrative for c in result.candidates):
         notes.append(f"* illustrative entries: {ILLUSTRATIVE}; never use them as vendor data")
+    if any(c.candidate.mass is None for c in result.candidates):
+        notes.append(
+            "mass '-': unknown (not in the catalogue, or the damper's catalogue mass is an "
+            "assembly mass with another gearbox); unknown masses rank after every known one"
+        )
     if not requirements.margin.factors_applied:
         notes.append(
             "torque margin: no uncertainty factors applied (all 1); take the factors from the "
@@ -191,6 +199,7 @@ def size(
         document = result.to_dict()
         document["config"] = loaded.source
         document["ratio_intervals"] = None if intervals is None else intervals.to_dict()
+        document["recommendation"] = report.recommendation(result)
         typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
     else:
         tables = [report.requirements_table(result), report.candidates_table(result)]
@@ -203,9 +212,10 @@ def size(
         if chosen:
             tables.append(report.checks_table(chosen[0]))
             tables.append(report.torque_margin_table(chosen[0]))
+            notes[:0] = report.margin_definitions(chosen[0])
         if intervals is not None:
             tables.append(report.intervals_table(intervals))
-        _print(tables, notes)
+        _print(tables, notes, lead=report.recommendation(result))
     for c in result.candidates:
         for warning in c.warnings:
             typer.echo(f"warning: {c.candidate.label}: {warning}", err=True)

@@ -70,7 +70,7 @@ def candidates_table(result: SearchResult) -> Table:
                     str(c.rank),
                     label,
                     "error",
-                    format_number(c.candidate.mass, none="unknown"),
+                    format_number(c.candidate.mass, none="-"),
                     c.error,
                     "",
                     "",
@@ -85,7 +85,7 @@ def candidates_table(result: SearchResult) -> Table:
                 str(c.rank),
                 label,
                 "yes" if c.passed else "no",
-                format_number(c.candidate.mass, none="unknown"),
+                format_number(c.candidate.mass, none="-"),
                 percent(c.margin),
                 " / ".join(format_number(t) for t in c.deployment_time),
                 format_number(c.spread),
@@ -97,20 +97,121 @@ def candidates_table(result: SearchResult) -> Table:
     return title, headers, rows
 
 
+# Each check's margin in words (sizing.requirements, docs/sizing.md): >= 0 is met.
+MARGIN_DEFINITIONS = {
+    "min_deployment_time": "1 - t_min / t",
+    "max_deployment_time": "t_max / t - 1",
+    "max_end_speed": "(v_max - v) / v_max",
+    "max_input_torque": "(limit - torque) / limit",
+    "no_stall": "(least spring torque - friction) / friction",
+    "min_torque_margin": "TM - TM_min",
+    "damper_max_torque": "(max - torque) / max",
+    "damper_linear_speed": "(limit - speed) / limit",
+    "damper_linear_torque": "(limit - torque) / limit",
+    "gearbox_max_output_torque": "(max - torque) / max",
+}
+
+
 def checks_table(candidate: CandidateResult) -> Table:
-    """Each requirement's pass/fail and margin for one candidate."""
-    rows = [
-        [
-            o.label,
-            o.result,
-            percent(o.margin),
-            "-" if o.cannot_start else f"{format_number(o.value)} {o.unit}",
-            format_number(o.temperature_C),
-        ]
-        for o in candidate.checks
+    """Each requirement's pass/fail and its margin at every temperature, for one candidate.
+
+    The worst value and where it occurs follow (secondary columns); the margins'
+    definitions are in :func:`margin_definitions`.
+    """
+    temps = candidate.temperatures
+    rows = []
+    for o in candidate.checks:
+        margins = o.margins or tuple(o.margin if t == o.temperature_C else math.nan for t in temps)
+        rows.append(
+            [
+                o.label,
+                o.result,
+                *("-" if math.isnan(m) else percent(m) for m in margins),
+                "-" if o.cannot_start else f"{format_number(o.value)} {o.unit}",
+                format_number(o.temperature_C),
+            ]
+        )
+    title = (
+        f"Requirements for #{candidate.rank} {candidate.candidate.label}: "
+        "margin at each temperature"
+    )
+    headers = ["requirement", "result", *(f"{t:g} degC" for t in temps)]
+    return title, [*headers, "value (worst)", "at T [degC]"], rows
+
+
+def margin_definitions(candidate: CandidateResult) -> list[str]:
+    """Lines defining the margins of ``candidate``'s checks (>= 0 is met)."""
+    return [
+        "margin, >= 0 where met (the smallest over the temperatures decides):",
+        *(
+            f"  {o.label}: {MARGIN_DEFINITIONS[o.name]}"
+            for o in candidate.checks
+            if o.name in MARGIN_DEFINITIONS
+        ),
     ]
-    title = f"Requirements for #{candidate.rank} {candidate.candidate.label}"
-    return title, ["requirement", "result", "margin", "value (worst)", "at T [degC]"], rows
+
+
+def recommendation(result: SearchResult) -> list[str]:
+    """The recommended candidate (rank 1) and why it ranks first, in words.
+
+    The ranking (:func:`ecdsim.sizing.search.rank_key`): meeting every requirement first,
+    then the lighter (an unknown mass after every known one), then the larger worst
+    margin, then the smaller spread of deployment times. The reason given is the first
+    of these that separates #1 from the next candidate that also meets everything.
+    """
+    valid = [c for c in result.candidates if c.error is None]
+    temps = ", ".join(f"{t:g}" for t in result.requirements.temperatures)
+    if not valid:
+        return ["No candidate could be evaluated (see the errors in the table)."]
+    best = valid[0]
+    label = best.candidate.label + (" (illustrative *)" if best.candidate.illustrative else "")
+    worst = min(best.checks, key=lambda o: o.margin) if best.checks else None
+    at_worst = "" if worst is None else f" ({worst.label}, at {worst.temperature_C:g} degC)"
+    passing = [c for c in valid if c.passed]
+    if not passing:
+        return [
+            f"No candidate meets every requirement at {temps} degC. Closest: #{best.rank} "
+            f"{label}, worst margin {percent(best.margin)}{at_worst}; the gear-ratio "
+            "intervals below show which ratios would."
+        ]
+    mass = best.candidate.mass
+    return [
+        f"Recommended: #{best.rank} {label}: meets every requirement at {temps} degC; "
+        f"mass {'-' if mass is None else f'{format_number(mass)} kg'}; smallest margin "
+        f"{percent(best.margin)}{at_worst}.",
+        f"Why first: {_why(best, passing, len(valid))}",
+    ]
+
+
+def _why(best: CandidateResult, passing: list[CandidateResult], evaluated: int) -> str:
+    """The first ranking criterion that puts ``best`` ahead of the next passing one."""
+    if len(passing) == 1:
+        return f"the only one of the {evaluated} candidates that meets every requirement."
+    other = passing[1]
+    mass, other_mass = best.candidate.mass, other.candidate.mass
+    versus = f"#{other.rank} {other.candidate.label}"
+    if mass is not None and other_mass is None:
+        return (
+            f"the only one of the {len(passing)} that pass with a known mass; {versus} "
+            "and the others have no known mass ('-')."
+        )
+    if mass is not None and other_mass is not None and mass != other_mass:
+        return (
+            f"the lightest of the {len(passing)} that pass: {format_number(mass)} kg "
+            f"against {format_number(other_mass)} kg for {versus}."
+        )
+    same = "no passing candidate has a known mass" if mass is None else "same mass as " + versus
+    if best.margin != other.margin:
+        return (
+            f"{same}; larger smallest margin, {percent(best.margin)} against "
+            f"{percent(other.margin)}."
+        )
+    if best.spread != other.spread:
+        return (
+            f"{same} and margin; smaller spread of deployment times, "
+            f"{format_number(best.spread)} s against {format_number(other.spread)} s."
+        )
+    return f"{same}, margin and spread of deployment times: the two are ordered by name."
 
 
 # Column headings of the resistive torques, in the order of margin.RESISTIVE_TYPES.
@@ -121,6 +222,7 @@ _KIND_HEADERS = {
     "inertia": "inertia",
     "spring": "spring",
     "harness": "harness",
+    "resistive_table": "resist.",
 }
 
 

@@ -268,6 +268,7 @@ def evaluate(
         stalled=solution.stalled,
         stall_angle=solution.stall_angle,
         settings=requirements.margin,
+        resistance=prediction.resistance,
     ).at_minimum()
     terms = TorqueMarginTerms(
         margin=full(terms.margin),
@@ -409,6 +410,8 @@ class CheckOutcome:
     cannot_start : True if the mechanism cannot start at that temperature: a torque
         check then has no running torque ("cannot start"; ``value`` is the torque held
         at rest, and JSON gives null)
+    margins : the margin at each requirement temperature, in their order [-]
+    values : the checked quantity at each requirement temperature, in ``unit``
     """
 
     name: str
@@ -419,6 +422,8 @@ class CheckOutcome:
     value: float
     unit: str
     cannot_start: bool = False
+    margins: tuple[float, ...] = ()
+    values: tuple[float, ...] = ()
 
     @property
     def result(self) -> str:
@@ -438,6 +443,8 @@ class CheckOutcome:
             "temperature_C": self.temperature_C,
             "value": None if self.cannot_start else _optional(self.value),
             "unit": self.unit,
+            "margins": [_optional(m) for m in self.margins],
+            "values": [_optional(v) for v in self.values],
         }
 
 
@@ -680,6 +687,8 @@ def _results(
                     float(check.values[i, j]),
                     check.unit,
                     held,
+                    tuple(float(m) for m in check.margins[i]),
+                    tuple(float(v) for v in check.values[i]),
                 )
             )
         spread = float(np.max(time[i]) - np.min(time[i])) if not np.any(stalled[i]) else np.inf
