@@ -194,7 +194,13 @@ def show(
         # As wide as the table needs: --wide cuts nothing, even beyond the terminal.
         options = console.options.update(width=100_000)
         need = Measurement.get(console, options, table).maximum
-        console.print(table, width=max(console.width, need))
+        # (print's width= is capped at the console's width: widen the console itself.)
+        width = console.width
+        console.width = max(width, need)
+        try:
+            console.print(table)
+        finally:
+            console.width = width
     else:
         console.print(table)
     if hidden:
