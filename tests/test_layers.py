@@ -23,7 +23,16 @@ ARCHITECTURE = ROOT / "docs" / "architecture.md"
 # lower layer. Groups that share a layer are peers: they may not import each other. The
 # group "ecdsim" is the package's own __init__ (its face), not everything under it.
 LAYERS: list[tuple[str, tuple[str, ...]]] = [
-    ("foundation", ("ecdsim._types", "ecdsim._version", "ecdsim.atomic", "ecdsim.formatting")),
+    (
+        "foundation",
+        (
+            "ecdsim._types",
+            "ecdsim._version",
+            "ecdsim.atomic",
+            "ecdsim.formatting",
+            "ecdsim.jsonrows",
+        ),
+    ),
     ("physics", ("ecdsim.physics",)),
     ("model", ("ecdsim.model",)),
     ("solvers", ("ecdsim.solvers",)),
@@ -32,10 +41,11 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("system", ("ecdsim.deployment",)),
     ("config", ("ecdsim.config",)),
     ("plots", ("ecdsim.plotting",)),
-    ("studies", ("ecdsim.characterize", "ecdsim.sizing")),
+    ("studies", ("ecdsim.characterize", "ecdsim.sizing", "ecdsim.sweeps")),
     ("tolerances", ("ecdsim.montecarlo",)),
     ("report", ("ecdsim.report",)),
     ("explorer", ("ecdsim.webapp",)),
+    ("notebook", ("ecdsim.api",)),
     ("command line", ("ecdsim.cli",)),
     ("entry points", ("ecdsim", "ecdsim.__main__")),
 ]

@@ -13,9 +13,29 @@ The package is layered (see ``docs/architecture.md``):
   :mod:`ecdsim.montecarlo`), :mod:`ecdsim.report` and :mod:`ecdsim.webapp` build on
   the layers below and are used by the CLI.
 
-Importing :mod:`ecdsim` itself is cheap: it imports nothing heavy.
+Importing :mod:`ecdsim` itself is cheap: it imports nothing heavy. The notebook API
+(:mod:`ecdsim.api`, docs/api.md) is exported lazily: ``ecdsim.deploy``, ``ecdsim.fit``,
+``ecdsim.size`` and ``ecdsim.load`` import it on first use.
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
 
 from ecdsim._version import __version__
 
-__all__ = ["__version__"]
+if TYPE_CHECKING:
+    from ecdsim.api import deploy, fit, load, size
+
+__all__ = ["__version__", "deploy", "fit", "load", "size"]
+
+_LAZY = {"deploy", "fit", "load", "size"}
+
+
+def __getattr__(name: str) -> Any:
+    """The notebook API's functions, imported from :mod:`ecdsim.api` on first use."""
+    if name in _LAZY:
+        from ecdsim import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'ecdsim' has no attribute {name!r}")

@@ -32,6 +32,8 @@ from ecdsim.cli.montecarlo import EPILOG as MONTECARLO_EPILOG
 from ecdsim.cli.montecarlo import montecarlo
 from ecdsim.cli.report import APP_EPILOG, REPORT_EPILOG, explore, report
 from ecdsim.cli.size import FLUID_EPILOG, SIZE_EPILOG, compare_fluid, size
+from ecdsim.cli.sweep import EPILOG as SWEEP_EPILOG
+from ecdsim.cli.sweep import sweep
 
 if TYPE_CHECKING:
     from ecdsim.deployment import Prediction
@@ -205,6 +207,7 @@ app.add_typer(fit_app, name="fit", help="Fit BECD(T) and FECD(T) to bench data (
 app.command(cls=HelpCommand, epilog=SIZE_EPILOG)(size)
 app.command(cls=HelpCommand, name="compare-fluid", epilog=FLUID_EPILOG)(compare_fluid)
 app.command(cls=HelpCommand, epilog=MONTECARLO_EPILOG)(montecarlo)
+app.command(cls=HelpCommand, epilog=SWEEP_EPILOG)(sweep)
 app.command(cls=HelpCommand, epilog=REPORT_EPILOG)(report)
 app.command(cls=HelpCommand, name="app", epilog=APP_EPILOG)(explore)
 

@@ -11,7 +11,9 @@ The pieces, each in its own module (user guide: docs/montecarlo.md):
   in process or on dask.distributed, streamed to Parquet, resumable;
 * :mod:`~ecdsim.montecarlo.stats` and :mod:`~ecdsim.montecarlo.repeatability`: the
   statistics, on the ranks and intervals of :mod:`~ecdsim.montecarlo.intervals`;
-  :mod:`~ecdsim.montecarlo.plots`: histogram, CDF and tornado plots.
+  :mod:`~ecdsim.montecarlo.plots`: histogram, CDF and tornado plots;
+* :mod:`~ecdsim.montecarlo.samples`: ``ecdsim.montecarlo.open(folder)``, a finished
+  study's samples as a pandas DataFrame (or a pyarrow dataset) for notebooks.
 
 pandas, pyarrow and dask are optional (``pip install 'ecdsim[montecarlo]'``) and are
 imported only when a study runs.
@@ -29,6 +31,8 @@ from ecdsim.montecarlo.run import (
     evaluate_chunk,
     run,
 )
+from ecdsim.montecarlo.samples import NotAStudy
+from ecdsim.montecarlo.samples import open_samples as open
 from ecdsim.montecarlo.store import MissingDependency
 from ecdsim.montecarlo.tolerances import Tolerance, ToleranceSet, resolve
 
@@ -36,6 +40,7 @@ __all__ = [
     "DaskExecutor",
     "InProcess",
     "MissingDependency",
+    "NotAStudy",
     "Plan",
     "RunError",
     "RunInterrupted",
@@ -45,6 +50,7 @@ __all__ = [
     "build_plan",
     "choose_executor",
     "evaluate_chunk",
+    "open",
     "resolve",
     "run",
 ]

@@ -1,0 +1,138 @@
+"""``ecdsim sweep``: vary config keys over a grid or a Latin hypercube, write a tidy table.
+
+Only typer is imported at start-up; the library (:mod:`ecdsim.sweeps`) inside the command.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ecdsim.cli.common import fail
+
+EPILOG = (
+    "Example: [bold]ecdsim sweep examples/paper_cc16.toml --vary gearbox.ratio=200:600:21 "
+    "--vary load.start_torque=3.2,3.73,4.2 -o sweep.csv --plot sweep.png[/bold]"
+)
+
+
+def sweep(
+    config: Annotated[
+        Path, typer.Argument(help="TOML configuration file (see docs/config.md).", metavar="CONFIG")
+    ],
+    vary: Annotated[
+        list[str],
+        typer.Option(
+            "--vary",
+            help="A config key and its values, repeatable: KEY=START:STOP:N [UNIT] "
+            "(N evenly spaced values) or KEY=V1,V2,... (each a number with an optional unit). "
+            "Plain numbers are SI (temperatures degC).",
+            metavar="KEY=VALUES",
+        ),
+    ],
+    out: Annotated[
+        Path,
+        typer.Option(
+            "--out",
+            "-o",
+            help="The table: CSV, or Parquet if the name ends .parquet.",
+            metavar="FILE",
+        ),
+    ] = Path("sweep.csv"),
+    latin: Annotated[
+        int | None,
+        typer.Option(
+            "--latin",
+            help="N points of a Latin hypercube (ranges sampled continuously) instead of the "
+            "full factorial grid.",
+            metavar="N",
+        ),
+    ] = None,
+    seed: Annotated[
+        int, typer.Option("--seed", help="Seed of the Latin hypercube.", metavar="SEED")
+    ] = 0,
+    temperature: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--temperature",
+            "-T",
+            help="Analysis temperature, repeatable; overrides \\[analysis] (bare numbers are "
+            "degC).",
+            metavar="TEMP",
+        ),
+    ] = None,
+    method: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--method",
+            "-m",
+            help="Solver, repeatable: paper, exact, dynamic. Overrides \\[analysis].",
+            metavar="METHOD",
+        ),
+    ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            "--plot", help="Write a PNG of --output against each varied key.", metavar="FILE.png"
+        ),
+    ] = None,
+    output: Annotated[
+        str,
+        typer.Option(
+            "--output",
+            help="The column --plot draws (e.g. deployment_time_s, end_speed_rad_s).",
+            metavar="COLUMN",
+        ),
+    ] = "deployment_time_s",
+) -> None:
+    """Vary config keys (full factorial or Latin hypercube) and tabulate every result."""
+    import tomllib
+
+    from ecdsim.cli.common import load_run
+    from ecdsim.config import ConfigError
+    from ecdsim.config.loader import read_config_text
+    from ecdsim.sweeps import SweepError, design, parse_vary, run_sweep
+
+    loaded = load_run(config, temperature, method)  # the base config, checked once
+    try:
+        raw = tomllib.loads(read_config_text(config))
+    except (ConfigError, tomllib.TOMLDecodeError) as exc:  # pragma: no cover - load_run read it
+        fail([f"{config}: {exc}"])
+    problems: list[str] = []
+    varies = []
+    for text in vary:
+        try:
+            varies.append(parse_vary(text))
+        except SweepError as exc:
+            problems.extend(exc.problems)
+    if latin is not None and latin < 1:
+        problems.append(f"--latin {latin}: expected a number of points >= 1")
+    if problems:
+        fail(problems)
+    try:
+        points = design(varies, latin, seed)
+        result = run_sweep(raw, str(config), varies, points, loaded.temperatures, loaded.methods)
+    except SweepError as exc:
+        fail(exc.problems)
+    if plot is not None and output not in result.columns:
+        known = [c for c in result.columns if c not in {v.column for v in varies}]
+        fail([f"--output {output!r}: not a column of the table; expected one of {known}"])
+    try:
+        result.write(out)
+    except ModuleNotFoundError as exc:
+        fail([f"--out {out}: {exc}"])
+    except OSError as exc:
+        fail([f"--out {out}: cannot write ({exc.strerror or exc})"])
+    typer.echo(f"wrote {out} ({len(points)} points, {len(result.rows)} rows)")
+    for index, message in result.errors:
+        typer.echo(f"warning: point {index}: {message}", err=True)
+    if plot is not None:
+        from ecdsim.plotting import save_figure
+
+        try:
+            save_figure(result.plot(output), plot)
+        except OSError as exc:
+            fail([f"--plot {plot}: cannot write ({exc.strerror or exc})"])
+        typer.echo(f"wrote {plot}")

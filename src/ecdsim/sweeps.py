@@ -1,0 +1,420 @@
+"""What-if sweeps: vary any config keys, predict at every point, and gather a tidy table.
+
+A sweep varies config keys by their dotted names (``gearbox.ratio``, ``load.inertia``;
+see :mod:`ecdsim.config.overrides`) over a full factorial grid or a Latin hypercube,
+runs :func:`ecdsim.deployment.predict` at every point with the config's temperatures and
+methods, and returns one row per (point, temperature, method): the varied values (in
+SI, the unit in the column name), then the same quantities as
+:func:`prediction_rows` (the notebook API's ``deploy(...).to_dataframe()``).
+
+Value syntax (``ecdsim sweep --vary``):
+
+* ``KEY=START:STOP:N`` or ``KEY=START:STOP:N UNIT``: N >= 2 evenly spaced values
+  (Latin hypercube: the continuous range START..STOP, N ignored);
+* ``KEY=V1,V2,...``: a list, each a number with an optional unit (``1 kg*m^2``).
+
+A plain number is read in the key's SI unit (temperatures in degC).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ecdsim.config.units import NUMBER_PATTERN
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ecdsim.deployment import Prediction
+
+MAX_POINTS = 100_000
+
+_RANGE = re.compile(rf"^\s*({NUMBER_PATTERN})\s*:\s*({NUMBER_PATTERN})\s*:\s*(\S+?)\s*(?:\s(.*))?$")
+_ITEM = re.compile(rf"^\s*({NUMBER_PATTERN})\s*(.*?)\s*$")
+_KEY = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
+
+
+class SweepError(ValueError):
+    """A bad sweep specification; ``problems`` holds one line each."""
+
+    def __init__(self, problems: list[str]) -> None:
+        self.problems = list(problems)
+        super().__init__("\n".join(self.problems))
+
+
+@dataclass(frozen=True)
+class Vary:
+    """One varied key.
+
+    Attributes
+    ----------
+    key : dotted config key
+    values : the values as the config reads them (numbers, or "number unit" strings)
+    si : the same values in the key's SI unit (degC for temperatures; NaN if unknown)
+    low, high : the range's ends for a Latin hypercube (None for a list)
+    unit : the SI unit of ``si`` ("" for a plain number, None if the key has no unit)
+    """
+
+    key: str
+    values: tuple[object, ...]
+    si: tuple[float, ...]
+    low: object | None = None
+    high: object | None = None
+    unit: str | None = None
+
+    @property
+    def column(self) -> str:
+        """The table column: the key, with its SI unit in brackets when it has one."""
+        return f"{self.key} [{self.unit}]" if self.unit else self.key
+
+
+def _si(key: str, value: object) -> float:
+    from ecdsim.config.overrides import config_value, field_kind
+
+    kind = field_kind(key)
+    if kind is None:
+        return float(value) if isinstance(value, int | float) else math.nan
+    return kind.parse(config_value(key, value))
+
+
+def parse_vary(text: str, option: str = "--vary") -> Vary:
+    """Read one ``KEY=VALUES`` specification; :class:`SweepError` (one line) if bad."""
+    from ecdsim.config.units import QuantityError
+
+    key, sep, spec = text.partition("=")
+    key = key.strip()
+    shown = key or text
+    syntax = "expected KEY=START:STOP:N [UNIT] or KEY=V1,V2,... (e.g. gearbox.ratio=200:600:21)"
+    if not sep or not _KEY.match(key):
+        raise SweepError([f"{option} {text!r}: {shown!r} is not a config key; {syntax}"])
+    if not spec.strip():
+        raise SweepError([f"{option} {key}: no values; {syntax}"])
+    from ecdsim.config.overrides import field_unit
+
+    unit = field_unit(key)
+    low: object | None = None
+    high: object | None = None
+    match = _RANGE.match(spec)
+    if match:
+        start, stop, count, unit_text = match.groups()
+        if not re.fullmatch(r"\d+", count) or int(count) < 2:
+            raise SweepError(
+                [f"{option} {key}: the count {count!r} is not an integer >= 2; {syntax}"]
+            )
+        n = int(count)
+        if n > MAX_POINTS:
+            raise SweepError([f"{option} {key}: {n} values, more than {MAX_POINTS}"])
+        numbers = np.linspace(float(start), float(stop), n)
+        values: list[object] = [
+            f"{float(x)!r} {unit_text}" if unit_text else float(x) for x in numbers
+        ]
+        low, high = values[0], values[-1]
+    elif ":" in spec:
+        raise SweepError([f"{option} {key}: {spec!r} is not START:STOP:N; {syntax}"])
+    else:
+        values = []
+        for item in spec.split(","):
+            found = _ITEM.match(item)
+            if found is None:
+                raise SweepError(
+                    [f"{option} {key}: {item.strip()!r} is not a number with an optional unit"]
+                )
+            number, unit_text = found.groups()
+            values.append(f"{number} {unit_text}" if unit_text else float(number))
+    try:
+        si = tuple(_si(key, v) for v in values)
+    except (QuantityError, ValueError) as exc:
+        raise SweepError([f"{option} {key}: {exc}"]) from None
+    return Vary(key, tuple(values), si, low, high, unit)
+
+
+def design(
+    varies: Sequence[Vary], latin: int | None = None, seed: int = 0
+) -> list[dict[str, tuple[object, float]]]:
+    """The sweep's points: each a mapping key -> (config value, SI value).
+
+    Full factorial (every combination, the last key varying fastest) when ``latin`` is
+    None; else ``latin`` points of a Latin hypercube drawn with ``seed``: a range key
+    is sampled uniformly over START..STOP (in the range's own unit), a list key picks
+    its values in equal strata.
+    """
+    if not varies:
+        raise SweepError(["--vary: give at least one KEY=VALUES"])
+    keys = [v.key for v in varies]
+    if len(set(keys)) != len(keys):
+        twice = sorted({k for k in keys if keys.count(k) > 1})
+        raise SweepError([f"--vary {k}: given more than once" for k in twice])
+    if latin is None:
+        total = math.prod(len(v.values) for v in varies)
+        if total > MAX_POINTS:
+            raise SweepError([f"--vary: {total} points, more than {MAX_POINTS}; use --latin N"])
+        return [
+            {v.key: (v.values[i], v.si[i]) for v, i in zip(varies, combo, strict=True)}
+            for combo in itertools.product(*(range(len(v.values)) for v in varies))
+        ]
+    if latin < 1 or latin > MAX_POINTS:
+        raise SweepError([f"--latin {latin}: expected 1 to {MAX_POINTS} points"])
+    rng = np.random.default_rng(seed)
+    points: list[dict[str, tuple[object, float]]] = [{} for _ in range(latin)]
+    for v in varies:
+        # One stratum per point, in random order, and a uniform position within it.
+        u = (rng.permutation(latin) + rng.random(latin)) / latin
+        for point, ui in zip(points, u, strict=True):
+            if v.low is not None and v.high is not None:
+                a, b = v.si[0], v.si[-1]
+                si = a + float(ui) * (b - a)
+                lo_value = v.low
+                if isinstance(lo_value, str):
+                    # the range's own unit: interpolate the magnitudes, keep the unit text
+                    lo_num = float(lo_value.split()[0])
+                    hi_num = float(str(v.high).split()[0])
+                    unit_text = lo_value.split(maxsplit=1)[1]
+                    value: object = f"{lo_num + float(ui) * (hi_num - lo_num)!r} {unit_text}"
+                    si = _si(v.key, value)
+                else:
+                    value = si
+                point[v.key] = (value, si)
+            else:
+                i = min(int(ui * len(v.values)), len(v.values) - 1)
+                point[v.key] = (v.values[i], v.si[i])
+    return points
+
+
+def _scalar(value: object) -> object:
+    if value is None:
+        return math.nan
+    if isinstance(value, bool | int | float | str):
+        return value
+    return None
+
+
+def prediction_rows(prediction: Prediction) -> list[dict[str, Any]]:
+    """One row per (temperature, method): inputs at T and the method's results, SI.
+
+    Column names carry their units as ``docs/json.md`` spells them (``temperature_C``,
+    ``deployment_time_s``, ``damping_rate_Nms_per_rad``); a missing value is NaN.
+    """
+    document = prediction.to_dict()
+    rows = []
+    for case in document["cases"]:
+        shared = {
+            "temperature_C": case["temperature_C"],
+            "damping_rate_Nms_per_rad": case["damping_rate_Nms_per_rad"],
+            "friction_Nm": case["friction_Nm"],
+            "system_friction_Nm": case["system_friction_Nm"],
+            "total_friction_Nm": case["total_friction_Nm"],
+        }
+        for method in document["methods"]:
+            row: dict[str, Any] = {"temperature_C": shared["temperature_C"], "method": method}
+            row.update({k: v for k, v in shared.items() if k != "temperature_C"})
+            for name, value in case[method].items():
+                scalar = _scalar(value)
+                if scalar is not None:
+                    row[name] = scalar
+            rows.append(row)
+    return rows
+
+
+@dataclass
+class SweepResult:
+    """A finished sweep: the rows, the varied keys, and what every point ran.
+
+    Attributes
+    ----------
+    rows : one dict per (point, temperature, method)
+    varies : the varied keys
+    title : the config's title
+    methods : the methods run at each point
+    errors : ``(point index, message)`` for points the model could not evaluate
+    """
+
+    rows: list[dict[str, Any]]
+    varies: list[Vary]
+    title: str
+    methods: tuple[str, ...]
+    errors: list[tuple[int, str]] = field(default_factory=list)
+
+    @property
+    def columns(self) -> list[str]:
+        """Every column, in order of first appearance."""
+        seen: dict[str, None] = {}
+        for row in self.rows:
+            seen.update(dict.fromkeys(row))
+        return list(seen)
+
+    def to_csv(self) -> str:
+        """The table as CSV text (NaN as an empty cell, numbers with full precision)."""
+        import csv
+        import io
+
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        columns = self.columns
+        writer.writerow(columns)
+        for row in self.rows:
+            writer.writerow([_cell(row.get(c)) for c in columns])
+        return buffer.getvalue()
+
+    def write(self, path: str | Path) -> Path:
+        """Write the table atomically: Parquet if ``path`` ends .parquet, else CSV.
+
+        Parquet needs pyarrow (``pip install 'ecdsim[montecarlo]'``).
+        """
+        from ecdsim import atomic
+
+        target = Path(path)
+        if target.suffix.lower() != ".parquet":
+            return atomic.write_text(target, self.to_csv())
+        try:
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+        except ImportError:
+            raise ModuleNotFoundError(
+                "Parquet output needs pyarrow; install it with: pip install 'ecdsim[montecarlo]'"
+            ) from None
+        columns = self.columns
+        table = pa.table({c: [row.get(c) for row in self.rows] for c in columns})
+        return atomic.write_with(target, lambda handle: pq.write_table(table, handle))
+
+    def plot(self, output: str = "deployment_time_s", method: str | None = None) -> Figure:
+        """``output`` against each varied key (one panel each), a colour per temperature.
+
+        Only the rows of ``method`` (default: the first method run) are drawn. With one
+        varied key the points of each temperature are joined by a line.
+        """
+        from ecdsim.plotting import _figure, plot_title, temperature_colors
+
+        chosen = method or self.methods[0]
+        rows = [r for r in self.rows if r.get("method") == chosen]
+        if not rows or output not in self.columns:
+            known = [c for c in self.columns if c not in {v.column for v in self.varies}]
+            raise KeyError(f"{output!r} is not an output of this sweep; known: {known}")
+        temps = sorted({float(r["temperature_C"]) for r in rows})
+        colors = temperature_colors(len(temps))
+        n = len(self.varies)
+        fig = _figure(width=max(5.0, 4.2 * min(n, 3)), height=4.4 if n <= 3 else 8.0)
+        cols = min(n, 3)
+        for k, vary in enumerate(self.varies):
+            ax = fig.add_subplot((n + cols - 1) // cols, cols, k + 1)
+            for temp, color in zip(temps, colors, strict=True):
+                mine = [r for r in rows if float(r["temperature_C"]) == temp]
+                x = np.array([float(r[vary.column]) for r in mine])
+                y = np.array([_number(r.get(output)) for r in mine])
+                order = np.argsort(x, kind="stable")
+                style = "o-" if n == 1 else "o"
+                ax.plot(
+                    x[order], y[order], style, color=color, ms=4, alpha=0.8, label=f"{temp:g} degC"
+                )
+            ax.set_xlabel(vary.column)
+            ax.set_ylabel(_label(output))
+            ax.grid(True, alpha=0.3)
+            if k == 0:
+                ax.legend(title=f"{chosen} method", fontsize="small")
+        fig.suptitle(plot_title(self.title, f"sweep of {_label(output)}", width=100))
+        return fig
+
+
+_UNIT_SUFFIXES = (
+    ("_Nms_per_rad", "N*m*s/rad"),
+    ("_rad_s", "rad/s"),
+    ("_Nm", "N*m"),
+    ("_rad", "rad"),
+    ("_s", "s"),
+    ("_C", "degC"),
+    ("_J", "J"),
+)
+
+
+def _label(column: str) -> str:
+    """``deployment_time_s`` -> ``deployment time [s]``."""
+    for suffix, unit in _UNIT_SUFFIXES:
+        if column.endswith(suffix):
+            return f"{column[: -len(suffix)].replace('_', ' ')} [{unit}]"
+    return column.replace("_", " ")
+
+
+def _number(value: object) -> float:
+    if isinstance(value, bool):
+        return float(value)
+    return float(value) if isinstance(value, int | float) else math.nan
+
+
+def _cell(value: object) -> object:
+    if isinstance(value, float):
+        return "" if math.isnan(value) else repr(value)
+    return "" if value is None else value
+
+
+def run_sweep(
+    raw: Mapping[str, Any],
+    source: str,
+    varies: Sequence[Vary],
+    points: Sequence[Mapping[str, tuple[object, float]]],
+    temperatures: Sequence[float] | None = None,
+    methods: Sequence[str] | None = None,
+) -> SweepResult:
+    """Validate every point's config, then predict at each and gather the rows.
+
+    ``raw`` is the parsed TOML document of the base config. Every invalid point is
+    reported before anything runs (:class:`SweepError`, one line per problem naming
+    ``--vary`` and the key); a point the model cannot evaluate (damping <= 0, ...)
+    gives rows with the ``error`` column set and NaN results.
+    """
+    from ecdsim.config import ConfigError
+    from ecdsim.config.loader import validate
+    from ecdsim.config.overrides import apply_overrides
+    from ecdsim.model import DeploymentSystem
+
+    specs: list[Any] = []
+    problems: list[str] = []
+    seen: set[str] = set()
+    for point in points:
+        overrides = {k: value for k, (value, _) in point.items()}
+        try:
+            spec = validate(apply_overrides(raw, overrides), source)
+        except ConfigError as exc:
+            shown = ", ".join(f"{k}={v}" for k, v in overrides.items())
+            for p in exc.problems:
+                if p not in seen:
+                    seen.add(p)
+                    problems.append(f"--vary: {p} (at {shown})")
+            continue
+        specs.append(spec)
+        if len(problems) >= 20:
+            break
+    if problems:
+        raise SweepError(problems)
+    from ecdsim.deployment import ModelDomainError, predict
+
+    rows: list[dict[str, Any]] = []
+    errors: list[tuple[int, str]] = []
+    title = ""
+    chosen_methods: tuple[str, ...] = ()
+    for index, (point, spec) in enumerate(zip(points, specs, strict=True)):
+        system = DeploymentSystem(ecd=spec.ecd(), load=spec.load.to_model(), name=spec.title)
+        title = spec.title
+        temps = tuple(temperatures) if temperatures else tuple(spec.analysis.temperatures)
+        chosen_methods = tuple(methods) if methods else tuple(spec.analysis.methods)
+        head: dict[str, Any] = {"point": index}
+        head.update({v.column: point[v.key][1] for v in varies})
+        try:
+            prediction = predict(system, temps, chosen_methods, dynamics=spec.dynamics())
+        except ModelDomainError as exc:
+            errors.append((index, str(exc)))
+            for temp in temps:
+                for method in chosen_methods:
+                    rows.append(
+                        {**head, "temperature_C": temp, "method": method, "error": str(exc)}
+                    )
+            continue
+        for row in prediction_rows(prediction):
+            rows.append({**head, **row})
+    return SweepResult(rows, list(varies), title, chosen_methods, errors)
