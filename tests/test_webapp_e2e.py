@@ -343,6 +343,7 @@ def test_dynamic_config_describes_its_methods(server: str, page: Any) -> None:
     for i, case in enumerate(cli_cases):
         shown = cells[f"{i}:dynamic.deployment_time_s"]
         assert shown == pytest.approx(case["dynamic"]["deployment_time_s"], rel=CELL_REL)
+    _shot(page, "08-dynamic-config")
     _axe(page)
 
 
@@ -473,6 +474,26 @@ def test_fit_from_the_bench(server: str, page: Any, tmp_path: Path) -> None:
     assert float(b_ref) == pytest.approx(linear["damping_rate_ref_Nms_per_rad"], rel=CELL_REL)
     _shot(page, "06-fit-drop-test")
     _axe(page)
+
+    # In US units the fit is converted too: BECD in in*lbf*s/rad, T in degF, by hand.
+    before = _requests(page)
+    page.select_option("#units", "us")
+    _wait_requests(page, before + 1)
+    us: dict[str, str] = page.evaluate(
+        """() => Object.fromEntries([...document.querySelectorAll('#fit-table td[data-fit]')]
+              .map(td => [td.dataset.fit + ':' + td.dataset.key, td.textContent]))"""
+    )
+    for i, fitted in enumerate(cli_fit["temperatures"]):
+        becd = fitted["damping_rate_Nms_per_rad"] / LBF_IN
+        assert float(us[f"{i}:damping_rate_Nms_per_rad"]) == pytest.approx(becd, rel=CELL_REL)
+    assert "[in*lbf*s/rad]" in page.inner_text("#fit-table thead")
+    assert _plot(page, "fit-damping-plot")["x"] == "temperature [degF]"
+    # c per degF is c per K times 5/9 (a degF is 5/9 K).
+    c_shown = float(page.inner_text('#fit-laws td[data-law="c"]'))
+    assert c_shown == pytest.approx(linear["temperature_coefficient_per_K"] * 5 / 9, rel=CELL_REL)
+    _shot(page, "07-fit-us-units")
+    page.select_option("#units", "si")
+    _wait_requests(page, before + 2)
 
     # Use the fitted damper: the model then equals the CLI's -o file with this config.
     start = page.evaluate("window.ecdsim.sentConfig")

@@ -37,6 +37,8 @@ const SI_UNITS = {
   angular_speed: { unit: "rad/s", scale: 1, offset: 0 },
   time: { unit: "s", scale: 1, offset: 0 },
   energy: { unit: "J", scale: 1, offset: 0 },
+  per_kelvin: { unit: "1/K", scale: 1, offset: 0 },
+  torque_per_kelvin: { unit: "N*m/K", scale: 1, offset: 0 },
 };
 
 const state = {
@@ -234,6 +236,7 @@ async function requestDeploy() {
       document.getElementById("results-section").dataset.stale = "false";
       showErrors([]);
       render();
+      if (state.fit) renderFit(); // the display units may have changed
       saveToUrl();
     } else failed(body.errors || [`HTTP ${r.status}`]);
   } catch (e) {
@@ -623,10 +626,10 @@ function renderFit() {
     const lin = laws.damping_rate.linear;
     if (lin) {
       lawRows.push(["B_ref (linear law, at " + sig(show("temperature", lin.reference_temperature_C)) + " " + label("temperature") + ")", sig(show("damping_rate", lin.damping_rate_ref_Nms_per_rad)), ci({ value: 0, ci95: lin.damping_rate_ref_Nms_per_rad_ci95 }, "damping_rate"), label("damping_rate"), "b_ref"]);
-      lawRows.push(["c (linear law)", sig(lin.temperature_coefficient_per_K), lin.temperature_coefficient_per_K_ci95 ? `[${sig(lin.temperature_coefficient_per_K_ci95[0], 4)}, ${sig(lin.temperature_coefficient_per_K_ci95[1], 4)}]` : "-", "1/K", "c"]);
+      lawRows.push(["c (linear law)", sig(show("per_kelvin", lin.temperature_coefficient_per_K)), ci({ value: 0, ci95: lin.temperature_coefficient_per_K_ci95 }, "per_kelvin"), label("per_kelvin"), "c"]);
     }
     if (laws.friction) {
-      lawRows.push(["FECD slope", sig(laws.friction.slope_Nm_per_K), laws.friction.slope_Nm_per_K_ci95 ? `[${sig(laws.friction.slope_Nm_per_K_ci95[0], 4)}, ${sig(laws.friction.slope_Nm_per_K_ci95[1], 4)}]` : "-", "N*m/K", "slope"]);
+      lawRows.push(["FECD slope", sig(show("torque_per_kelvin", laws.friction.slope_Nm_per_K)), ci({ value: 0, ci95: laws.friction.slope_Nm_per_K_ci95 }, "torque_per_kelvin"), label("torque_per_kelvin"), "slope"]);
       lawRows.push(["FECD at 0 degC", sig(show("torque", laws.friction.at_0C_Nm)), ci({ value: 0, ci95: laws.friction.at_0C_Nm_ci95 }, "torque"), label("torque"), "at_0C"]);
     }
   }
