@@ -400,3 +400,28 @@ def test_api_report_and_app_default_units() -> None:
     assert (
         us_client.post("/api/deploy", json={**small, "units": "si"}).json()["display_units"] == "si"
     )
+
+
+def test_fit_drop_test_in_us_units() -> None:
+    import json
+
+    from tests.conftest import ROOT
+
+    data = str(ROOT / "examples" / "drop_test.csv")
+    si = json.loads(_run("fit", "drop-test", data, "--json").stdout)
+    result = _run("fit", "drop-test", data, "--units", "us", "--wide")
+    assert result.exit_code == 0, result.output
+    assert "T_ref = 77 degF" in result.stdout
+    friction = si["temperature_laws"]["friction"]
+    at_0c, slope = friction["at_0C_Nm"], friction["slope_Nm_per_K"]
+    # The FECD line in US units: the value at 32 degF (= 0 degC) in lbf*in, and the slope
+    # per degF: N*m/K / 1.8 per degF-per-K / 0.1129848290276167 N*m per lbf*in; the table
+    # prints 5 significant digits.
+    lines = [line for line in result.stdout.splitlines() if "at_32F [lbf*in]" in line]
+    assert len(lines) == 1
+    assert f"{at_0c / LBF_IN_NM:.5g}" in lines[0]
+    lines = [line for line in result.stdout.splitlines() if "slope [lbf*in/degF]" in line]
+    assert f"{slope / 1.8 / LBF_IN_NM:.5g}" in lines[0]
+    us = json.loads(_run("fit", "drop-test", data, "--json", "--units", "us").stdout)
+    assert us["display_units"] == "us"
+    assert us["temperature_laws"] == si["temperature_laws"]  # JSON stays SI

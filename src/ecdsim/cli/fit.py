@@ -18,8 +18,9 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from ecdsim.cli import display
-from ecdsim.cli.common import fail, temperature_option
+from ecdsim.cli.common import UnitsOpt, fail, temperature_option, units_option
 from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, WideOpt
+from ecdsim.units_display import KEY_SUFFIXES, Shown, UnitSystem, kind_of_key
 
 if TYPE_CHECKING:
     from ecdsim.characterize.droptest import DropTestResult, FailedTemperature
@@ -81,10 +82,31 @@ def _fmt(value: float | None, digits: int = 4) -> str:
     return f"{value:.{digits}g}"
 
 
-def _ci(estimate: Estimate, digits: int = 4) -> str:
+def _ci(estimate: Estimate, digits: int = 4, u: Shown | None = None, kind: str = "") -> str:
     if estimate.ci95 is None:
         return "-"
-    return f"[{estimate.ci95[0]:.{digits}g}, {estimate.ci95[1]:.{digits}g}]"
+    low, high = estimate.ci95
+    if u is not None and kind:
+        low, high = u.value(low, kind), u.value(high, kind)
+    return f"[{low:.{digits}g}, {high:.{digits}g}]"
+
+
+def _q(u: Shown, value: float | None, kind: str, digits: int = 4) -> str:
+    """A fitted SI value in ``u``'s unit; "-" if missing or not finite."""
+    if value is None or not math.isfinite(value):
+        return "-"
+    return _fmt(u.value(value, kind), digits)
+
+
+def _parameter(u: Shown, key: str) -> tuple[str, str]:
+    """A law parameter's row label and kind: the JSON key in SI, ``name [unit]`` otherwise."""
+    kind = kind_of_key(key) or "number"
+    if u.system == "si":
+        return key, kind
+    suffix = next(s for s, k in KEY_SUFFIXES if k == kind) if kind != "number" else ""
+    name = key.removesuffix(suffix) if suffix and key.endswith(suffix) else key
+    name = "at_32F" if name == "at_0C" else name  # 0 degC is 32 degF
+    return u.head(name, kind), kind
 
 
 def _load_config(path: Path) -> Config:
@@ -191,6 +213,7 @@ def _finish(
     plotter: Callable[[Path], list[Path]],
     printer: Callable[[], None],
     as_json: bool,
+    units: UnitSystem = "si",
 ) -> None:
     """Write the -o file and plots, render the result, then warnings and written paths."""
     written, plots = _write_outputs(text, output, plot, plotter)
@@ -199,6 +222,7 @@ def _finish(
         document["warnings"] = [w.to_dict() for w in warnings]
         document["parameter_file"] = written
         document["plots"] = plots
+        document["display_units"] = units
         _emit_json(document)
     else:
         printer()
@@ -241,6 +265,7 @@ def drop_test(
         ),
     ] = "torque",
     strict: StrictOpt = False,
+    units: UnitsOpt = None,
     wide: WideOpt = False,
     plain: PlainOpt = False,
 ) -> None:
@@ -256,6 +281,7 @@ def drop_test(
     except ValueError as exc:
         fail([f"--noise: {exc}"])
     loaded = _load_config(config) if config is not None else None
+    u = Shown(units_option(units, loaded))
     try:
         result = fit_drop_test(data, reference, noise=noise)
     except ConfigError as exc:
@@ -309,12 +335,13 @@ def drop_test(
         output,
         plot,
         plotter,
-        lambda: _print_drop_test(result),
+        lambda: _print_drop_test(result, u),
         as_json,
+        u.system,
     )
 
 
-def _print_drop_test(result: DropTestResult) -> None:
+def _print_drop_test(result: DropTestResult, u: Shown) -> None:
     from rich.markup import escape
     from rich.table import Table
 
@@ -325,11 +352,11 @@ def _print_drop_test(result: DropTestResult) -> None:
         title_justify="left",
     )
     headers = [
-        "T [degC]",
+        u.head("T", "temperature"),
         "n",
-        "BECD [N*m*s/rad]",
+        u.head("BECD", "damping_rate"),
         "95 % CI",
-        "FECD [N*m]",
+        u.head("FECD", "torque"),
         "95 % CI",
         "R^2",
         "start-up corr. [%]",
@@ -346,40 +373,41 @@ def _print_drop_test(result: DropTestResult) -> None:
             flags.append("outlier rows " + ", ".join(str(int(r)) for r in fit.rows[line.outliers]))
         correction = float(abs(fit.correction).max()) * 100.0
         table.add_row(
-            _fmt(fit.temperature),
+            u.num(fit.temperature, "temperature"),
             str(line.n_points),
-            _fmt(line.slope.value),
-            _ci(line.slope),
-            _fmt(line.intercept.value),
-            _ci(line.intercept),
+            _q(u, line.slope.value, "damping_rate"),
+            _ci(line.slope, u=u, kind="damping_rate"),
+            _q(u, line.intercept.value, "torque"),
+            _ci(line.intercept, u=u, kind="torque"),
             f"{line.r_squared:.5f}",
             f"{correction:.2f}" if fit.corrected_for_inertia else "not corrected",
             escape("; ".join(flags)) or "-",
         )
     drop = ("start-up corr.", "R^2", "n", "95 % CI", "95 % CI")
     display.show(console, table, drop=drop, wrap=("flags",))
-    _print_footer(console, result)
+    _print_footer(console, result, u)
 
 
-def _print_footer(console: Any, result: DropTestResult | TraceResult) -> None:
+def _print_footer(console: Any, result: DropTestResult | TraceResult, u: Shown) -> None:
     """The laws over temperature, then how many rows were used."""
     from rich.markup import escape
 
-    _print_laws(console, result.laws)
+    _print_laws(console, result.laws, u)
     used, excluded = result.table.rows.size, len(result.table.excluded_rows)
     console.print(
         escape(f"{result.table.source}: {used} rows used, {excluded} excluded"), style="dim"
     )
 
 
-def _print_laws(console: Any, laws: Any) -> None:
+def _print_laws(console: Any, laws: Any, u: Shown) -> None:
     from rich.markup import escape
     from rich.table import Table
 
     if laws is None:
         return
     table = Table(
-        title=f"Laws over temperature (T_ref = {laws.reference_temperature:g} degC)",
+        title="Laws over temperature "
+        f"(T_ref = {u.text(laws.reference_temperature, 'temperature')})",
         title_justify="left",
     )
     for header in ("law", "parameter", "value", "95 % CI", "chi^2 / dof", "p"):
@@ -389,11 +417,12 @@ def _print_laws(console: Any, laws: Any) -> None:
         fits.append(("FECD line", laws.friction))
     for label, fit in fits:
         for i, (key, estimate) in enumerate(zip(fit.law.keys, fit.parameters, strict=True)):
+            name, kind = _parameter(u, key)
             table.add_row(
                 escape(label if i == 0 else ""),
-                escape(key),
-                _fmt(estimate.value, 5),
-                _ci(estimate, 5),
+                escape(name),
+                _q(u, estimate.value, kind, 5),
+                _ci(estimate, 5, u, kind),
                 (f"{fit.chi_square:.3g} / {fit.dof}" if i == 0 else ""),
                 (_fmt(fit.p_value, 3) if i == 0 else ""),
             )
@@ -445,6 +474,7 @@ def trace(
     ] = None,
     reference_temperature: ReferenceOpt = "25",
     strict: StrictOpt = False,
+    units: UnitsOpt = None,
     wide: WideOpt = False,
     plain: PlainOpt = False,
 ) -> None:
@@ -461,6 +491,7 @@ def trace(
     reference = temperature_option("--reference-temperature", reference_temperature)
     at = None if temperature is None else temperature_option("--temperature", temperature)
     loaded = _load_config(config)
+    u = Shown(units_option(units, loaded))
     try:
         result = fit_traces(
             data,
@@ -509,12 +540,13 @@ def trace(
         output,
         plot,
         plotter,
-        lambda: _print_traces(result),
+        lambda: _print_traces(result, u),
         as_json,
+        u.system,
     )
 
 
-def _print_traces(result: TraceResult) -> None:
+def _print_traces(result: TraceResult, u: Shown) -> None:
     from rich.markup import escape
     from rich.table import Table
 
@@ -524,14 +556,20 @@ def _print_traces(result: TraceResult) -> None:
         table = Table(
             title=(
                 "Spring torques fitted to the traces (at "
-                f"{spring.reference_temperature:g} degC; BECD and friction from the config)"
+                f"{u.text(spring.reference_temperature, 'temperature')}; BECD and friction "
+                "from the config)"
             ),
             title_justify="left",
         )
-        for header in ("parameter", "value [N*m]", "95 % CI"):
+        for header in ("parameter", u.head("value", "torque"), "95 % CI"):
             table.add_column(escape(header), justify="right")
-        table.add_row("start_torque", _fmt(spring.start_torque.value, 5), _ci(spring.start_torque))
-        table.add_row("end_torque", _fmt(spring.end_torque.value, 5), _ci(spring.end_torque))
+        for name, estimate in (
+            ("start_torque", spring.start_torque),
+            ("end_torque", spring.end_torque),
+        ):
+            table.add_row(
+                name, _q(u, estimate.value, "torque", 5), _ci(estimate, u=u, kind="torque")
+            )
         display.show(console, table)
     else:
         table = Table(
@@ -539,40 +577,46 @@ def _print_traces(result: TraceResult) -> None:
             title_justify="left",
         )
         headers = [
-            "T [degC]",
+            u.head("T", "temperature"),
             "n",
-            "BECD [N*m*s/rad]",
+            u.head("BECD", "damping_rate"),
             "95 % CI",
-            "F total [N*m]",
+            u.head("F total", "torque"),
             "95 % CI",
-            "FS [N*m]",
-            "FECD [N*m]",
+            u.head("FS", "torque"),
+            u.head("FECD", "torque"),
         ]
         for header in headers:
             table.add_column(escape(header), justify="right")
         for fit in result.fits:
             table.add_row(
-                _fmt(fit.temperature),
+                u.num(fit.temperature, "temperature"),
                 str(fit.statistics.n_points),
-                _fmt(fit.damping_rate.value),
-                _ci(fit.damping_rate),
-                _fmt(fit.total_friction.value),
-                _ci(fit.total_friction),
-                _fmt(fit.system_friction),
-                _fmt(fit.friction.value),
+                _q(u, fit.damping_rate.value, "damping_rate"),
+                _ci(fit.damping_rate, u=u, kind="damping_rate"),
+                _q(u, fit.total_friction.value, "torque"),
+                _ci(fit.total_friction, u=u, kind="torque"),
+                _q(u, fit.system_friction, "torque"),
+                _q(u, fit.friction.value, "torque"),
             )
         display.show(console, table, drop=("n", "FS", "95 % CI", "95 % CI"))
     residuals = Table(title="Residuals", title_justify="left")
-    for header in ("T [degC]", "rms [deg]", "R^2", "Durbin-Watson", "fitted time [s]"):
+    for header in (
+        u.head("T", "temperature"),
+        "rms [deg]",
+        "R^2",
+        "Durbin-Watson",
+        "fitted time [s]",
+    ):
         residuals.add_column(escape(header), justify="right")
     for curve in result.curves:
         e = curve.residuals
         residuals.add_row(
-            _fmt(curve.trace.temperature),
+            u.num(curve.trace.temperature, "temperature"),
             _fmt(math.degrees(float((e * e).mean()) ** 0.5), 3),
             f"{curve.r_squared:.6f}",
             _fmt(curve.durbin_watson, 3),
             _fmt(curve.deployment_time),
         )
     display.show(console, residuals, drop=("Durbin-Watson",))
-    _print_footer(console, result)
+    _print_footer(console, result, u)
