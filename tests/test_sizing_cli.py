@@ -101,7 +101,7 @@ def test_compare_fluid_json_and_plot(tmp_path: Path, saved_figures: SavedFigures
     case = document["cases"][0]
     assert set(case["ecd"]) == set(case["fluid"]) == {
         "deadband_rad", "damped_time_s", "free_time_s", "engage_speed_rad_s",
-        "total_time_s", "end_speed_rad_s", "stalled",
+        "total_time_s", "end_speed_rad_s", "stalled", "engagement_torque_Nm",
     }  # fmt: skip
     assert case["ecd"]["damped_time_s"] == pytest.approx(hand.exact_time(-40.0), rel=1e-12)
     assert (out / "ecd_vs_fluid.png").read_bytes().startswith(b"\x89PNG")

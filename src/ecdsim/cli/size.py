@@ -313,7 +313,15 @@ def compare_fluid(
         if comparison.fluid.free_time is None:
             notes.append(
                 "no load inertia given ([fluid_damper] load_inertia or [load] inertia): the "
-                "free time through the deadband is not computed"
+                "free time through the deadband and the engagement shock are not computed"
+            )
+        else:
+            lost = np.degrees(comparison.ecd.deadband)
+            notes.append(
+                "shock: the damping torque when the damper engages at the end of its deadband, "
+                "coefficient x engagement speed (the load crosses the deadband undamped); "
+                f"the ECD's lost motion is {lost:.3g} deg"
+                + (", so it engages at rest" if lost == 0.0 else "")
             )
         _print([report.fluid_table(comparison)], notes, _FLUID_DROP)
     for line in warnings:

@@ -552,14 +552,32 @@ class FluidComparison:
     fluid: DeadbandDeployment
     extrapolated: BoolArray
 
+    def engagement_torques(self) -> tuple[FloatArray | None, FloatArray | None]:
+        """The damping torque at engagement, ECD and fluid damper [N*m]; None without inertia.
+
+        At the end of its deadband the damper engages at the speed the undamped load has
+        reached, so its torque jumps at once to ``coefficient * engage_speed**n`` (the
+        paper's case for the ECD: a fluid damper's 15 deg or more of deadband against
+        the ECD's lost motion of 0.25 deg at most, section 3.4). An ECD without lost
+        motion engages at rest: 0. Infinite where the engagement speed is.
+        """
+        if self.ecd.engage_speed is None or self.fluid.engage_speed is None:
+            return None, None
+        ecd = as_float(self.ecd_damping_rate * self.ecd.engage_speed)
+        fluid = as_float(self.fluid_coefficient * np.power(self.fluid.engage_speed, self.exponent))
+        return ecd, fluid
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (infinite times and speeds become null); see docs/sizing.md."""
 
         def number(x: float) -> float | None:
             return float(x) if math.isfinite(x) else None
 
-        def side(d: DeadbandDeployment, i: int) -> dict[str, Any]:
+        ecd_shock, fluid_shock = self.engagement_torques()
+
+        def side(d: DeadbandDeployment, i: int, shock: FloatArray | None) -> dict[str, Any]:
             return {
+                "engagement_torque_Nm": None if shock is None else number(float(shock[i])),
                 "deadband_rad": d.deadband,
                 "damped_time_s": number(float(d.damped_time[i])),
                 "free_time_s": None if d.free_time is None else number(float(d.free_time[i])),
@@ -593,8 +611,8 @@ class FluidComparison:
                     "viscosity_SI": float(self.viscosity[i]),
                     "fluid_friction_Nm": float(self.fluid_friction[i]),
                     "viscosity_extrapolated": bool(self.extrapolated[i]),
-                    "ecd": side(self.ecd, i),
-                    "fluid": side(self.fluid, i),
+                    "ecd": side(self.ecd, i, ecd_shock),
+                    "fluid": side(self.fluid, i, fluid_shock),
                 }
                 for i, t in enumerate(self.temperatures)
             ],

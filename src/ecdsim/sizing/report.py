@@ -290,6 +290,9 @@ def fluid_table(comparison: FluidComparison) -> Table:
     if inertia:
         headers += ["fluid deadband t [s]", "engage speed [rad/s]", "fluid total [s]"]
     headers += ["fluid / ECD"]
+    ecd_shock, fluid_shock = comparison.engagement_torques()
+    if ecd_shock is not None:
+        headers += ["fluid shock [N*m]", "ECD shock [N*m]"]
     rows = []
     for i, t in enumerate(comparison.temperatures):
         ecd_t = comparison.ecd.total_time if inertia else comparison.ecd.damped_time
@@ -313,6 +316,8 @@ def fluid_table(comparison: FluidComparison) -> Table:
                 format_number(float(fluid_t[i])),
             ]
         row.append(format_number(ratio, 3))
+        if ecd_shock is not None and fluid_shock is not None:
+            row += [format_number(float(fluid_shock[i])), format_number(float(ecd_shock[i]))]
         rows.append(row)
     title = (
         f"ECD against {comparison.name}, matched at {comparison.match_temperature:g} degC "
