@@ -15,7 +15,8 @@ The package is layered (see ``docs/architecture.md``):
 
 Importing :mod:`ecdsim` itself is cheap: it imports nothing heavy. The notebook API
 (:mod:`ecdsim.api`, docs/api.md) is exported lazily: ``ecdsim.deploy``, ``ecdsim.fit``,
-``ecdsim.size`` and ``ecdsim.load`` import it on first use.
+``ecdsim.size`` and ``ecdsim.load`` import it on first use, and ``ecdsim.montecarlo``
+(for ``ecdsim.montecarlo.open(folder)``) is imported when first named.
 """
 
 from __future__ import annotations
@@ -38,4 +39,8 @@ def __getattr__(name: str) -> Any:
         from ecdsim import api
 
         return getattr(api, name)
+    if name == "montecarlo":  # ecdsim.montecarlo.open(folder) after a bare import ecdsim
+        import ecdsim.montecarlo
+
+        return ecdsim.montecarlo
     raise AttributeError(f"module 'ecdsim' has no attribute {name!r}")
