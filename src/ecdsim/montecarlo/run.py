@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from ecdsim._version import __version__
-from ecdsim.montecarlo import apply, sampling, store
+from ecdsim.montecarlo import apply, sampling, store, streaming
 from ecdsim.montecarlo.tolerances import ToleranceSet, resolve
 
 if TYPE_CHECKING:
@@ -277,6 +277,8 @@ class ChunkResult:
     warnings : the model's warnings in this chunk: code, temperature, method, count, example
     version : ecdsim version of the process that computed it
     written : True if the worker already wrote the chunk file (columns then empty)
+    sensitivity_sums : the chunk's sums for the sensitivity statistics, encoded
+        (:mod:`ecdsim.montecarlo.streaming`), stored in the chunk file's metadata
     """
 
     index: int
@@ -284,6 +286,7 @@ class ChunkResult:
     warnings: list[dict[str, Any]]
     version: str
     written: bool = False
+    sensitivity_sums: str = ""
 
 
 def chunk_values(plan: Plan, index: int) -> np.ndarray[Any, np.dtype[np.float64]]:
@@ -320,6 +323,7 @@ def outputs_of(plan: Plan, prediction: Prediction) -> dict[str, np.ndarray[Any, 
             stalled=solution.stalled,
             stall_angle=solution.stall_angle,
             settings=plan.margin,
+            resistance=prediction.resistance,
         ).minimum()
         found[MARGIN] = np.broadcast_to(lowest, shape)
     return found
@@ -359,14 +363,14 @@ def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
         for (c, t, m), n in sorted(counts.items(), key=lambda item: repr(item[0]))
     ]
     ordered = {name: columns[name] for name in plan.columns}
-    return ChunkResult(index, ordered, warnings, __version__)
+    sums = streaming.encode(streaming.chunk_sums(plan, ordered))
+    return ChunkResult(index, ordered, warnings, __version__, sensitivity_sums=sums)
 
 
 def write_result(plan: Plan, out: Path, result: ChunkResult) -> Path:
     """Write an evaluated chunk as its Parquet file, atomically, stamped with the plan."""
-    return store.write_chunk(
-        out, result.index, result.columns, plan.identity_sha256, {"warnings": result.warnings}
-    )
+    extra = {"warnings": result.warnings, streaming.KEY: result.sensitivity_sums}
+    return store.write_chunk(out, result.index, result.columns, plan.identity_sha256, extra)
 
 
 def evaluate_and_write(plan: Plan, index: int, out: Path) -> ChunkResult:
@@ -377,7 +381,7 @@ def evaluate_and_write(plan: Plan, index: int, out: Path) -> ChunkResult:
     """
     result = evaluate_chunk(plan, index)
     write_result(plan, out, result)
-    return ChunkResult(index, {}, result.warnings, result.version, written=True)
+    return ChunkResult(index, {}, result.warnings, result.version, True, result.sensitivity_sums)
 
 
 class Executor(Protocol):

@@ -42,13 +42,15 @@ import numpy as np
 
 from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim._version import __version__
-from ecdsim.montecarlo import repeatability
+from ecdsim.montecarlo import repeatability, streaming
 from ecdsim.montecarlo.intervals import confidence_ranks, proportion_interval, rank_of
+from ecdsim.montecarlo.streaming import Sums
 
 if TYPE_CHECKING:
     from pathlib import Path
 
     from ecdsim.montecarlo.run import Plan
+    from ecdsim.montecarlo.store import ChunkReader
 
 PERCENTILES: dict[str, float] = {"P1": 0.01, "P5": 0.05, "P50": 0.50, "P95": 0.95, "P99": 0.99}
 MAX_BINS = 64
@@ -180,6 +182,13 @@ def standardized_regression(
         gram += dx.T @ dx
         cross += dx.T @ dy
         total += float(dy @ dy)
+    return regression_from_sums(gram, cross, total)
+
+
+def regression_from_sums(
+    gram: FloatArray, cross: FloatArray, total: float
+) -> tuple[FloatArray | None, float | None]:
+    """SRCs and R^2 from centred sums: ``dx.T @ dx``, ``dx.T @ dy`` and ``dy @ dy``."""
     x_std = np.sqrt(np.diag(gram))
     if total <= 0.0 or np.any(x_std <= 0.0):
         return None, None
@@ -234,14 +243,29 @@ def first_order_indices(
     total = float(centred @ centred)
     if total <= 0.0:
         return None
-    out = np.empty(d)
+    counts = np.empty((d, bins))
+    sums = np.empty((d, bins))
     for j in range(d):
         # Unused samples go to an extra bin, which is then dropped.
         label = np.where(keep, labels[:, j], bins)
-        counts = np.bincount(label, minlength=bins + 1)[:bins]
-        sums = np.bincount(label, weights=centred, minlength=bins + 1)[:bins]
-        filled = counts > 0
-        between = float(np.sum(sums[filled] ** 2 / counts[filled]))
+        counts[j] = np.bincount(label, minlength=bins + 1)[:bins]
+        sums[j] = np.bincount(label, weights=centred, minlength=bins + 1)[:bins]
+    return first_order_from_bins(counts, sums, total, count)
+
+
+def first_order_from_bins(
+    counts: FloatArray, sums: FloatArray, total: float, count: int
+) -> FloatArray:
+    """First-order indices from each input's bin counts and bins' sums of centred t.
+
+    ``counts`` and ``sums`` have shape (d, bins); ``total`` is the sum of squares of
+    the centred response and ``count`` the number of samples (:func:`first_order_indices`).
+    """
+    d, bins = counts.shape
+    out = np.empty(d)
+    for j in range(d):
+        filled = counts[j] > 0
+        between = float(np.sum(sums[j][filled] ** 2 / counts[j][filled]))
         groups = int(np.count_nonzero(filled))
         within = total - between
         out[j] = (between - (groups - 1) * within / (count - groups)) / total
@@ -281,6 +305,28 @@ def sensitivity(
         "bins": bins,
         "inputs": rows,
     }
+
+
+def sensitivity_from_sums(keys: Sequence[str], sums: Sums, bins: int) -> dict[str, Any]:
+    """:func:`sensitivity` from the merged per-chunk sums of :mod:`.streaming`."""
+    count = int(sums.count)
+    coefficients: FloatArray | None = None
+    r_squared: float | None = None
+    first: FloatArray | None = None
+    if count >= len(keys) + 2:
+        coefficients, r_squared = regression_from_sums(sums.gram, sums.cross, sums.total)
+    if count > 2 * bins and sums.total > 0.0:
+        first = first_order_from_bins(sums.bin_counts, sums.centred_bin_sums(), sums.total, count)
+    rows: list[dict[str, Any]] = [
+        {
+            "key": key,
+            "src": None if coefficients is None else float(coefficients[j]),
+            "first_order": None if first is None else float(first[j]),
+        }
+        for j, key in enumerate(keys)
+    ]
+    rows.sort(key=lambda r: -abs(r["src"] or 0.0))
+    return {"samples": count, "r_squared": r_squared, "bins": bins, "inputs": rows}
 
 
 def nominal(plan: Plan) -> dict[float, dict[str, Any]]:
@@ -357,26 +403,49 @@ def _warnings(tags: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return sorted(merged.values(), key=lambda e: (e["code"], repr(e["temperature_C"])))
 
 
+def _merged_sums(
+    plan: Plan, reader: ChunkReader, tags: list[dict[str, Any]], bins: int
+) -> list[Sums]:
+    """Each temperature's sensitivity sums over the whole study, merged in chunk order.
+
+    A chunk file without them (written before they existed) is reduced from its columns.
+    """
+    d = plan.tolerances.dimension
+    merged = [Sums.empty(d, bins) for _ in plan.temperatures]
+    for k, tag in enumerate(tags):
+        text = tag.get(streaming.KEY)
+        try:
+            sums = None if text is None else streaming.decode(text, len(merged), d, bins)
+        except ValueError:
+            sums = None
+        if sums is None:
+            sums = streaming.chunk_sums(plan, reader.chunk(k, plan.columns))
+        merged = [a.merge(b) for a, b in zip(merged, sums, strict=True)]
+    return merged
+
+
 def summarize(plan: Plan, out: Path) -> dict[str, Any]:
     """The study's statistics per temperature, read from its chunk files (JSON-ready)."""
     from ecdsim.montecarlo.run import output_column
     from ecdsim.montecarlo.store import ChunkReader
 
     reader = ChunkReader(out, plan.chunks)
-    data = reader.read(plan.columns)
+    tags = reader.tags()
+    # Order statistics need whole columns, but only these: the inputs' columns (the bulk
+    # of the files) enter through the sums each chunk carries (module streaming).
+    wanted = ["sample"]
+    for temperature in plan.temperatures:
+        wanted += [output_column(o, temperature) for o in plan.outputs]
+    data = reader.read(wanted)
     if not np.array_equal(data["sample"], np.arange(plan.samples)):
         raise ValueError(f"{out}: the chunk files do not hold samples 0..{plan.samples - 1}")
+    del data["sample"]
     keys = plan.tolerances.keys
-    tolerances = plan.tolerances.tolerances
-    # (n, d) views of (d, n) arrays: every column stays contiguous, nothing is copied.
-    values = np.stack([np.asarray(data[k], dtype=float) for k in keys]).T
     bins = bin_count(plan.samples)
-    labels = np.stack(
-        [bin_labels(t.scores(values[:, j]), bins) for j, t in enumerate(tolerances)]
-    ).T
+    merged = _merged_sums(plan, reader, tags, bins)
     reference = nominal(plan)
     cases = []
-    for temperature in plan.temperatures:
+    for temperature, sums in zip(plan.temperatures, merged, strict=True):
         times = np.asarray(data[output_column("deployment_time_s", temperature)], dtype=float)
         stalled = np.asarray(data[output_column("stalled", temperature)], dtype=bool)
         speeds = np.asarray(data[output_column("end_speed_rad_s", temperature)], dtype=float)
@@ -388,7 +457,7 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
                 "deployment_time_s": describe(times),
                 "end_speed_rad_s": describe(speeds[~stalled]),
                 "stall": stall(stalled),
-                "sensitivity": sensitivity(keys, values, labels, bins, times),
+                "sensitivity": sensitivity_from_sums(keys, sums, bins),
                 "repeatability": repeatability.study(
                     times, nominal_case["deployment_time_s"], plan.repeat_within, plan.repeat_runs
                 ),
@@ -409,6 +478,6 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
         "tolerances": plan.tolerances.to_dict(),
         "correlation": [list(row) for row in plan.tolerances.correlation],
         "cases": cases,
-        "warnings": _warnings(reader.tags()),
+        "warnings": _warnings(tags),
         "notes": _notes(plan),
     }

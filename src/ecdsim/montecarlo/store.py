@@ -114,12 +114,14 @@ def write_chunk(
         allow_nan=False,
     )
     table = table.replace_schema_metadata({METADATA_KEY: tag.encode("utf-8")})
-    # Sampled floats do not repeat: dictionary encoding would cost 4x the write time for
-    # nothing.
-    return atomic.write_with(
-        chunk_path(out, index),
-        lambda stream: pq.write_table(table, stream, use_dictionary=False),
-    )
+    # Sampled floats do not repeat and do not compress: dictionary encoding cost 4x the
+    # write time, snappy 1.5x and per-page min/max statistics 2.5x, for files 3 % smaller
+    # at best. The file is built in memory and written in one call (pyarrow writing to a
+    # Python stream makes many small writes).
+    buffer = pa.BufferOutputStream()
+    pq.write_table(table, buffer, use_dictionary=False, compression="none", write_statistics=False)
+    data = buffer.getvalue()
+    return atomic.write_with(chunk_path(out, index), lambda stream: stream.write(data))
 
 
 def chunk_tag(path: Path) -> dict[str, Any] | None:
@@ -177,14 +179,31 @@ class ChunkReader:
         return np.concatenate(parts)
 
     def read(self, names: Sequence[str]) -> dict[str, np.ndarray[Any, Any]]:
-        """Several columns over all samples, each chunk file opened once."""
+        """Several columns over all samples, each chunk file opened once.
+
+        Each column is filled chunk by chunk into one array, so that the peak memory is
+        the columns plus one chunk (not the columns twice, as concatenating would).
+        """
         pq = require("pyarrow.parquet")
-        parts: dict[str, list[np.ndarray[Any, Any]]] = {name: [] for name in names}
-        for k in range(self.chunks):
-            table = pq.read_table(chunk_path(self.out, k), columns=list(names))
+        paths = [chunk_path(self.out, k) for k in range(self.chunks)]
+        rows = [pq.read_metadata(path).num_rows for path in paths]
+        found: dict[str, np.ndarray[Any, Any]] = {}
+        start = 0
+        for path, count in zip(paths, rows, strict=True):
+            table = pq.read_table(path, columns=list(names))
             for name in names:
-                parts[name].append(table.column(name).to_numpy())
-        return {name: np.concatenate(chunks) for name, chunks in parts.items()}
+                part = table.column(name).to_numpy()
+                if name not in found:
+                    found[name] = np.empty(sum(rows), dtype=part.dtype)
+                found[name][start : start + count] = part
+            start += count
+        return found
+
+    def chunk(self, index: int, names: Sequence[str]) -> dict[str, np.ndarray[Any, Any]]:
+        """Columns of one chunk file."""
+        pq = require("pyarrow.parquet")
+        table = pq.read_table(chunk_path(self.out, index), columns=list(names))
+        return {name: table.column(name).to_numpy() for name in names}
 
     def floats(self, name: str) -> FloatArray:
         """One float column over all samples."""

@@ -1,0 +1,131 @@
+"""Monte Carlo statistics computed while the chunks are solved (issue 13, item 2).
+
+The sensitivity sums each chunk carries (:mod:`ecdsim.montecarlo.streaming`) are merged
+in chunk order; merged, they must give what a one-pass computation over all samples
+gives (:func:`ecdsim.montecarlo.stats.sensitivity`, itself checked against least squares
+and hand-computed binned variances in test_montecarlo_stats.py). The LHS design is drawn
+with NumPy directly and must be scipy's LatinHypercube bit for bit.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+from scipy.stats import qmc
+
+from ecdsim._types import FloatArray
+from ecdsim.config import load_config
+from ecdsim.montecarlo import build_plan, run, sampling, store, streaming
+from ecdsim.montecarlo.run import evaluate_chunk
+from ecdsim.montecarlo.stats import (
+    bin_count,
+    bin_labels,
+    sensitivity,
+    sensitivity_from_sums,
+    summarize,
+)
+from tests.conftest import ROOT
+
+EXAMPLE = ROOT / "examples" / "paper_cc16_tolerances.toml"
+# Merged pairwise (Chan et al.) against one pass: the same sums in another order, so they
+# agree to rounding; the SRCs go through a d x d solve, which can lose a few digits more.
+MERGED = 1e-11
+
+
+@pytest.mark.parametrize(
+    ("seed", "dimension", "chunk_size", "index", "count"),
+    [(7, 8, 4096, 3, 4096), (1, 3, 100, 0, 37), (2**40, 1, 5, 9, 5)],
+)
+def test_lhs_is_scipys_latin_hypercube_bit_for_bit(
+    seed: int, dimension: int, chunk_size: int, index: int, count: int
+) -> None:
+    found = sampling.uniforms("lhs", seed, dimension, chunk_size, index, count)
+    engine = qmc.LatinHypercube(dimension, rng=sampling.chunk_generator(seed, index))
+    assert np.array_equal(found, engine.random(count))
+
+
+def random_chunk(
+    rng: np.random.Generator, n: int, d: int, bins: int
+) -> tuple[FloatArray, np.ndarray[Any, Any], FloatArray]:
+    values = rng.normal(size=(n, d)) * np.arange(1.0, d + 1.0) + 10.0
+    scores = rng.random((n, d))
+    labels = bin_labels(scores, bins)
+    times = 40.0 + values @ np.linspace(1.0, -1.0, d) + rng.normal(size=n) + 5.0 * scores[:, 0]
+    times[rng.random(n) < 0.01] = np.inf  # stalled samples leave the sums
+    return values, labels, times
+
+
+def test_merged_chunk_sums_equal_one_pass_over_all_samples() -> None:
+    rng = np.random.default_rng(4)
+    d, bins = 5, 12
+    chunks = [random_chunk(rng, n, d, bins) for n in (1000, 37, 2500, 1, 800)]
+    merged = streaming.Sums.empty(d, bins)
+    for values, labels, times in chunks:
+        merged = merged.merge(streaming.sums_of(values, labels, times, bins))
+    values, labels, times = (np.concatenate(parts) for parts in zip(*chunks, strict=True))
+    keys = [f"x{j}" for j in range(d)]
+    expected = sensitivity(keys, values, labels, bins, times)
+    found = sensitivity_from_sums(keys, merged, bins)
+    assert found["samples"] == expected["samples"] == int(np.isfinite(times).sum())
+    assert found["r_squared"] == pytest.approx(expected["r_squared"], rel=MERGED)
+    by_key = {row["key"]: row for row in expected["inputs"]}
+    for row in found["inputs"]:
+        assert row["src"] == pytest.approx(by_key[row["key"]]["src"], rel=MERGED)
+        # The first-order index of a no-effect input is ~0: compare absolutely there.
+        assert row["first_order"] == pytest.approx(
+            by_key[row["key"]]["first_order"], rel=MERGED, abs=1e-13
+        )
+
+
+def test_sums_survive_the_metadata_text_exactly() -> None:
+    rng = np.random.default_rng(9)
+    values, labels, times = random_chunk(rng, 300, 3, 7)
+    empty = streaming.Sums.empty(3, 7)
+    odd = streaming.Sums(
+        np.inf,
+        np.full(3, np.nan),
+        -np.inf,
+        empty.gram,
+        empty.cross,
+        np.nan,
+        empty.bin_counts,
+        empty.bin_sums,
+    )
+    sums = [streaming.sums_of(values, labels, times, 7), odd]
+    back = streaming.decode(streaming.encode(sums), 2, 3, 7)
+    for a, b in zip(sums, back, strict=True):
+        assert np.array_equal(a.to_vector(), b.to_vector(), equal_nan=True)
+    with pytest.raises(ValueError, match="wrong length"):
+        streaming.decode(streaming.encode(sums), 2, 3, 8)
+
+
+def test_summary_of_files_without_sums_is_the_same(tmp_path: Path) -> None:
+    """A chunk file written before the sums existed is reduced from its own columns."""
+    plan = build_plan(load_config(EXAMPLE), 3000, "exact", chunk_size=1024)
+    out = tmp_path / "study"
+    run(plan, out)
+    with_sums = summarize(plan, out)
+    path = store.chunk_path(out, 1)
+    table = pq.read_table(path)
+    tag = json.loads(table.schema.metadata[store.METADATA_KEY])
+    del tag[streaming.KEY]
+    pq.write_table(
+        table.replace_schema_metadata({store.METADATA_KEY: json.dumps(tag).encode()}), path
+    )
+    assert summarize(plan, out) == with_sums
+
+
+def test_chunk_sums_bin_like_the_summary_did() -> None:
+    """The bins are those of the quantities' own scores, as before (stats.bin_labels)."""
+    plan = build_plan(load_config(EXAMPLE), 2000, "exact", chunk_size=2000)
+    columns = evaluate_chunk(plan, 0).columns
+    bins = bin_count(plan.samples)
+    [first, *_] = streaming.chunk_sums(plan, columns)
+    tolerance = plan.tolerances.tolerances[0]
+    labels = bin_labels(tolerance.scores(columns[tolerance.key]), bins)
+    assert np.array_equal(first.bin_counts[0], np.bincount(labels, minlength=bins))
