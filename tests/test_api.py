@@ -104,7 +104,7 @@ def test_bad_input_raises_config_error_naming_the_field() -> None:
     ]
     for kwargs, needle in cases:
         with pytest.raises(ConfigError) as caught:
-            ecdsim.deploy(PAPER, **kwargs)  # type: ignore[arg-type]
+            ecdsim.deploy(PAPER, **kwargs)
         assert needle in str(caught.value), (kwargs, str(caught.value))
         assert all(line.strip() for line in str(caught.value).splitlines())
     with pytest.raises(ConfigError, match="config file not found"):
