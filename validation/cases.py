@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim.config import load_config
+from ecdsim.config import load_config, parse_config
 from ecdsim.deployment import Prediction, predict
 from ecdsim.dynamics import DynamicParameters, Thermal
 from ecdsim.dynamics.method import DynamicSolution
@@ -36,7 +36,13 @@ from ecdsim.model import (
     Load,
 )
 from validation.checks import CaseResult, Check
-from validation.scipy_reference import PaperSystem, SpinDown, damped_mass
+from validation.scipy_reference import (
+    RESISTIVE_ROWS,
+    PaperSystem,
+    ResistedPaperSystem,
+    SpinDown,
+    damped_mass,
+)
 
 HERE = Path(__file__).resolve().parent
 REFERENCES = HERE / "references"
@@ -581,6 +587,64 @@ def paper_heating_limit() -> CaseResult:
     )
 
 
+def resistive_table() -> CaseResult:
+    """A resistive torque table (issue 16 item 1) by the exact and dynamic methods."""
+    source = EXAMPLES / "paper_cc16_dynamic.toml"
+    rows = ", ".join(f'["{a} rad", "{r} N*m"]' for a, r in RESISTIVE_ROWS)
+    text = source.read_text().replace(
+        'travel = "1.57 rad"', f'travel = "1.57 rad"\nresistive_table = [{rows}]', 1
+    )
+    config = parse_config(text, str(source) + " + resistive_table")
+    temps = [-40.0, 25.0, 100.0]
+    dynamics = config.spec.dynamics()
+    assert dynamics is not None
+    found = predict(config.system, temps, ["exact", "dynamic"], dynamics=dynamics)
+    inertia = 5.0 + 2e-7 * 380.0**2  # as in paper_example_methods
+    system = ResistedPaperSystem()
+    checks: list[Check] = []
+    for i, temp in enumerate(temps):
+        at = f"at {temp:+g} degC"
+        exact_time = system.quasi_static_time(temp)
+        checks.append(
+            Check(
+                f"exact-method time with the table {at}",
+                "s",
+                exact_time,
+                "scipy DOP853 rtol 1e-12 of Eq. 5, spring less the table",
+                float(found.solutions["exact"].deployment_time[i]),
+                _relative(exact_time, CLOSED_FORM_RTOL),
+                CLOSED_FORM_REASON,
+            )
+        )
+        dyn_time, _speed = system.dynamic_time(temp, inertia)
+        checks.append(
+            Check(
+                f"dynamic time with the table, J = {inertia:.4g} kg*m^2, {at}",
+                "s",
+                dyn_time,
+                "scipy Radau rtol 1e-12",
+                float(found.solutions["dynamic"].deployment_time[i]),
+                _relative(dyn_time, CLOSED_FORM_RTOL),
+                CLOSED_FORM_REASON,
+            )
+        )
+    return CaseResult(
+        name="resistive_table",
+        title="A resistive torque table (harness, blanket) on the paper's example",
+        source=(
+            "the paper's constants typed in plain Python with the table interpolated by "
+            "numpy.interp (`validation/scipy_reference.py`, ResistedPaperSystem), integrated "
+            "with scipy"
+        ),
+        mapping=(
+            "`examples/paper_cc16_dynamic.toml` with `[load] resistive_table` = "
+            f"{[list(r) for r in RESISTIVE_ROWS]} (rad, N*m; ILLUSTRATIVE values, one row "
+            "assisting, the last beyond the travel)."
+        ),
+        checks=tuple(checks),
+    )
+
+
 CASES: tuple[Callable[[], CaseResult], ...] = (
     msl_eddy_current_brake,
     msl_damper,
@@ -588,6 +652,7 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     paper_printed,
     paper_example_methods,
     paper_heating_limit,
+    resistive_table,
 )
 
 

@@ -211,3 +211,25 @@ def _arrival(rhs: Rhs, y0: list[float], travel: float, method: str) -> tuple[flo
     arrive.terminal = True  # type: ignore[attr-defined]
     sol = solve_ivp(rhs, (0.0, 1e4), y0, method=method, events=arrive, rtol=RTOL, atol=ATOL)
     return float(sol.t_events[0][0]), np.asarray(sol.y_events[0][0], dtype=float)
+
+
+# The resistive torque of validation case "resistive_table" (harness and blanket torque
+# against angle, N*m; a negative row assists), rows [angle rad, torque N*m].
+RESISTIVE_ROWS: tuple[tuple[float, float], ...] = (
+    (0.0, 0.2),
+    (0.5, 0.6),
+    (0.9, -0.1),
+    (1.3, 0.3),
+    (2.0, 0.0),
+)
+
+
+@dataclass(frozen=True)
+class ResistedPaperSystem(PaperSystem):
+    """The paper's system with the spring lowered by :data:`RESISTIVE_ROWS`, linear between."""
+
+    def spring(self, angle: float) -> float:
+        """Eq. 7 less the resistive torque interpolated in the rows."""
+        angles = [a for a, _ in RESISTIVE_ROWS]
+        torques = [r for _, r in RESISTIVE_ROWS]
+        return super().spring(angle) - float(np.interp(angle, angles, torques))

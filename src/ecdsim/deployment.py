@@ -90,6 +90,15 @@ class Prediction:
     solutions: dict[str, DeploymentSolution]
     warnings: list[ModelWarning] = field(default_factory=list)
 
+    @property
+    def resistance(self) -> FloatArray | None:
+        """The ``[load] resistive_table`` torque at each breakpoint of the problem [N*m];
+        None without one. The problem's torques are the net drive (spring less this)."""
+        resistance = self.system.load.resistance
+        if resistance is None:
+            return None
+        return resistance.torque_at(self.problem.angles, self.temperatures)
+
     def trajectory(self, method: str, times: ArrayLike) -> Trajectory:
         """Angle and speed against time [s] by one method."""
         solution = self.solutions.get(method)
@@ -191,7 +200,7 @@ def build_problem(
 ) -> tuple[QuasiStaticProblem, FloatArray]:
     """The quasi-static problem at the given temperatures, and FS_T [N*m]."""
     load = system.load
-    angles, torques = load.spring.breakpoints(load.travel, temperatures)
+    angles, torques = load.drive.breakpoints(load.travel, temperatures)
     fs = np.asarray(load.system_friction(temperatures), dtype=float)
     friction = np.asarray(ecd.ecd_friction + fs, dtype=float)
     problem = QuasiStaticProblem(

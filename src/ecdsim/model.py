@@ -247,6 +247,10 @@ class Spring(Protocol):
         """Deployed angles [rad] and torques [N*m] at the breakpoints, along axis 0."""
         ...
 
+    def torque_at(self, angle: ArrayLike, travel: ArrayLike, temperature: ArrayLike) -> FloatArray:
+        """Torque [N*m] at deployed angles ``angle`` [rad] within the travel."""
+        ...
+
     def describe(self) -> str:
         """A one-line human description of the spring."""
         ...
@@ -285,6 +289,16 @@ class LinearSpring:
             )
         )
         return angles, torques
+
+    def torque_at(self, angle: ArrayLike, travel: ArrayLike, temperature: ArrayLike) -> FloatArray:
+        """Eq. 7 at ``angle``: Ts + (Te - Ts) * angle / travel, scaled for temperature."""
+        factor = load.spring_temperature_factor(
+            temperature, self.temperature_coefficient, self.reference_temperature
+        )
+        ts = np.asarray(self.start_torque, dtype=float)
+        te = np.asarray(self.end_torque, dtype=float)
+        fraction = as_float(angle) / np.asarray(travel, dtype=float)
+        return as_float((ts + (te - ts) * fraction) * factor)
 
     def describe(self) -> str:
         """One-line description."""
@@ -335,9 +349,121 @@ class TabulatedSpring:
         angles, torques = np.broadcast_arrays(clipped, torque * factor)
         return np.array(angles), np.array(torques)
 
+    def torque_at(self, angle: ArrayLike, travel: ArrayLike, temperature: ArrayLike) -> FloatArray:
+        """The table interpolated at ``angle``, scaled for temperature."""
+        factor = load.spring_temperature_factor(
+            temperature, self.temperature_coefficient, self.reference_temperature
+        )
+        return as_float(load.tabulated_torque(angle, self.angles, self.torques) * factor)
+
     def describe(self) -> str:
         """One-line description."""
         return f"table of {len(self.angles)} (angle, torque) points"
+
+
+@dataclass(frozen=True)
+class ResistiveTable:
+    """Resistive torque against deployed angle: harness, cable, blanket, connector.
+
+    Positive opposes deployment; linear between the rows (issue 16 item 1). It is a
+    function of the angle alone, like the spring (the elastic part of a harness or
+    blanket): a resistance that opposes motion in either direction belongs in
+    ``system_friction``.
+
+    Attributes
+    ----------
+    angles : strictly increasing deployed angles, the first 0 [rad]
+    torques : resistive torque at those angles, at the reference temperature [N*m]
+    temperature_coefficient : fractional change of torque per kelvin [1/K]
+    reference_temperature : temperature at which the torques are given [degC]
+    scale : factor on every torque of the table [-] (1; a Monte Carlo tolerance)
+    """
+
+    angles: tuple[float, ...]
+    torques: tuple[float, ...]
+    temperature_coefficient: Param = 0.0
+    reference_temperature: float = 25.0
+    scale: Param = 1.0
+
+    def __post_init__(self) -> None:
+        if len(self.angles) != len(self.torques) or len(self.angles) < 2:
+            raise ValueError("a resistive table needs at least two (angle, torque) points")
+        if self.angles[0] != 0.0:
+            raise ValueError("a resistive table must start at angle 0 (the start of travel)")
+        if np.any(np.diff(self.angles) <= 0.0):
+            raise ValueError("resistive table angles must be strictly increasing")
+
+    def torque_at(self, angle: ArrayLike, temperature: ArrayLike) -> FloatArray:
+        """Resistive torque [N*m] at ``angle`` [rad], interpolated, scaled for T."""
+        factor = load.spring_temperature_factor(
+            temperature, self.temperature_coefficient, self.reference_temperature
+        )
+        table = load.tabulated_torque(angle, self.angles, self.torques)
+        return as_float(table * factor * np.asarray(self.scale, dtype=float))
+
+
+@dataclass(frozen=True)
+class ResistedSpring:
+    """The net drive of a spring less a resistive torque table, itself a :class:`Spring`.
+
+    Both are piecewise linear in the angle, so their difference is piecewise linear on
+    the union of their breakpoints and every method that takes a tabulated spring solves
+    it as it is: the exact method stays exact, the paper method takes its end values
+    (issue 16 item 1).
+    """
+
+    spring: Spring
+    resistance: ResistiveTable
+
+    def breakpoints(
+        self, travel: ArrayLike, temperature: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
+        """The union of both tables' breakpoints within the travel, net torque there."""
+        angles, _, _ = self.parts(travel, temperature)
+        return angles, as_float(self.torque_at(angles, travel, temperature))
+
+    def parts(
+        self, travel: ArrayLike, temperature: ArrayLike
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """(angles, spring torque, resistive torque) at the union of the breakpoints.
+
+        The drive and the resistance apart, for the torque margin, which factors the
+        resistance as its own kind.
+        """
+        spring_angles, spring_torques = self.spring.breakpoints(travel, temperature)
+        # The full batch shape (parameters and temperatures broadcast), so that every
+        # array below has the angle on axis 0 and the same batch axes after it.
+        batch = np.broadcast_shapes(spring_angles.shape[1:], spring_torques.shape[1:])
+        # Batch axes align from the right, after the angle axis.
+        missing = (1,) * (len(batch) - (spring_angles.ndim - 1))
+        aligned = spring_angles.reshape(
+            (spring_angles.shape[0], *missing, *spring_angles.shape[1:])
+        )
+        points = np.broadcast_to(aligned, (spring_angles.shape[0], *batch))
+        trav = np.broadcast_to(np.asarray(travel, dtype=float), batch)
+        table = np.asarray(self.resistance.angles, dtype=float).reshape((-1,) + (1,) * len(batch))
+        # Rows beyond the travel fall onto it (zero-length segments, as a clipped spring
+        # table has): solvers already take those.
+        extra = np.minimum(np.broadcast_to(table, (table.shape[0], *batch)), trav)
+        angles = np.sort(np.concatenate([points, extra]), axis=0)
+        drive = self.spring.torque_at(angles, travel, temperature)
+        resist = self.resistance.torque_at(angles, temperature)
+        angles, drive, resist = np.broadcast_arrays(angles, drive, resist)
+        return as_float(np.array(angles)), as_float(np.array(drive)), as_float(np.array(resist))
+
+    def torque_at(self, angle: ArrayLike, travel: ArrayLike, temperature: ArrayLike) -> FloatArray:
+        """Spring less resistance at ``angle`` [N*m] (angle on axis 0, batch axes after)."""
+        return as_float(
+            self.spring.torque_at(angle, travel, temperature)
+            - self.resistance.torque_at(angle, temperature)
+        )
+
+    def describe(self) -> str:
+        """One-line description."""
+        return (
+            f"{self.spring.describe()}, less a resistive table of "
+            f"{len(self.resistance.angles)} (angle, torque) points"
+        )
 
 
 @dataclass(frozen=True)
@@ -349,11 +475,20 @@ class Load:
     spring : the driving spring torque over the travel
     travel : deployment angle, delta_theta [rad]
     system_friction : FS_T, hinge and harness friction, a temperature law [N*m]
+    resistance : resistive torque against angle (harness, blanket), None for none
     """
 
     spring: Spring
     travel: Param
     system_friction: TemperatureLaw = ZERO_LAW
+    resistance: ResistiveTable | None = None
+
+    @property
+    def drive(self) -> Spring:
+        """The net driving torque over the travel: the spring, less the resistance."""
+        if self.resistance is None:
+            return self.spring
+        return ResistedSpring(self.spring, self.resistance)
 
 
 @dataclass(frozen=True)

@@ -98,7 +98,7 @@ def problem_for(
     load: Load, temperature: float, damping_rate: float, friction: float
 ) -> QuasiStaticProblem:
     """The quasi-static problem of ``load`` at T [degC] with BECD [N*m*s/rad], F [N*m]."""
-    angles, torques = load.spring.breakpoints(load.travel, temperature)
+    angles, torques = load.drive.breakpoints(load.travel, temperature)
     return QuasiStaticProblem(
         angles=np.asarray(angles, dtype=float),
         torques=np.asarray(torques, dtype=float),
@@ -444,7 +444,7 @@ def initial_damper_guess(trace: Trace, load: Load, config: Config) -> tuple[floa
     ``w0 = (Ts - F) / B`` and k the spring's torque drop per radian; a quadratic fitted to
     the first 80 % of the travel gives B and F. Falls back to the configuration's ECD.
     """
-    angles, torques = load.spring.breakpoints(load.travel, trace.temperature)
+    angles, torques = load.drive.breakpoints(load.travel, trace.temperature)
     start, end = float(np.ravel(torques)[0]), float(np.ravel(torques)[-1])
     travel = float(np.ravel(angles)[-1])
     moving = np.ptp(trace.time) > 0.0

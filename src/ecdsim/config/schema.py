@@ -52,6 +52,7 @@ from ecdsim.model import (
     LinearSpring,
     LinearTemperatureLaw,
     Load,
+    ResistiveTable,
     Spring,
     TabulatedSpring,
     TabulatedTemperatureLaw,
@@ -253,6 +254,10 @@ class LoadSpec(_Section):
     start_torque: NonNegativeTorque | None = None
     end_torque: NonNegativeTorque | None = None
     spring_table: list[tuple[Angle, NonNegativeTorque]] | None = None
+    # Harness, cable, blanket torque against angle, opposing deployment positive (a
+    # negative row assists); linear between rows (docs/model.md, resistive torques).
+    resistive_table: list[tuple[Angle, Torque]] | None = None
+    resistive_temperature_coefficient: PerKelvin = 0.0
     travel: PositiveAngle
     system_friction: FrictionLawSpec | None = None
     spring_temperature_coefficient: PerKelvin = 0.0
@@ -268,6 +273,7 @@ class LoadSpec(_Section):
         linear = self.start_torque is not None or self.end_torque is not None
         if linear and self.spring_table is not None:
             raise ValueError("give either start_torque and end_torque, or spring_table, not both")
+        _check_table("resistive_table", self.resistive_table, self.travel)
         if self.spring_table is None:
             if self.start_torque is None or self.end_torque is None:
                 missing = "start_torque" if self.start_torque is None else "end_torque"
@@ -276,17 +282,7 @@ class LoadSpec(_Section):
                     "e.g. '3.73 N*m' (or give spring_table)"
                 )
             return self
-        angles = [a for a, _ in self.spring_table]
-        if len(angles) < 2:
-            raise ValueError("spring_table needs at least two [angle, torque] points")
-        if angles[0] != 0.0:
-            raise ValueError(f"spring_table must start at angle 0 (got {angles[0]:g} rad)")
-        if any(b <= a for a, b in zip(angles, angles[1:], strict=False)):
-            raise ValueError("spring_table angles must be strictly increasing")
-        if angles[-1] < self.travel * (1.0 - 1e-12):
-            raise ValueError(
-                f"spring_table ends at {angles[-1]:g} rad, before the travel {self.travel:g} rad"
-            )
+        _check_table("spring_table", self.spring_table, self.travel)
         return self
 
     def spring(self) -> Spring:
@@ -307,15 +303,42 @@ class LoadSpec(_Section):
             self.reference_temperature,
         )
 
+    def resistance(self) -> ResistiveTable | None:
+        """The resistive torque table (SI), None without one."""
+        if self.resistive_table is None:
+            return None
+        return ResistiveTable(
+            tuple(a for a, _ in self.resistive_table),
+            tuple(t for _, t in self.resistive_table),
+            self.resistive_temperature_coefficient,
+            self.reference_temperature,
+        )
+
     def to_model(self) -> Load:
         """The model object (SI)."""
         return Load(
             spring=self.spring(),
+            resistance=self.resistance(),
             travel=self.travel,
             system_friction=(
                 self.system_friction.to_law() if self.system_friction else LinearTemperatureLaw()
             ),
         )
+
+
+def _check_table(key: str, table: list[tuple[float, float]] | None, travel: float) -> None:
+    """A torque table starts at angle 0, rises strictly and reaches the travel."""
+    if table is None:
+        return
+    angles = [a for a, _ in table]
+    if len(angles) < 2:
+        raise ValueError(f"{key} needs at least two [angle, torque] points")
+    if angles[0] != 0.0:
+        raise ValueError(f"{key} must start at angle 0 (got {angles[0]:g} rad)")
+    if any(b <= a for a, b in zip(angles, angles[1:], strict=False)):
+        raise ValueError(f"{key} angles must be strictly increasing")
+    if angles[-1] < travel * (1.0 - 1e-12):
+        raise ValueError(f"{key} ends at {angles[-1]:g} rad, before the travel {travel:g} rad")
 
 
 def _known_method(name: object) -> str:

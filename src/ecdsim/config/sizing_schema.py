@@ -122,6 +122,8 @@ class FactorsSpec(_Section):
     inertia: Factor = 1.0
     spring: Factor = 1.0
     harness: Factor = 1.0
+    # [load] resistive_table: harness and blanket torque against angle, its own kind.
+    resistive_table: Factor = 1.0
 
 
 class AllowancesSpec(_Section):

@@ -127,6 +127,14 @@ TOLERABLE: dict[str, TolerableQuantity] = {
         ),
         _q("load.end_torque", TORQUE, "load.spring.end_torque", "LinearSpring", lower_bound=0.0),
         _q("load.travel", ANGLE, "load.travel", lower_bound=0.0, strict=True),
+        # A factor on every row of [load] resistive_table (a relative spread, e.g. "20 %").
+        _q(
+            "load.resistive_table",
+            NUMBER,
+            "load.resistance.scale",
+            "ResistiveTable",
+            lower_bound=0.0,
+        ),
         _q(
             "load.spring_temperature_coefficient",
             PER_KELVIN,

@@ -47,6 +47,7 @@ class Parameters:
 _OWNERS = {
     "LinearSpring": "the linear spring's start_torque and end_torque (this config gives a "
     "spring_table)",
+    "ResistiveTable": "[load] resistive_table, which this config does not give",
 }
 
 
@@ -60,6 +61,10 @@ def _owner(parameters: Parameters, key: str) -> tuple[Any, str]:
     for name in quantity.model_path[:-1]:
         obj = getattr(obj, name)
         if obj is None:
+            if quantity.owner in _OWNERS:  # an optional part of the model, absent here
+                raise NotTolerable(
+                    f"not set in this config: it applies to {_OWNERS[quantity.owner]}"
+                )
             raise NotTolerable("not set in this config: the dynamic parameters need [load] inertia")
     field = quantity.model_path[-1]
     section = key.rsplit(".", 1)[0]

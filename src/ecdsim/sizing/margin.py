@@ -19,7 +19,10 @@ The resistive torques of an ECD deployment, by kind (:data:`RESISTIVE_TYPES`):
 * ``damping``: BECD_T * omega (Eq. 3) at a required speed, or at the deployment's own
   speed, or nothing (speed 0, the default);
 * ``inertia``, ``spring`` (a *resisting* spring) and ``harness``: user allowances that
-  the quasi-static model does not contain.
+  the quasi-static model does not contain;
+* ``resistive_table``: the config's ``[load] resistive_table`` at the angle (harness,
+  blanket torque against angle), which the deployment does contain: the drive is then
+  the spring torque alone, and this its own kind with its own factor.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ RESISTIVE_TYPES = (
     "inertia",
     "spring",
     "harness",
+    "resistive_table",
 )
 # ECSS-E-ST-33-01C has one kind for friction; ``friction`` is the factor of both Coulomb
 # kinds unless ``ecd_friction`` or ``system_friction`` is given on its own.
@@ -242,6 +246,7 @@ def margin_over_travel(
     stalled: ArrayLike,
     stall_angle: ArrayLike,
     settings: MarginSettings,
+    resistance: ArrayLike | None = None,
 ) -> MarginOverTravel:
     """Torque margin at every spring breakpoint and at the stall point (docs/sizing.md).
 
@@ -261,6 +266,8 @@ def margin_over_travel(
     stalled : True where the deployment stalls [-]
     stall_angle : angle of the stall [rad], ignored where not stalled
     settings : factors, allowances and damping speed
+    resistance : the resistive table's torque at each breakpoint [N*m], where
+        ``spring_torques`` is the net drive (spring less resistance); None without one
     """
     angles = as_float(breakpoint_angles)
     torques = as_float(spring_torques)
@@ -269,11 +276,20 @@ def margin_over_travel(
     f = as_float(fecd + fs)
     b = as_float(damping_rate)
     stop = np.asarray(stalled, dtype=bool)
-    # The stall point: spring torque equal to the friction, at the stall angle.
-    angles = np.concatenate(
-        [angles, np.broadcast_to(np.nan_to_num(as_float(stall_angle)), angles.shape[1:])[None]]
-    )
+    # The stall point: net drive torque equal to the friction, at the stall angle.
+    stop_angle = np.nan_to_num(as_float(stall_angle))
+    resist: FloatArray | None = None
+    if resistance is not None:
+        points, resist_at = np.broadcast_arrays(angles, as_float(resistance))
+        batch = np.broadcast_shapes(points.shape[1:], stop_angle.shape)
+        points = np.broadcast_to(points, (points.shape[0], *batch))
+        resist_at = np.broadcast_to(resist_at, points.shape)
+        at_stop = _interpolate_axis0(np.broadcast_to(stop_angle, batch), points, resist_at)
+        resist = as_float(np.concatenate([resist_at, at_stop[None]]))
+    angles = np.concatenate([angles, np.broadcast_to(stop_angle, angles.shape[1:])[None]])
     drive = np.concatenate([torques, np.broadcast_to(f, torques.shape[1:])[None]])
+    if resist is not None:
+        drive = drive + resist  # the spring torque: net drive plus the resistance
     angles, drive = np.broadcast_arrays(angles, drive)
     if settings.damping_speed is None:
         speed = input_speed(drive, f, b)
@@ -284,6 +300,8 @@ def margin_over_travel(
         "system_friction": as_float(np.broadcast_to(fs, drive.shape)),
         "damping": as_float(np.broadcast_to(b * speed, drive.shape)),
     }
+    if resist is not None:
+        resistive["resistive_table"] = as_float(np.broadcast_to(resist, drive.shape))
     for kind, torque in settings.allowances.items():
         resistive[kind] = as_float(np.full(drive.shape, torque))
     margin = torque_margin(drive, resistive, settings.factors)
@@ -299,3 +317,25 @@ def margin_over_travel(
         margin=margin,
         valid=valid,
     )
+
+
+def _interpolate_axis0(x: ArrayLike, xp: ArrayLike, fp: ArrayLike) -> FloatArray:
+    """Linear interpolation at ``x`` (batch shape) in tables ``xp``, ``fp`` along axis 0.
+
+    ``xp`` ascends along axis 0 (repeated values allowed: zero-length segments); outside
+    the table the end values are taken, as ``numpy.interp`` does.
+    """
+    table_x = as_float(xp)
+    table_f = as_float(fp)
+    query = as_float(x)
+    last = table_x.shape[0] - 1
+    k = np.clip(np.sum(table_x <= query[None], axis=0) - 1, 0, max(last - 1, 0))[None]
+    x0 = np.take_along_axis(table_x, k, axis=0)[0]
+    x1 = np.take_along_axis(table_x, np.minimum(k + 1, last), axis=0)[0]
+    f0 = np.take_along_axis(table_f, k, axis=0)[0]
+    f1 = np.take_along_axis(table_f, np.minimum(k + 1, last), axis=0)[0]
+    width = x1 - x0
+    weight = np.clip(
+        np.where(width > 0.0, (query - x0) / np.where(width > 0.0, width, 1.0), 0.0), 0.0, 1.0
+    )
+    return as_float(f0 + weight * (f1 - f0))

@@ -137,6 +137,7 @@ class Requirements:
             "inertia": given.inertia,
             "spring": given.spring,
             "harness": given.harness,
+            "resistive_table": given.resistive_table,
         }
         return cls(
             temperatures=spec.all_temperatures(),
