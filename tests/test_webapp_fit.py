@@ -53,6 +53,16 @@ def test_fit_equals_the_cli(noise: str) -> None:
     assert body["fit"]["source"] == "drop_test.csv"
 
 
+def test_display_units_are_recorded_as_the_cli_records_them() -> None:
+    us = _fit(units="us").json()["fit"]
+    assert _without_files(us) == _without_files(_cli_json("--units", "us"))
+    assert us["display_units"] == "us"
+    # Without units, the config's [output] units (as --config's for the CLI).
+    config = tomllib.loads(PAPER_CONFIG.read_text(encoding="utf-8"))
+    config["output"] = {"units": "us"}
+    assert _fit(config=config).json()["fit"]["display_units"] == "us"
+
+
 def test_parameter_file_equals_the_cli_file(tmp_path: Path) -> None:
     config = tomllib.loads(PAPER_CONFIG.read_text(encoding="utf-8"))
     body = _fit(config=config).json()

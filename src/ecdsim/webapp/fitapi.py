@@ -60,6 +60,11 @@ class FitBody(BaseModel):
         description="T_ref of the damping laws [degC] (--reference-temperature).",
     )
     noise: Literal["torque", "timing"] = Field("torque", description="--noise model.")
+    units: Literal["si", "us"] | None = Field(
+        None,
+        description="Display unit system recorded in fit.display_units (--units); null: "
+        "the config's [output] units, si without a config. Numbers stay SI.",
+    )
     config: dict[str, Any] | None = Field(
         None,
         description="The configuration whose [load] goes into the parameter file (--config); "
@@ -70,7 +75,9 @@ class FitBody(BaseModel):
 class FitResponse(BaseModel):
     """The fit, the curves to plot it and the fitted configuration."""
 
-    fit: dict[str, Any] = Field(description="Exactly `ecdsim fit drop-test --json`.")
+    fit: dict[str, Any] = Field(
+        description="Exactly `ecdsim fit drop-test --json [--units U]` (source: the file name)."
+    )
     curves: dict[str, Any] = Field(
         description="torque_speed: per temperature the points and line; laws: the laws "
         "over temperature_C with 95 % bands, and the per-temperature values with intervals."
@@ -180,9 +187,11 @@ def fit_drop_test_text(body: FitBody) -> dict[str, Any]:
     from ecdsim.webapp.server import _refuse, load_body
 
     load = None
+    units: str = body.units or "si"
     if body.config is not None:
         config, _ = load_body(body.config)
         load = config.spec.load
+        units = body.units or config.spec.output.units
     name = _SAFE_NAME.sub("_", Path(body.filename).name).strip("._") or "drop_test.csv"
     with tempfile.TemporaryDirectory(prefix="ecdsim-fit-") as folder:
         path = Path(folder) / name
@@ -200,6 +209,7 @@ def fit_drop_test_text(body: FitBody) -> dict[str, Any]:
     document["warnings"] = [w.to_dict() for w in result.warnings]
     document["parameter_file"] = None
     document["plots"] = []
+    document["display_units"] = units
     text, why = _parameter_file(result, name, load)
     return {
         "fit": document,

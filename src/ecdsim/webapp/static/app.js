@@ -662,6 +662,7 @@ async function runFit(file) {
       noise: document.getElementById("fit-noise").value, reference_temperature: reference,
     };
     if (state.config) body.config = state.config;
+    if (state.choice !== "config") body.units = state.choice;
     const r = await postJson("/api/fit/drop-test", body);
     const answer = await r.json();
     if (r.ok) {
