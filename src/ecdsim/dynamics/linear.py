@@ -42,6 +42,9 @@ _SERIES_DEGREE = 11  # highest power of t kept in the series of the speed
 _SMALL_MU_T = 1e-2  # mu t below which M_j uses its own power series
 _EXP_CAP = 700.0  # cap on the real part of exponents (beyond any meaningful time)
 _EPS = np.finfo(float).eps
+# Slow time constants after which an asymptotic approach to rest has ended in double
+# precision (e^-800 underflows): where :func:`rest_time` evaluates its dissipation.
+REST_TIME_CONSTANTS = 800.0
 
 # Event kinds returned by :func:`advance`.
 REACH = 0  # x reached the segment length
@@ -189,12 +192,13 @@ def _moments(mu: FloatArray, t: FloatArray, degree: int) -> FloatArray:
     that no power overflows; below, the power series ``t^(j+1) sum_n (-mu t)^n / (n!
     (n + j + 1))``, whose 9th term is below 1e-21.
     """
-    from scipy.special import gammainc, gammaln
-
     orders = np.arange(degree + 1, dtype=float)[:, None]
     mt = mu * t
     small = mt < _SMALL_MU_T
-    # Power series (also covers mu = 0).
+    everywhere = bool(np.all(small))
+    # Power series (also covers mu = 0); each form is skipped where no case needs it.
+    if not np.any(small):
+        return _gamma_moments(mu, mt, orders, small)
     series = np.zeros((degree + 1, mt.size))
     term = np.ones_like(mt)
     for n_term in range(9):
@@ -203,12 +207,23 @@ def _moments(mu: FloatArray, t: FloatArray, degree: int) -> FloatArray:
     with np.errstate(divide="ignore", over="ignore", under="ignore"):
         tpow = np.exp((orders + 1.0) * np.log(np.where(t > 0.0, t, 1.0)))
     by_series = np.where(t > 0.0, tpow * series, 0.0)
+    if everywhere:
+        return by_series
+    return np.where(small, by_series, _gamma_moments(mu, mt, orders, small))
+
+
+def _gamma_moments(
+    mu: FloatArray, mt: FloatArray, orders: FloatArray, small: BoolArray
+) -> FloatArray:
+    """``j! P(j+1, mu t) / mu^(j+1)`` of :func:`_moments` (its values where small are
+    placeholders)."""
+    from scipy.special import gammainc, gammaln
+
     safe_mu = np.where(small, 1.0, mu)
     log_scale = gammaln(orders + 1.0) - (orders + 1.0) * np.log(safe_mu)
-    by_gamma = np.exp(np.minimum(log_scale, _EXP_CAP)) * gammainc(
-        orders + 1.0, np.where(small, 1.0, mt)
+    return np.asarray(
+        np.exp(np.minimum(log_scale, _EXP_CAP)) * gammainc(orders + 1.0, np.where(small, 1.0, mt))
     )
-    return np.where(small, by_series, by_gamma)
 
 
 def _series_coefficients(seg: Segment, h2: FloatArray) -> FloatArray:
@@ -395,10 +410,16 @@ def limit_position(seg: Segment) -> FloatArray:
     return np.where(q_pos, eq, np.where(coast, glide, np.inf))
 
 
-def rest_time(seg: Segment) -> FloatArray:
-    """A time by which an asymptotically resting segment is at rest to within e^-800 [s]."""
+def rest_time(seg: Segment, time_constants: float = REST_TIME_CONSTANTS) -> FloatArray:
+    """``time_constants`` slow time constants of an asymptotically resting segment [s].
+
+    The slow mode decays as ``e^{r1 t}`` (``e^{-2 p t}`` for its coasting case k = a = 0),
+    so after ``time_constants / |r1|`` its remaining motion is ``e^-time_constants`` of
+    its start. With the default :data:`REST_TIME_CONSTANTS` (800) nothing is left in
+    double precision: the dissipation of a segment ending at rest is evaluated there.
+    """
     slow = np.where(seg.q > 0.0, np.abs(seg.r1.real), 2.0 * seg.p)
-    return 800.0 / np.where(slow > 0.0, slow, 1.0)
+    return time_constants / np.where(slow > 0.0, slow, 1.0)
 
 
 def _reach_guess(seg: Segment, length: FloatArray) -> FloatArray:
@@ -542,7 +563,7 @@ def advance(seg: Segment, length: FloatArray, cap: FloatArray) -> Advance:
     duration = np.where(finite_hi, t_hi, np.inf)
     x = np.where(finite_hi, x_at_hi, x_limit)
     v = np.where(kind == CAP, v_at_hi, 0.0)
-    # Asymptotic rest: the state at a time where the remaining motion is below e^-800.
+    # Asymptotic rest: the state once the remaining motion is below e^-REST_TIME_CONSTANTS.
     resting = np.flatnonzero(kind == REST)
     if resting.size:
         sub = seg.take(resting)

@@ -39,6 +39,9 @@ _STICK_MARGIN = 1e-12
 # arrival's is taken as coming to rest against the stop (the remaining bounces form a
 # convergent geometric series of vanishing energy).
 _SETTLE_FRACTION = 1e-12
+# A plot of a case that ends approaching rest asymptotically (creep) stops after this many
+# of the motion's slow time constants (its remaining motion is then below e^-10 of it).
+DISPLAY_TIME_CONSTANTS = 10.0
 
 _EV = {name: code for code, name in enumerate(EVENT_KINDS)}
 _ST = {name: code for code, name in enumerate(STATUSES)}
@@ -110,26 +113,51 @@ def _flatten(problem: DynamicProblem) -> _Cases:
 class _Piece:
     """The spring piece each case is on, for its direction of motion."""
 
+    index: NDArray[np.intp]  # piece i runs from breakpoint i to i + 1
     lower: FloatArray  # angle of the piece's start [rad]
     upper: FloatArray  # angle of the piece's end [rad]
     torque: FloatArray  # spring torque at the current angle [N*m]
     stiffness: FloatArray  # k = -dT/dphi on the piece [N*m/rad]
 
 
-def _piece(c: _Cases, idx: NDArray[np.intp], phi: FloatArray, forward: BoolArray) -> _Piece:
-    """Piecewise-linear spring lookup per case (each case has its own breakpoints)."""
-    angles = c.angles[:, idx]
-    torques = c.torques[:, idx]
-    interior = angles[1:-1]
-    at_or_below = np.sum(interior <= phi, axis=0)
-    below = np.sum(interior < phi, axis=0)
-    i = np.where(forward, at_or_below, below).astype(np.intp)
-    cols = np.arange(idx.size)
-    a0, a1 = angles[i, cols], angles[i + 1, cols]
-    t0, t1 = torques[i, cols], torques[i + 1, cols]
+def _first_piece(c: _Cases, phi: FloatArray) -> NDArray[np.intp]:
+    """The piece of every case at its release angle, counted once: O(P) per case."""
+    interior = c.angles[1:-1]
+    return np.asarray(np.sum(interior <= phi, axis=0), dtype=np.intp)
+
+
+def _piece(
+    c: _Cases,
+    idx: NDArray[np.intp],
+    phi: FloatArray,
+    forward: BoolArray,
+    start: NDArray[np.intp],
+) -> _Piece:
+    """Piecewise-linear spring lookup per case (each case has its own breakpoints).
+
+    The piece is the one the motion is about to run along: moving forward from a
+    breakpoint, the piece above it; backward, the piece below (equivalently, the number
+    of interior breakpoints at or below phi, or below it). The search walks from
+    ``start``, the case's previous piece: a motion is continuous, so it moves by at most
+    one piece per event, and a deployment over P breakpoints costs O(P), not the O(P^2)
+    of counting the breakpoints at every event.
+    """
+    angles = c.angles
+    last = angles.shape[0] - 2  # pieces 0 .. P - 2
+    i = start.copy()
+    while True:
+        above = angles[np.minimum(i + 1, last), idx]
+        below = angles[i, idx]
+        up = (i < last) & np.where(forward, above <= phi, above < phi)
+        down = (i > 0) & np.where(forward, below > phi, below >= phi)
+        if not (np.any(up) or np.any(down)):
+            break
+        i += up.astype(np.intp) - down.astype(np.intp)
+    a0, a1 = angles[i, idx], angles[i + 1, idx]
+    t0, t1 = c.torques[i, idx], c.torques[i + 1, idx]
     width = a1 - a0
     slope = np.where(width > 0.0, (t1 - t0) / np.where(width > 0.0, width, 1.0), 0.0)
-    return _Piece(lower=a0, upper=a1, torque=t0 + slope * (phi - a0), stiffness=-slope)
+    return _Piece(index=i, lower=a0, upper=a1, torque=t0 + slope * (phi - a0), stiffness=-slope)
 
 
 class _Log:
@@ -193,6 +221,7 @@ class _State:
     damper_work: FloatArray
     engagement_loss: FloatArray
     impact_loss: FloatArray
+    piece: NDArray[np.intp]  # the spring piece each case was last on
 
     @classmethod
     def initial(cls, c: _Cases) -> _State:
@@ -226,6 +255,7 @@ class _State:
             damper_work=np.zeros(n),
             engagement_loss=np.zeros(n),
             impact_loss=np.zeros(n),
+            piece=_first_piece(c, c.angle0),
         )
 
     def finish(self, idx: NDArray[np.intp], status: str) -> None:
@@ -334,7 +364,8 @@ def _stick_or_break(
     c: _Cases, s: _State, resting: NDArray[np.intp], direction: FloatArray, log: _Log
 ) -> None:
     """At rest: stick for good if the spring cannot beat static friction, else break away."""
-    piece = _piece(c, resting, s.phi[resting], np.ones(resting.size, dtype=bool))
+    piece = _piece(c, resting, s.phi[resting], np.ones(resting.size, dtype=bool), s.piece[resting])
+    s.piece[resting] = piece.index
     # Each friction breaks away at its own factor: the ECD's (when engaged) and the
     # system's FS_T (hinge, harness), which is not the damper's breakaway.
     static = mechanics.static_friction(
@@ -357,6 +388,59 @@ def _stick_or_break(
     log.add(moving_off, s.t[moving_off], "breakaway", s.phi[moving_off], s.w[moving_off])
 
 
+@dataclass(frozen=True)
+class _Segment:
+    """The segment each running case is on and its first geometric event.
+
+    Every motion is solved in its forward frame: ``J x'' + B x' + k x = a`` with
+    ``x = direction * (phi - phi_start)`` (:mod:`ecdsim.dynamics.linear`).
+    """
+
+    run: NDArray[np.intp]  # the cases
+    direction: FloatArray  # +1 forward, -1 backward
+    forward: BoolArray
+    piece: _Piece
+    engaged: BoolArray
+    length: FloatArray  # distance to the first geometric event [rad]
+    reach_kind: NDArray[np.int64]  # that event's code (_EV)
+    inertia: FloatArray  # J [kg*m^2]
+    damping: FloatArray  # B [N*m*s/rad] (linear law at ambient)
+    kinetic: FloatArray  # kinetic friction [N*m]
+    drive: FloatArray  # a, spring torque minus friction, forward frame [N*m]
+    speed0: FloatArray  # forward-frame speed at the start [rad/s]
+    cap: FloatArray  # time left before the stop time [s]
+
+
+@dataclass
+class _Step:
+    """What happened in each case's segment (see :class:`ecdsim.dynamics.linear.Advance`)."""
+
+    kind: NDArray[np.int8]
+    duration: FloatArray
+    x: FloatArray
+    v: FloatArray
+    damper_work: FloatArray
+    peak_speed: FloatArray
+    temperature: FloatArray  # damper temperature at the end [degC]
+    peak_temperature: FloatArray
+    display_end: FloatArray  # where a plot of the case should end if this is its last
+
+    @classmethod
+    def empty(cls, temperature: FloatArray) -> _Step:
+        m = temperature.size
+        return cls(
+            kind=np.zeros(m, dtype=np.int8),
+            duration=np.zeros(m),
+            x=np.zeros(m),
+            v=np.zeros(m),
+            damper_work=np.zeros(m),
+            peak_speed=np.zeros(m),
+            temperature=temperature.copy(),
+            peak_temperature=temperature.copy(),
+            display_end=np.zeros(m),
+        )
+
+
 def _advance_cases(
     c: _Cases,
     s: _State,
@@ -366,11 +450,32 @@ def _advance_cases(
     log: _Log,
     records: _Records | None,
 ) -> None:
-    """Advance the cases ``run`` through one segment each and apply their events."""
+    """Advance the cases ``run`` through one segment each and apply their events.
+
+    Event finding (:func:`_segments`), stepping (:func:`_step_closed_form`,
+    :func:`_step_integrated`) and bookkeeping (:func:`_account`, :func:`_apply_events`).
+    """
+    seg = _segments(c, s, run, direction, problem.stop_time)
+    step = _Step.empty(s.temp[run])
+    integrated = seg.engaged & problem.nonlinear
+    closed_idx = np.flatnonzero(~integrated)
+    if closed_idx.size:
+        _step_closed_form(c, s, seg, closed_idx, step, records)
+    nl_idx = np.flatnonzero(integrated)
+    if nl_idx.size:
+        _step_integrated(c, s, seg, nl_idx, step, problem, records)
+    _account(s, seg, step)
+    _apply_events(c, s, seg, step, log)
+
+
+def _segments(
+    c: _Cases, s: _State, run: NDArray[np.intp], direction: FloatArray, stop_time: float
+) -> _Segment:
+    """Each running case's segment and the distance to its first geometric event."""
     forward = direction > 0.0
     phi_r = s.phi[run]
-    t_r = s.t[run]
-    piece = _piece(c, run, phi_r, forward)
+    piece = _piece(c, run, phi_r, forward, s.piece[run])
+    s.piece[run] = piece.index
     eng = s.engaged[run]
     # Distance to the first geometric event and its kind, in the direction of motion.
     up_length = piece.upper - phi_r
@@ -382,133 +487,158 @@ def _advance_cases(
         np.where(forward, np.where(gap_first, gap_length, up_length), phi_r - piece.lower), 0.0
     )
     reach_kind = np.where(forward, np.where(gap_first, _EV["engage"], up_kind), down_kind)
-
-    inertia = np.where(eng, c.total_inertia[run], c.load_inertia[run])
-    damping = np.where(eng, c.damping[run], 0.0)
     kinetic = np.where(eng, c.ecd_friction[run] + c.system_friction[run], c.system_friction[run])
-    # Forward frame: J x'' + B x' + k x = a with x = direction * (phi - phi_start).
-    drive = np.where(forward, piece.torque - kinetic, -(piece.torque + kinetic))
-    speed0 = direction * s.w[run]
-    cap = np.maximum(problem.stop_time - t_r, 0.0)
+    return _Segment(
+        run=run,
+        direction=direction,
+        forward=forward,
+        piece=piece,
+        engaged=eng,
+        length=length,
+        reach_kind=reach_kind,
+        inertia=np.where(eng, c.total_inertia[run], c.load_inertia[run]),
+        damping=np.where(eng, c.damping[run], 0.0),
+        kinetic=kinetic,
+        drive=np.where(forward, piece.torque - kinetic, -(piece.torque + kinetic)),
+        speed0=direction * s.w[run],
+        cap=np.maximum(stop_time - s.t[run], 0.0),
+    )
 
-    m = run.size
-    kind = np.zeros(m, dtype=np.int8)
-    duration = np.zeros(m)
-    x = np.zeros(m)
-    v = np.zeros(m)
-    work_damper = np.zeros(m)
-    peak_speed = np.zeros(m)
-    temp_end = s.temp[run].copy()
-    temp_peak = s.temp[run].copy()
-    display = np.zeros(m)
 
-    integrate_mask = eng & problem.nonlinear
-    closed_idx = np.flatnonzero(~integrate_mask)
-    if closed_idx.size:
-        seg = linear.segment(
-            inertia[closed_idx],
-            damping[closed_idx],
-            piece.stiffness[closed_idx],
-            drive[closed_idx],
-            speed0[closed_idx],
-        )
-        adv = linear.advance(seg, length[closed_idx], cap[closed_idx])
-        kind[closed_idx] = adv.kind
-        duration[closed_idx] = adv.duration
-        x[closed_idx] = adv.x
-        v[closed_idx] = adv.v
-        work_damper[closed_idx] = damping[closed_idx] * adv.speed_squared_integral
-        peak_speed[closed_idx] = adv.max_speed
-        # A plot of an asymptotic approach to rest ends after 10 slow time constants.
-        display[closed_idx] = t_r[closed_idx] + linear.rest_time(seg) / 80.0
-        if records is not None:
-            records.closed.append(
-                ClosedFormRecord(
-                    case=run[closed_idx],
-                    start_time=t_r[closed_idx],
-                    duration=adv.duration,
-                    start_angle=phi_r[closed_idx],
-                    direction=direction[closed_idx],
-                    engaged=eng[closed_idx],
-                    temperature=s.temp[run[closed_idx]],
-                    segment=seg,
-                )
-            )
-    nl_idx = np.flatnonzero(integrate_mask)
-    if nl_idx.size:
-        cases = run[nl_idx]
-        out = integrate.advance_nonlinear(
-            integrate.NonlinearSegments(
-                inertia=inertia[nl_idx],
-                stiffness=piece.stiffness[nl_idx],
-                drive=drive[nl_idx],
-                speed0=speed0[nl_idx],
-                length=length[nl_idx],
-                cap=cap[nl_idx],
-                state0=s.heat[cases],
-                ambient=c.ambient[cases],
-                ratio=c.ratio[cases],
-                gearbox_damping=c.gearbox_damping[cases],
-                heat_capacity=c.heat_capacity[cases],
-                thermal_resistance=c.thermal_resistance[cases],
-                linear_damping=c.damping[cases],
-                eddy=c.eddy,
+def _step_closed_form(
+    c: _Cases,
+    s: _State,
+    seg: _Segment,
+    idx: NDArray[np.intp],
+    step: _Step,
+    records: _Records | None,
+) -> None:
+    """Linear segments ``idx`` (of ``seg``) in closed form (:mod:`ecdsim.dynamics.linear`)."""
+    closed = linear.segment(
+        seg.inertia[idx],
+        seg.damping[idx],
+        seg.piece.stiffness[idx],
+        seg.drive[idx],
+        seg.speed0[idx],
+    )
+    adv = linear.advance(closed, seg.length[idx], seg.cap[idx])
+    step.kind[idx] = adv.kind
+    step.duration[idx] = adv.duration
+    step.x[idx] = adv.x
+    step.v[idx] = adv.v
+    step.damper_work[idx] = seg.damping[idx] * adv.speed_squared_integral
+    step.peak_speed[idx] = adv.max_speed
+    start = s.t[seg.run[idx]]
+    # A plot of an asymptotic approach to rest ends after a few slow time constants.
+    step.display_end[idx] = start + linear.rest_time(closed, DISPLAY_TIME_CONSTANTS)
+    if records is not None:
+        cases = seg.run[idx]
+        records.closed.append(
+            ClosedFormRecord(
                 case=cases,
-                thermal=problem.thermal,
-            ),
-            rtol=problem.rtol,
-            method=problem.integrator,
-            record=records is not None,
+                start_time=start,
+                duration=adv.duration,
+                start_angle=s.phi[cases],
+                direction=seg.direction[idx],
+                engaged=seg.engaged[idx],
+                temperature=s.temp[cases],
+                segment=closed,
+            )
         )
-        kind[nl_idx] = out.kind
-        duration[nl_idx] = out.duration
-        x[nl_idx] = out.x
-        v[nl_idx] = out.v
-        work_damper[nl_idx] = out.damper_work
-        peak_speed[nl_idx] = out.max_speed
-        temp_end[nl_idx] = out.temperature
-        temp_peak[nl_idx] = out.max_temperature
-        s.heat[cases] = out.state
-        display[nl_idx] = t_r[nl_idx] + out.duration
-        if records is not None:
-            for j, sol in enumerate(out.solutions):
-                if sol is not None:
-                    i = int(nl_idx[j])
-                    records.integrated.append(
-                        IntegratedRecord(
-                            case=int(run[i]),
-                            start_time=float(t_r[i]),
-                            duration=float(out.duration[j]),
-                            start_angle=float(phi_r[i]),
-                            direction=float(direction[i]),
-                            solution=sol,
-                        )
-                    )
 
-    # Energy of the segment (spring work exact for the linear spring piece).
-    displacement = direction * x
+
+def _step_integrated(
+    c: _Cases,
+    s: _State,
+    seg: _Segment,
+    idx: NDArray[np.intp],
+    step: _Step,
+    problem: DynamicProblem,
+    records: _Records | None,
+) -> None:
+    """Nonlinear segments ``idx`` (roll-off, heating) by :mod:`ecdsim.dynamics.integrate`."""
+    cases = seg.run[idx]
+    out = integrate.advance_nonlinear(
+        integrate.NonlinearSegments(
+            inertia=seg.inertia[idx],
+            stiffness=seg.piece.stiffness[idx],
+            drive=seg.drive[idx],
+            speed0=seg.speed0[idx],
+            length=seg.length[idx],
+            cap=seg.cap[idx],
+            state0=s.heat[cases],
+            ambient=c.ambient[cases],
+            ratio=c.ratio[cases],
+            gearbox_damping=c.gearbox_damping[cases],
+            heat_capacity=c.heat_capacity[cases],
+            thermal_resistance=c.thermal_resistance[cases],
+            linear_damping=c.damping[cases],
+            eddy=c.eddy,
+            case=cases,
+            thermal=problem.thermal,
+        ),
+        rtol=problem.rtol,
+        method=problem.integrator,
+        record=records is not None,
+    )
+    step.kind[idx] = out.kind
+    step.duration[idx] = out.duration
+    step.x[idx] = out.x
+    step.v[idx] = out.v
+    step.damper_work[idx] = out.damper_work
+    step.peak_speed[idx] = out.max_speed
+    step.temperature[idx] = out.temperature
+    step.peak_temperature[idx] = out.max_temperature
+    s.heat[cases] = out.state
+    start = s.t[cases]
+    step.display_end[idx] = start + out.duration
+    if records is not None:
+        for j, sol in enumerate(out.solutions):
+            if sol is not None:
+                case = int(cases[j])
+                records.integrated.append(
+                    IntegratedRecord(
+                        case=case,
+                        start_time=float(start[j]),
+                        duration=float(out.duration[j]),
+                        start_angle=float(s.phi[case]),
+                        direction=float(seg.direction[idx[j]]),
+                        solution=sol,
+                    )
+                )
+
+
+def _account(s: _State, seg: _Segment, step: _Step) -> None:
+    """Energy of the segment, extremes, and the new time, angle and speed of each case."""
+    run, piece, direction = seg.run, seg.piece, seg.direction
+    phi_r = s.phi[run]
+    # Spring work exact for the linear spring piece.
+    displacement = direction * step.x
     s.spring_work[run] += (
         piece.torque * displacement - 0.5 * piece.stiffness * displacement * displacement
     )
-    s.friction_work[run] += kinetic * np.abs(x)
-    s.damper_work[run] += work_damper
-    before_arrival = ~np.isfinite(s.arrival_time[run]) & forward
+    s.friction_work[run] += seg.kinetic * np.abs(step.x)
+    s.damper_work[run] += step.damper_work
+    before_arrival = ~np.isfinite(s.arrival_time[run]) & seg.forward
     s.max_speed[run] = np.where(
-        before_arrival, np.maximum(s.max_speed[run], peak_speed), s.max_speed[run]
+        before_arrival, np.maximum(s.max_speed[run], step.peak_speed), s.max_speed[run]
     )
-    s.max_temp[run] = np.maximum(s.max_temp[run], temp_peak)
-    s.temp[run] = temp_end
-
-    reached = kind == linear.REACH
+    s.max_temp[run] = np.maximum(s.max_temp[run], step.peak_temperature)
+    s.temp[run] = step.temperature
+    reached = step.kind == linear.REACH
     # Geometric events land exactly on their angle.
-    target = phi_r + direction * length
-    t_new = t_r + duration
+    target = phi_r + direction * seg.length
+    t_new = s.t[run] + step.duration
     s.hold_from[run] = t_new
-    s.display_end[run] = display
+    s.display_end[run] = step.display_end
     s.t[run] = t_new
     s.phi[run] = np.where(reached, target, phi_r + displacement)
-    s.w[run] = direction * v
+    s.w[run] = direction * step.v
 
+
+def _apply_events(c: _Cases, s: _State, seg: _Segment, step: _Step, log: _Log) -> None:
+    """Log each case's event and apply it: stop, cap, creep, engagement, impacts."""
+    run, kind = seg.run, step.kind
     zero = run[kind == linear.ZERO]
     s.w[zero] = 0.0  # the next iteration decides stick or breakaway
     log.add(zero, s.t[zero], "zero_speed", s.phi[zero], s.w[zero])
@@ -530,7 +660,8 @@ def _advance_cases(
     s.finish(cut, "horizon")
     log.add(cut, s.t[cut], "horizon", s.phi[cut], s.w[cut])
 
-    engaging = run[reached & (reach_kind == _EV["engage"])]
+    reached = kind == linear.REACH
+    engaging = run[reached & (seg.reach_kind == _EV["engage"])]
     if engaging.size:
         log.add(engaging, s.t[engaging], "engage", s.phi[engaging], s.w[engaging])
         w_after, loss = mechanics.plastic_engagement(
@@ -540,10 +671,10 @@ def _advance_cases(
         s.engagement_loss[engaging] += loss
         s.engaged[engaging] = True
         s.engagement_time[engaging] = s.t[engaging]
-    passing = run[reached & (reach_kind == _EV["breakpoint"])]
+    passing = run[reached & (seg.reach_kind == _EV["breakpoint"])]
     log.add(passing, s.t[passing], "breakpoint", s.phi[passing], s.w[passing])
     for name in ("arrive", "start_stop"):
-        hit = run[reached & (reach_kind == _EV[name])]
+        hit = run[reached & (seg.reach_kind == _EV[name])]
         if hit.size:
             _impact(c, s, hit, name, log)
 
