@@ -190,10 +190,16 @@ def test_plot_to_unwritable_place_exits_2(tmp_path: Path) -> None:
                 "--plot": None,
                 "--damper": None,
                 "--gearbox": None,
+                "--fail-on": None,
+                "--wide": None,
+                "--plain": None,
                 "--help": None,
             },
         ),
-        ("compare-fluid", {"--json": None, "--plot": None, "--help": None}),
+        (
+            "compare-fluid",
+            {"--json": None, "--plot": None, "--wide": None, "--plain": None, "--help": None},
+        ),
     ],
 )
 def test_help_has_an_example(
