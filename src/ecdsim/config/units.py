@@ -1,7 +1,11 @@
 """Quantities written as strings ("1.3e-4 N*m*s/rad", "90 deg", "25 degC"), parsed with pint.
 
-This is the only module that imports pint; it does so lazily and once. Each physical kind
-of quantity has a :class:`Kind` naming its SI unit and an example, so that every error
+This is the only module that imports pint; it does so lazily and once, and only for a
+unit outside :data:`LEAN_FACTORS`: the common units of configs and bench logs (N*m, mN*m,
+deg, rpm, degC, / K, %, g, mm, ...) are converted by a table of pint's own conversion
+factors, so that ``ecdsim deploy`` does not pay pint's import and registry (about 0.2 s on
+a quiet machine, more with dask installed, which pint imports; scipy too). Each physical
+kind of quantity has a :class:`Kind` naming its SI unit and an example, so that every error
 message can say what was expected.
 """
 
@@ -67,6 +71,100 @@ def check_unit_grammar(unit_text: str) -> str | None:
 
 ABSOLUTE_ZERO_C = -273.15
 """Absolute zero [degC]; temperatures at or below it are refused."""
+
+
+# Pint's conversion factor of (unit, the kind's SI unit), keyed by the unit as
+# :func:`lean_key` writes it: for these, pint's answer is ``number * factor``, bit for bit,
+# which tests/test_units_lean.py checks against pint itself (random magnitudes, every
+# entry). Anything else, wrong dimensions and offset conversions (K, degF to degC)
+# included, goes to pint, whose messages stay the only ones.
+LEAN_FACTORS: dict[tuple[str, str], float] = {
+    ("N*m", "N*m"): 1.0,
+    ("mN*m", "N*m"): 0.001,
+    ("uN*m", "N*m"): 1e-06,
+    ("N*mm", "N*m"): 0.001,
+    ("mN*mm", "N*m"): 1e-06,
+    ("kN*m", "N*m"): 1000.0,
+    ("N*cm", "N*m"): 0.01,
+    ("N*m*s/rad", "N*m*s/rad"): 1.0,
+    ("mN*m*s/rad", "N*m*s/rad"): 0.001,
+    ("uN*m*s/rad", "N*m*s/rad"): 1e-06,
+    ("N*mm*s/rad", "N*m*s/rad"): 0.001,
+    ("mN*mm*s/rad", "N*m*s/rad"): 1e-06,
+    ("N*m*s", "N*m*s/rad"): 1.0,
+    ("mN*m*s", "N*m*s/rad"): 0.001,
+    ("rad", "rad"): 1.0,
+    ("deg", "rad"): 0.017453292519943295,
+    ("degree", "rad"): 0.017453292519943295,
+    ("mrad", "rad"): 0.001,
+    ("turn", "rad"): 6.283185307179586,
+    ("rad/s", "rad/s"): 1.0,
+    ("deg/s", "rad/s"): 0.017453292519943295,
+    ("rpm", "rad/s"): 0.10471975511965977,
+    ("turn/s", "rad/s"): 6.283185307179586,
+    ("rad/min", "rad/s"): 0.016666666666666666,
+    ("degC", "degC"): 1.0,
+    ("/K", "1/K"): 1.0,
+    ("1/K", "1/K"): 1.0,
+    ("/degC", "1/K"): 1.0,
+    ("1/degC", "1/K"): 1.0,
+    ("%/K", "1/K"): 0.01,
+    ("%/degC", "1/K"): 0.01,
+    ("ppm/K", "1/K"): 1e-06,
+    ("N*m/K", "N*m/K"): 1.0,
+    ("mN*m/K", "N*m/K"): 0.001,
+    ("N*m/degC", "N*m/K"): 1.0,
+    ("mN*m/degC", "N*m/K"): 0.001,
+    ("uN*m/K", "N*m/K"): 1e-06,
+    ("%", ""): 0.01,
+    ("percent", ""): 0.01,
+    ("ppm", ""): 1e-06,
+    ("s", "s"): 1.0,
+    ("ms", "s"): 0.001,
+    ("min", "s"): 60.0,
+    ("h", "s"): 3600.0,
+    ("us", "s"): 1e-06,
+    ("kg", "kg"): 1.0,
+    ("g", "kg"): 0.001,
+    ("mg", "kg"): 1e-06,
+    ("m", "m"): 1.0,
+    ("mm", "m"): 0.001,
+    ("cm", "m"): 0.01,
+    ("um", "m"): 1e-06,
+    ("kg*m^2", "kg*m^2"): 1.0,
+    ("g*cm^2", "kg*m^2"): 1.0000000000000001e-07,
+    ("kg*mm^2", "kg*m^2"): 1e-06,
+    ("g*mm^2", "kg*m^2"): 1e-09,
+    ("kg*cm^2", "kg*m^2"): 0.0001,
+    ("g*m^2", "kg*m^2"): 0.001,
+    ("Pa*s", "Pa*s"): 1.0,
+    ("mPa*s", "Pa*s"): 0.001,
+    ("cP", "Pa*s"): 0.001,
+    ("P", "Pa*s"): 0.1,
+    ("m^2/s", "m^2/s"): 1.0,
+    ("mm^2/s", "m^2/s"): 1e-06,
+    ("cSt", "m^2/s"): 1.0000000000000002e-06,
+    ("St", "m^2/s"): 0.0001,
+    ("J/K", "J/K"): 1.0,
+    ("mJ/K", "J/K"): 0.001,
+    ("kJ/K", "J/K"): 1000.0,
+    ("J/degC", "J/K"): 1.0,
+    ("K/W", "K/W"): 1.0,
+    ("degC/W", "K/W"): 1.0,
+}
+_LEAN_OPERATOR = re.compile(r"\s*(\*\*|[*/^])\s*")
+_LEAN_SPACE = re.compile(r"\s+")
+
+
+def lean_key(unit_text: str) -> str:
+    """``unit_text`` written one way, as pint reads it: ``N m`` and ``N * m`` are ``N*m``,
+    ``m**2`` is ``m^2``, ``1 / K`` is ``1/K``.
+
+    >>> lean_key("mN * m ") , lean_key("kg m**2"), lean_key("/ K")
+    ('mN*m', 'kg*m^2', '/K')
+    """
+    text = _LEAN_OPERATOR.sub(lambda m: "^" if m.group(1) == "**" else m.group(1), unit_text)
+    return _LEAN_SPACE.sub("*", text.strip())
 
 
 @cache
@@ -179,11 +277,19 @@ def _in_range(number: float, raw: object, kind: Kind) -> float:
 
 
 def _convert(number: float, unit_text: str, raw: str, kind: Kind) -> float:
-    import pint
-
     bad_grammar = check_unit_grammar(unit_text)
     if bad_grammar is not None:
         raise QuantityError(f"{quoted(raw)}: {quoted(unit_text)} {bad_grammar}; {kind.expected}")
+    factor = LEAN_FACTORS.get((lean_key(unit_text), kind.unit))
+    if factor is not None:
+        return _in_range(_finite(number * factor, raw, kind), raw, kind)
+    return _convert_with_pint(number, unit_text, raw, kind)
+
+
+def _convert_with_pint(number: float, unit_text: str, raw: str, kind: Kind) -> float:
+    """The conversion by pint, for any unit (``LEAN_FACTORS`` are checked against it)."""
+    import pint
+
     registry = _registry()
     if unit_text.startswith("/"):
         unit_text = "1 " + unit_text
