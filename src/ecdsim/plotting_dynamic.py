@@ -66,17 +66,16 @@ def dynamic_result(prediction: Prediction) -> DynamicResult | None:
 def events_by_kind(result: DynamicResult) -> dict[str, list[tuple[int, float, float, float]]]:
     """The events to mark, by marker kind: (flat case, time [s], angle [rad], speed [rad/s]).
 
-    An ``arrive`` or ``start_stop`` event is an impact unless a ``latch`` or ``settle``
-    of the same case happens at the same instant (restitution 0: caught on arrival).
+    An ``arrive`` or ``start_stop`` event is an impact (as the result's ``impacts``
+    counts them) unless a ``latch`` of the same case happens at the same instant
+    (restitution 0: caught on arrival).
     A ``creep`` (an asymptotic approach to rest, at an infinite time) is drawn at the
     end of its curve; other events at an infinite time are not drawn.
     """
     ev = result.events
     names = [EVENT_KINDS[k] for k in ev.kind]
     caught = {
-        (int(c), float(t))
-        for c, t, n in zip(ev.case, ev.time, names, strict=True)
-        if n in ("latch", "settle")
+        (int(c), float(t)) for c, t, n in zip(ev.case, ev.time, names, strict=True) if n == "latch"
     }
     out: dict[str, list[tuple[int, float, float, float]]] = {kind: [] for kind in MARKERS}
     for c, t, n, a, s in zip(ev.case, ev.time, names, ev.angle, ev.speed, strict=True):
