@@ -189,7 +189,9 @@ def _temperatures(values: object) -> tuple[float, ...]:
             raise ConfigError(
                 [f"temperatures = {values}: not a temperature ({type(exc).__name__})"]
             ) from None
-        items: list[Any] = [float(m) for m in _iterate(magnitudes)]  # type: ignore[arg-type]
+        # pint converts degF through kelvin (77 degF -> 25.000000000000057 degC): 12
+        # significant digits keep the value and drop the rounding noise.
+        items: list[Any] = [_round(m) for m in _iterate(magnitudes)]
     else:
         items = list(_iterate(values))
     if not items:
@@ -201,7 +203,7 @@ def _temperatures(values: object) -> tuple[float, ...]:
         if isinstance(item, int | float) and not isinstance(item, bool):
             text = f"{float(item)!r} degC"
         elif hasattr(item, "magnitude") and hasattr(item, "to"):
-            text = f"{float(item.to('degC').magnitude)!r} degC"
+            text = f"{_round(item.to('degC').magnitude)!r} degC"
         elif isinstance(item, str) and not any(c.isalpha() for c in item):
             text = f"{item} degC"
         try:
@@ -211,6 +213,10 @@ def _temperatures(values: object) -> tuple[float, ...]:
     if problems:
         raise ConfigError(problems)
     return tuple(out)
+
+
+def _round(value: Any) -> float:
+    return float(f"{float(value):.12g}")
 
 
 def _iterate(values: object) -> Iterable[object]:
