@@ -368,6 +368,8 @@ def test_cli_json_summary_progress_and_plots(tmp_path: Path, saved_figures: Save
     )
     assert result.exit_code == 0, result.output
     document = json.loads(result.stdout)
+    # The printed summary is the stored one plus the display unit system it was shown in.
+    assert document.pop("display_units") == "si"
     assert document == json.loads((out / SUMMARY).read_text())
     assert document["samples"] == 3000
     assert document["seed"] == 99

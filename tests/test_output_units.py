@@ -425,3 +425,26 @@ def test_fit_drop_test_in_us_units() -> None:
     us = json.loads(_run("fit", "drop-test", data, "--json", "--units", "us").stdout)
     assert us["display_units"] == "us"
     assert us["temperature_laws"] == si["temperature_laws"]  # JSON stays SI
+
+
+def test_montecarlo_tables_in_us_units(tmp_path: Any) -> None:
+    import json
+
+    pytest.importorskip("pyarrow")
+    from tests.conftest import ROOT
+
+    config = ROOT / "examples" / "paper_cc16_tolerances.toml"
+    common = ["-n", "64", "--no-plot", "--no-progress", "--overwrite"]
+    out = str(tmp_path / "mc")
+    result = _run("montecarlo", str(config), "--out", out, "--units", "us", *common)
+    assert result.exit_code == 0, result.output
+    # -40, 25, 100 degC are -40, 77, 212 degF; times stay in s.
+    assert "[degF]" in result.stdout
+    assert "77 degF" in result.stdout  # the sensitivity columns
+    assert _row(result.stdout, "77")[0] == "77"
+    assert "degC" not in result.stdout
+    result = _run("montecarlo", str(config), "--out", out, "--units", "us", "--json", *common)
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    assert document["display_units"] == "us"
+    assert [c["temperature_C"] for c in document["cases"]] == [-40.0, 25.0, 100.0]

@@ -17,9 +17,10 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from ecdsim.cli import display
-from ecdsim.cli.common import fail, load_run
+from ecdsim.cli.common import UnitsOpt, fail, load_run, units_option
 from ecdsim.cli.display import PlainOpt, WideOpt
 from ecdsim.formatting import format_number
+from ecdsim.units_display import Shown
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -115,6 +116,7 @@ def montecarlo(
     show_progress: Annotated[
         bool, typer.Option("--progress/--no-progress", help="Show the progress bar.")
     ] = True,
+    units: UnitsOpt = None,
     wide: WideOpt = False,
     plain: PlainOpt = False,
 ) -> None:
@@ -132,6 +134,7 @@ def montecarlo(
     )
 
     loaded = load_run(config, temperature, None)
+    u = Shown(units_option(units, loaded))
     folder = out if out is not None else Path(f"{config.stem}-montecarlo")
     if resume and overwrite:
         fail(["--resume continues the run in --out and --overwrite replaces it: give one"])
@@ -198,9 +201,10 @@ def montecarlo(
     except OSError as exc:
         fail([f"--out {folder}: cannot write ({exc.strerror or exc})"])
     if as_json:
-        typer.echo(json.dumps(summary, indent=2, sort_keys=True, allow_nan=False))
+        document = {**summary, "display_units": u.system}
+        typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
     else:
-        _print_tables(summary)
+        _print_tables(summary, u)
 
 
 def _check_folder(folder: Path, resume: bool, overwrite: bool) -> None:
@@ -353,7 +357,7 @@ def _fmt(value: float | None, digits: int = 4) -> str:
     return format_number(value, digits, none="inf", signed_inf=False)
 
 
-def _print_tables(summary: dict[str, Any]) -> None:
+def _print_tables(summary: dict[str, Any], u: Shown) -> None:
     from rich.markup import escape
     from rich.table import Table
 
@@ -364,7 +368,9 @@ def _print_tables(summary: dict[str, Any]) -> None:
         f"{summary['sampling']} sampling, seed {summary['seed']}"
     )
     times = Table(title=escape(f"Deployment time [s]  ({title})"), title_justify="left")
-    for header in ("T [degC]", "nominal", "P1", "P5", "P50", "P95", "P99", "mean", "std"):
+    for header in (u.head("T", "temperature"), "nominal", "P1", "P5", "P50", "P95", "P99"):
+        times.add_column(escape(header), justify="right")
+    for header in ("mean", "std"):
         times.add_column(escape(header), justify="right")
     times.add_column(escape("stall [%] (95 % interval)"), justify="right")
     for case in cases:
@@ -376,7 +382,7 @@ def _print_tables(summary: dict[str, Any]) -> None:
         std = d["std"] if d["std"] is not None else d["std_arriving"]
         marker = "" if d["mean"] is not None else "*"
         times.add_row(
-            f"{case['temperature_C']:g}",
+            u.num(case["temperature_C"], "temperature"),
             _fmt(case["nominal"]["deployment_time_s"]),
             *(_fmt(p[name]["value"]) for name in ("P1", "P5", "P50", "P95", "P99")),
             _fmt(mean) + marker,
@@ -396,13 +402,13 @@ def _print_tables(summary: dict[str, Any]) -> None:
     speeds = Table(
         title=escape("End (latch) speed [rad/s], samples that arrive"), title_justify="left"
     )
-    for header in ("T [degC]", "nominal", "P1", "P50", "P99", "mean", "std"):
+    for header in (u.head("T", "temperature"), "nominal", "P1", "P50", "P99", "mean", "std"):
         speeds.add_column(escape(header), justify="right")
     for case in cases:
         e = case["end_speed_rad_s"]
         p = e["percentiles"]
         speeds.add_row(
-            f"{case['temperature_C']:g}",
+            u.num(case["temperature_C"], "temperature"),
             _fmt(case["nominal"]["end_speed_rad_s"]),
             _fmt(p["P1"]["value"]),
             _fmt(p["P50"]["value"]),
@@ -417,14 +423,22 @@ def _print_tables(summary: dict[str, Any]) -> None:
             title="Minimum torque margin over the travel (docs/sizing.md section 5)",
             title_justify="left",
         )
-        for header in ("T [degC]", "nominal", "P1", "P5", "P50", "mean", "P(< required) [%]"):
+        for header in (
+            u.head("T", "temperature"),
+            "nominal",
+            "P1",
+            "P5",
+            "P50",
+            "mean",
+            "P(< required) [%]",
+        ):
             margins.add_column(escape(header), justify="right")
         for case in cases:
             m = case["min_torque_margin"]
             p = m["percentiles"]
             below = m.get("probability_below_required")
             margins.add_row(
-                f"{case['temperature_C']:g}",
+                u.num(case["temperature_C"], "temperature"),
                 _fmt(case["nominal"]["min_torque_margin"]),
                 _fmt(p["P1"]["value"]),
                 _fmt(p["P5"]["value"]),
@@ -441,7 +455,7 @@ def _print_tables(summary: dict[str, Any]) -> None:
     sensitivity.add_column("quantity")
     for case in cases:
         r2 = case["sensitivity"]["r_squared"]
-        label = f"{case['temperature_C']:g} degC\nR^2 {_fmt(r2, 3)}"
+        label = f"{u.text(case['temperature_C'], 'temperature')}\nR^2 {_fmt(r2, 3)}"
         sensitivity.add_column(escape(label), justify="right")
     keys = [row["key"] for row in cases[0]["sensitivity"]["inputs"]] if cases else []
     for key in keys:
@@ -455,7 +469,7 @@ def _print_tables(summary: dict[str, Any]) -> None:
     display.show(console, sensitivity, wrap=("quantity",))
 
     if cases:
-        _print_repeatability(console, cases)
+        _print_repeatability(console, cases, u)
     for warning in summary["warnings"]:
         console.print(
             escape(
@@ -485,7 +499,7 @@ def _chance(probability: float, possible: bool) -> str:
     return f"{100 * probability:.3g}"
 
 
-def _print_repeatability(console: Console, cases: list[dict[str, Any]]) -> None:
+def _print_repeatability(console: Console, cases: list[dict[str, Any]], u: Shown) -> None:
     """The repeated-deployment table and what it means, in words (docs/montecarlo.md)."""
     from rich.markup import escape
     from rich.table import Table
@@ -498,7 +512,7 @@ def _print_repeatability(console: Console, cases: list[dict[str, Any]]) -> None:
         title_justify="left",
     )
     headers = (
-        "T [degC]",
+        u.head("T", "temperature"),
         "nominal [s]",
         "spread [s]",
         "one within [%]",
@@ -516,7 +530,9 @@ def _print_repeatability(console: Console, cases: list[dict[str, Any]]) -> None:
         spread = d["std"] if d["std"] is not None else d["std_arriving"]
         marker = "" if d["std"] is not None else "*"
         if "fraction_within" not in r:
-            table.add_row(f"{case['temperature_C']:g}", "stalls", "-", "-", "-", "-", "no")
+            table.add_row(
+                u.num(case["temperature_C"], "temperature"), "stalls", "-", "-", "-", "-", "no"
+            )
             continue
         if spread is not None:
             spreads.append((case["temperature_C"], spread))
@@ -533,7 +549,7 @@ def _print_repeatability(console: Console, cases: list[dict[str, Any]]) -> None:
             )
             bounded = True
         table.add_row(
-            f"{case['temperature_C']:g}",
+            u.num(case["temperature_C"], "temperature"),
             _fmt(r["nominal_time_s"]),
             _fmt(spread) + marker,
             one,
@@ -562,12 +578,13 @@ def _print_repeatability(console: Console, cases: list[dict[str, Any]]) -> None:
             low = min(x for _, x in wide) / required
             high = max(x for _, x in wide) / required
             ratio = f"{low:.2g}" if f"{low:.2g}" == f"{high:.2g}" else f"{low:.2g} to {high:.2g}"
-            where = ", ".join(f"{t:g}" for t, _ in wide)
+            where = ", ".join(u.num(t, "temperature") for t, _ in wide)
             lines.append(
-                f"At {where} degC the spread is {ratio} times that: wider than one unit's "
-                "run-to-run scatter usually is. If these are unit-to-unit (manufacturing) "
-                "tolerances, 'no' says that different units differ by more than "
-                f"{window}, not that one unit repeats badly (docs/montecarlo.md)."
+                f"At {where} {u.unit('temperature')} the spread is {ratio} times that: "
+                "wider than one unit's run-to-run scatter usually is. If these are "
+                "unit-to-unit (manufacturing) tolerances, 'no' says that different units "
+                f"differ by more than {window}, not that one unit repeats badly "
+                "(docs/montecarlo.md)."
             )
     if bounded:
         lines.append(
