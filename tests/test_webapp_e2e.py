@@ -12,6 +12,7 @@ axe-core the tests fail naming what to install; they are never skipped.
 
 from __future__ import annotations
 
+import base64
 import json
 import math
 import os
@@ -155,7 +156,7 @@ def _cell_texts(page: Any, attribute: str = "key") -> dict[str, str]:
 
 def _cells(page: Any) -> dict[str, float | None]:
     return {
-        k: None if v.startswith("stalls") else float(v)
+        k: None if v.startswith(("stalls", "stuck", "not deployed", "cannot start")) else float(v)
         for k, v in _cell_texts(page).items()
         if not k.endswith(":temperature")
     }
@@ -610,3 +611,37 @@ def test_keyboard_reaches_and_operates_every_control(server: str, page: Any) -> 
     page.focus("#pin")
     page.keyboard.press("Enter")
     page.wait_for_function("() => window.ecdsim.pinned !== null")
+
+
+def test_a_crafted_link_opens_a_case_that_cannot_start(
+    server: str, page: Any, tmp_path: Path
+) -> None:
+    # The dynamic example with breakaway friction 3x the kinetic and FS at 0 degC 0.9 N*m.
+    config = tomllib.loads(DYNAMIC_CONFIG.read_text(encoding="utf-8"))
+    config["damper"]["static_friction_factor"] = 3.0
+    config["load"]["system_friction"]["at_0C"] = "0.9 N*m"
+    encoded = base64.urlsafe_b64encode(json.dumps(config).encode()).rstrip(b"=").decode()
+    _open(page, f"{server}/#case={encoded}")
+    assert page.inner_text("#source") == "from the link"
+    assert page.evaluate("window.ecdsim.sentConfig") == config
+    texts = _cell_texts(page)
+    # The CLI on the same config says where the dynamic method sticks.
+    path = tmp_path / "stuck.toml"
+    path.write_text(page.evaluate("window.ecdsim.response.toml"), encoding="utf-8")
+    result = runner.invoke(cli, ["deploy", str(path), "--json"])
+    assert result.exit_code == 0, result.output
+    cases = json.loads(result.stdout)["cases"]
+    for i, case in enumerate(cases):
+        dynamic = case["dynamic"]
+        shown = texts[f"{i}:dynamic.deployment_time_s"]
+        if dynamic["stuck"] and dynamic["stuck_angle_rad"] == 0.0:
+            assert shown == "cannot start: friction at release >= spring torque"
+        else:
+            assert float(shown) == pytest.approx(dynamic["deployment_time_s"], rel=CELL_REL)
+    assert cases[1]["dynamic"]["stuck_angle_rad"] == 0.0  # the case this test is about
+    # Quasi-static at -40 degC: FECD + FS = 0.587024 + (0.9 + 0.0044 * 40) = 1.663024 N*m
+    # > 1.58 N*m: stalls at (3.73 - 1.663024) * 1.57 / 2.15 rad = 86.48 deg.
+    stall = math.degrees((3.73 - 1.663024) * 1.57 / 2.15)
+    assert texts["0:exact.deployment_time_s"] == f"stalls at {float(f'{stall:.4g}'):g} deg"
+    _shot(page, "09-cannot-start")
+    _axe(page)

@@ -290,9 +290,24 @@ const PLOT_CONFIG = {
 
 function caseTemperature(c) { return `${sig(show("temperature", c.temperature_C))} ${label("temperature")}`; }
 
-function stallText(result) {
-  if (result.stall_angle_rad === null || result.stall_angle_rad === undefined) return "stalls";
-  return `stalls at ${sig((result.stall_angle_rad * 180) / Math.PI, 4)} deg`;
+// A case that does not reach the latch: it stalls (quasi-static: the spring torque falls
+// to the friction), sticks (dynamic: stick-slip holds it), or has no solution.
+function notDeployed(r) {
+  return r !== undefined && r !== null && (r.deployment_time_s === null || r.deployment_time_s === undefined);
+}
+function stopAngle(r) {
+  for (const key of ["stall_angle_rad", "stuck_angle_rad", "final_angle_rad"]) {
+    if (r[key] !== null && r[key] !== undefined) return r[key];
+  }
+  return null;
+}
+function stallText(r) {
+  const angle = stopAngle(r);
+  if (angle === 0 && (r.stalled || r.stuck)) return "cannot start: friction at release >= spring torque";
+  const at = angle === null ? "" : ` at ${sig((angle * 180) / Math.PI, 4)} deg`;
+  if (r.stalled) return `stalls${at}`;
+  if (r.stuck) return `stuck${at}`;
+  return `not deployed (${r.status || "no solution"})${at}`;
 }
 
 function angleTraces(body, prefix, faded) {
@@ -302,7 +317,7 @@ function angleTraces(body, prefix, faded) {
   doc.methods.forEach((m) => {
     doc.cases.forEach((c, j) => {
       const r = c[m] || {};
-      const stalled = r.stalled === true;
+      const stalled = notDeployed(r);
       traces.push({
         x: time, y: body.trajectories.methods[m].angle_rad[j].map((a) => (a === null ? null : (a * 180) / Math.PI)),
         name: `${prefix}${caseTemperature(c)}, ${m}${stalled ? ": " + stallText(r).toUpperCase() : ""}`,
@@ -310,9 +325,9 @@ function angleTraces(body, prefix, faded) {
         opacity: faded ? 0.45 : 1,
         line: { color: COLORS[j % COLORS.length], dash: DASH[m] || "dashdot", width: faded ? 1.5 : 2.2 },
       });
-      if (stalled && r.stall_angle_rad !== null && r.stall_angle_rad !== undefined) {
+      if (stalled && stopAngle(r) !== null) {
         traces.push({
-          x: [time[time.length - 1]], y: [(r.stall_angle_rad * 180) / Math.PI], mode: "markers",
+          x: [time[time.length - 1]], y: [(stopAngle(r) * 180) / Math.PI], mode: "markers",
           name: `${prefix}${caseTemperature(c)}, ${m}: ${stallText(r)}`, legendgroup: prefix,
           marker: { symbol: "x", size: 12, color: "#b00020" }, opacity: faded ? 0.45 : 1,
         });
@@ -329,7 +344,7 @@ function sweepTraces(body, prefix, faded) {
   const traces = [];
   const finite = doc.methods.flatMap((m) => sweep.methods[m].deployment_time_s.filter((v) => v !== null));
   const top = finite.length ? Math.max(...finite) * 1.05 : 1;
-  doc.methods.forEach((m) => {
+  doc.methods.forEach((m, k) => {
     const y = sweep.methods[m].deployment_time_s;
     traces.push({
       x, y, name: `${prefix}${m}`, mode: "lines+markers", legendgroup: prefix, opacity: faded ? 0.45 : 1,
@@ -340,8 +355,9 @@ function sweepTraces(body, prefix, faded) {
     if (stallX.length) {
       // Stalled temperatures have no deployment time: marked along the top, not dropped.
       traces.push({
-        x: stallX, y: stallX.map(() => top), mode: "markers", name: `${prefix}${m}: stalls (no deployment)`,
-        legendgroup: prefix, marker: { symbol: "x", size: 11, color: "#b00020" }, opacity: faded ? 0.45 : 1,
+        // One row per method above the curves, in the method's colour.
+        x: stallX, y: stallX.map(() => top * (1 + 0.05 * k)), mode: "markers", name: `${prefix}${m}: stalls (no deployment)`,
+        legendgroup: prefix, marker: { symbol: "x", size: 11, color: METHOD_COLORS[m] || "#b00020" }, opacity: faded ? 0.45 : 1,
         hovertemplate: `stalls at %{x} ${label("temperature")}<extra>${m}</extra>`,
       });
     }
@@ -400,7 +416,7 @@ function caseValue(c, key) { return getPath(c, key.split(".")); }
 function cellText(c, key, kind) {
   const v = caseValue(c, key);
   const method = key.includes(".") ? key.split(".")[0] : null;
-  if ((v === null || v === undefined) && method && c[method] && c[method].stalled) return stallText(c[method]);
+  if ((v === null || v === undefined) && method && notDeployed(c[method])) return stallText(c[method]);
   return sig(show(kind, v));
 }
 
@@ -423,7 +439,7 @@ function renderTable(doc, pinnedDoc) {
     let html = `<tr><th scope="row" class="num" data-case="${i}" data-key="temperature">${sig(show("temperature", c.temperature_C))}</th>`;
     for (const [key, kind] of cols) {
       const method = key.includes(".") ? key.split(".")[0] : null;
-      const stalled = method && c[method] && c[method].stalled && caseValue(c, key) === null;
+      const stalled = method && notDeployed(c[method]) && caseValue(c, key) === null;
       const current = `<td class="num${stalled ? " stalled" : ""}" data-case="${i}" data-key="${key}">${escapeHtml(cellText(c, key, kind))}</td>`;
       if (!pinnedDoc) { html += current; continue; }
       const a = match ? caseValue(match, key) : undefined;
