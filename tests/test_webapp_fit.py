@@ -177,3 +177,22 @@ def test_endpoint_is_in_the_openapi_document() -> None:
     schema = client.get("/openapi.json").json()
     operation = schema["paths"]["/api/fit/drop-test"]["post"]
     assert {"200", "413", "422", "503"} <= set(operation["responses"])
+
+
+def test_a_deeply_nested_config_is_refused_before_it_is_walked() -> None:
+    from ecdsim.config.loader import MAX_NESTING
+
+    nested: Any = 1
+    for _ in range(MAX_NESTING + 5):
+        nested = {"x": nested}
+    config = tomllib.loads(PAPER_CONFIG.read_text(encoding="utf-8"))
+    config["extra"] = nested
+    (message,) = _errors(_fit(config=config))
+    assert "nested too deeply" in message
+
+
+def test_a_file_name_is_only_a_name() -> None:
+    # A path in the name cannot point anywhere: only its last part, made safe, is used.
+    body = _fit(filename="../../etc/pass wd;.csv").json()
+    assert body["fit"]["source"] == "pass_wd_.csv"
+    assert "data: pass_wd_.csv" in body["toml"]
