@@ -57,8 +57,8 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 _jit = cast("Callable[[_F], _F]", numba.njit(cache=True, nogil=True, error_model="numpy"))
 
 # Columns of the per-segment parameter table handed to the kernels.
-_J, _K, _DRIVE, _N, _BG, _C, _R, _FA, _COEF, _LAW_A, _LAW_B = range(11)
-_COLUMNS = 11
+_J, _K, _DRIVE, _N, _BG, _C, _R, _FA, _COEF, _LAW_A, _LAW_B, _FIXED = range(12)
+_COLUMNS = 12
 LINEAR_LAW, KLOSS_LAW = 0, 1
 _REACH, _ZERO, _CAP, _REST = linear.REACH, linear.ZERO, linear.CAP, linear.REST
 
@@ -102,11 +102,23 @@ def _law(kind: int, a: float, b: float, w: float, f: float) -> tuple[float, ...]
 
 
 @_jit
+def _factor(par: FloatArray, heating: bool, s: float) -> float:
+    """The damping law's temperature factor ``f_a exp(c s)`` (thermal.damping_factor_from_log).
+
+    Without heating s keeps its start value in every stage (its stages are exactly 0), so
+    the factor is the one :func:`_segment` stored at the start: the same number, no exp.
+    """
+    if heating:
+        return par[_FA] * math.exp(par[_COEF] * s)
+    return par[_FIXED]
+
+
+@_jit
 def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArray) -> None:
     """``dy/dt`` of :meth:`Model.rhs` for one segment."""
     u = y[1]
     s = y[2]
-    f = par[_FA] * math.exp(par[_COEF] * s)
+    f = _factor(par, heating, s)
     shaft = par[_N] * u
     eddy, _, _, power, _, _ = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)
     torque = par[_N] * (eddy + par[_BG] * shaft)
@@ -128,7 +140,7 @@ def _jacobian(par: FloatArray, kind: int, heating: bool, y: FloatArray) -> tuple
     s = y[2]
     n = par[_N]
     c = par[_COEF]
-    f = par[_FA] * math.exp(c * s)
+    f = _factor(par, heating, s)
     shaft = n * u
     eddy, d_speed, d_factor, _, by_speed, by_factor = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)
     torque = n * (eddy + par[_BG] * shaft)
@@ -334,6 +346,7 @@ def _segment(
     Returns (event kind, duration, max speed, max temperature state, recorded steps as a
     (9, m) table of time, state and slope, m); the end state is written into ``final``.
     """
+    par[_FIXED] = par[_FA] * math.exp(par[_COEF] * y0[2])
     k = np.empty((6, 4))
     stage = np.empty(4)
     value = np.empty(4)
@@ -501,6 +514,7 @@ def _parameters(model: Model) -> tuple[FloatArray, int]:
     table[:, _R] = model.thermal_resistance
     table[:, _FA] = model.factor(np.zeros(n))
     table[:, _COEF] = np.broadcast_to(eddy.coefficient, (n,))
+    table[:, _FIXED] = np.nan  # set by _segment from the start state
     if isinstance(eddy, LinearEddy):
         table[:, _LAW_A] = np.broadcast_to(np.asarray(eddy.damping_rate, float), (n,))
         table[:, _LAW_B] = 0.0
