@@ -27,6 +27,7 @@ from ecdsim.config.units import Kind
 from ecdsim.deployment import Prediction, predict
 from ecdsim.formatting import format_number
 from ecdsim.methods import SOLVERS
+from ecdsim.model import TabulatedTemperatureLaw
 from ecdsim.units_display import KIND_BY_SI_UNIT, Shown, UnitSystem, kind_of_key
 
 if TYPE_CHECKING:
@@ -228,18 +229,58 @@ def _deployment_rows(document: dict[str, Any], shown: Shown | None = None) -> li
     return rows
 
 
-def margin_section(config: Config) -> dict[str, Any] | None:
+# What each requirement check measures, in words, for the report's requirements table.
+REQUIREMENT_QUANTITIES = {
+    "min_deployment_time": "deployment time",
+    "max_deployment_time": "deployment time",
+    "max_end_speed": "end (latch) speed",
+    "max_input_torque": "ECD input torque",
+    "no_stall": "no stall: least spring torque - friction",
+    "min_torque_margin": "torque margin",
+}
+
+
+def _limit_text(name: str, requirements: Any, shown: Shown) -> str:
+    """The limit of check ``name`` as "<= 60 s", in ``shown``'s units."""
+    r = requirements
+    limits: dict[str, tuple[str, float | None, str]] = {
+        "min_deployment_time": (">=", r.min_deployment_time, "time"),
+        "max_deployment_time": ("<=", r.max_deployment_time, "time"),
+        "max_end_speed": ("<=", r.max_end_speed, "angular_speed"),
+        "max_input_torque": ("<=", r.max_input_torque, "torque"),
+        "no_stall": (">", 0.0, "torque"),
+        "min_torque_margin": (">=", r.min_torque_margin, ""),
+    }
+    if name not in limits:
+        return "-"
+    sign, value, kind = limits[name]
+    return f"{sign} {shown.text(value, kind) if kind else fmt(value, 4)}"
+
+
+def _value_text(value: float, unit: str, shown: Shown) -> str:
+    kind = KIND_BY_SI_UNIT.get(unit)
+    if kind is None:
+        return fmt(value, 4)
+    return shown.text(value, kind)
+
+
+def margin_section(config: Config, shown: Shown | None = None) -> dict[str, Any] | None:
     """Torque margins and requirement checks (``[requirements]``), or None without it.
 
     The same :func:`ecdsim.sizing.search.evaluate` call as ``ecdsim size`` makes, for the
-    configured damper and gearbox as a single candidate.
+    configured damper and gearbox as a single candidate. Each check has one row per
+    temperature: the value, the limit, pass or fail and the margin (its definition is
+    :data:`ecdsim.sizing.report.MARGIN_DEFINITIONS`), values and limits in ``shown``'s
+    units.
     """
     spec = config.spec.requirements
     if spec is None:
         return None
+    from ecdsim.sizing.report import MARGIN_DEFINITIONS, percent
     from ecdsim.sizing.requirements import Requirements
     from ecdsim.sizing.search import evaluate, stack_ecd
 
+    u = shown or Shown(digits=6)
     requirements = Requirements.from_spec(spec)
     ecd = stack_ecd([config.system.ecd.damper], [config.system.ecd.gearbox])
     evaluation = evaluate(ecd, config.system.load, requirements)
@@ -248,16 +289,35 @@ def margin_section(config: Config) -> dict[str, Any] | None:
     for check in evaluation.checks:
         values = [float(v) for v in np.ravel(check.values[0])]
         margins = [float(m) for m in np.ravel(check.margins[0])]
+        held = (
+            [bool(h) for h in np.ravel(check.cannot_start[0])]
+            if check.cannot_start is not None
+            else [False] * len(values)
+        )
+        limit = _limit_text(check.name, requirements, u)
         checks.append(
             {
                 "name": check.name,
                 "label": check.label,
+                "quantity": REQUIREMENT_QUANTITIES.get(check.name, check.label),
                 "unit": check.unit,
+                "limit": limit,
+                "definition": MARGIN_DEFINITIONS.get(check.name, "-"),
                 "values": values,
                 "margins": margins,
                 "cells": [
                     {"value": fmt(v), "margin": fmt(m, 4), "ok": m >= 0.0}
                     for v, m in zip(values, margins, strict=True)
+                ],
+                "rows": [
+                    {
+                        "temperature": u.num(t, "temperature"),
+                        "value": "cannot start" if h else _value_text(v, check.unit, u),
+                        "limit": limit,
+                        "ok": m >= 0.0,
+                        "margin": percent(m),
+                    }
+                    for t, v, m, h in zip(temps, values, margins, held, strict=True)
                 ],
                 "passed": all(m >= 0.0 for m in margins),
             }
@@ -345,6 +405,110 @@ def montecarlo_section(config: Config, samples: int = REPORT_MC_SAMPLES) -> dict
     return section
 
 
+def findings_checked(config: Config) -> str:
+    """What "no warning" means for this config: only the checks that were made.
+
+    A stall is always checked; the damper's linear range only where the config gives
+    ``max_linear_speed`` or ``max_linear_torque``; extrapolation only of a friction table.
+    """
+    damper = config.system.ecd.damper
+    checked = ["stall"]
+    limited = damper.max_linear_speed is not None or damper.max_linear_torque is not None
+    if limited:
+        checked.append("linear-range")
+    laws = (damper.lubrication_friction, config.system.load.system_friction)
+    if any(isinstance(law, TabulatedTemperatureLaw) for law in laws):
+        checked.append("table extrapolation")
+    text = "None: no " + (
+        " or ".join(checked) if len(checked) < 3 else f"{checked[0]}, {checked[1]} or {checked[2]}"
+    )
+    text += " finding."
+    if not limited:
+        text += (
+            " The damper's linear range is not checked: the config gives no max_linear_speed "
+            "or max_linear_torque ([damper], docs/config.md)."
+        )
+    return text
+
+
+# Solver settings: shown in the appendix, not among the physical inputs.
+SOLVER_KEYS = ("analysis.rtol", "analysis.integrator")
+
+
+def solver_appendix(config: Config, prediction: Prediction, document: dict[str, Any]) -> Any:
+    """Solver internals for the appendix: methods, settings, and the dynamic run's counts.
+
+    For the dynamic method, per case: its end status, the relative energy-balance error,
+    the number of closed-form and integrated segments and the integrator's accepted steps
+    (where the integrator keeps them, as the batched Rosenbrock RODAS4 does); "-" where a
+    count is not available.
+    """
+    analysis = config.spec.analysis
+    settings = [("methods", ", ".join(f"{m} ({SOLVERS[m].label})" for m in document["methods"]))]
+    if "dynamic" in document["methods"]:
+        settings += [("integrator", analysis.integrator), ("rtol", f"{analysis.rtol:g}")]
+    rows = []
+    if "dynamic" in prediction.solutions:
+        counts = _dynamic_counts(prediction.solutions["dynamic"], len(document["cases"]))
+        for i, case in enumerate(document["cases"]):
+            result = case.get("dynamic", {})
+            error = result.get("energy_balance_error")
+            rows.append(
+                {
+                    "temperature": case["temperature_C"],
+                    "status": result.get("status", "-"),
+                    "energy_balance_error": "-" if error is None else f"{error:.2g}",
+                    **counts[i],
+                }
+            )
+    return {"settings": settings, "dynamic": rows}
+
+
+def _dynamic_counts(solution: Any, n: int) -> list[dict[str, str]]:
+    """Per case: closed-form segments, integrated segments, integrator steps ("-": unknown)."""
+    trajectory = getattr(getattr(solution, "result", None), "trajectory", None)
+    closed = [0] * n
+    integrated = [0] * n
+    steps: list[int | None] = [0] * n
+    if trajectory is None:
+        return [{"closed": "-", "integrated": "-", "steps": "-"}] * n
+    for record in getattr(trajectory, "closed", ()):
+        for case in np.ravel(record.case):
+            if 0 <= int(case) < n:
+                closed[int(case)] += 1
+    for record in getattr(trajectory, "integrated", ()):
+        case = int(record.case)
+        if not 0 <= case < n:
+            continue
+        integrated[case] += 1
+        taken, count = _accepted_steps(record.solution), steps[case]
+        steps[case] = None if taken is None or count is None else count + taken
+    return [
+        {
+            "closed": str(closed[i]),
+            "integrated": str(integrated[i]),
+            "steps": "-" if steps[i] is None else str(steps[i]),
+        }
+        for i in range(n)
+    ]
+
+
+def _accepted_steps(solution: Any) -> int | None:
+    """The accepted steps of a segment's dense output (its step times), None if unknown.
+
+    The output may be wrapped (e.g. to turn a state into a temperature): the wrapped
+    ``solution`` is looked into, a few levels deep.
+    """
+    for _ in range(4):
+        times = getattr(solution, "times", None)
+        if times is not None:
+            return max(int(np.size(times)) - 1, 0)
+        solution = getattr(solution, "solution", None)
+        if solution is None:
+            return None
+    return None
+
+
 def _kind(key: str) -> str:
     return kind_of_key(key.rsplit(".", 1)[-1]) or "number"
 
@@ -362,7 +526,7 @@ def build_context(
         "config_sha256": config.sha256,
         "date": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
     }
-    margins = margin_section(config)
+    margins = margin_section(config, u)
     montecarlo = montecarlo_section(config)
     data = {
         "prediction": document,
@@ -384,7 +548,9 @@ def build_context(
     return {
         "title": config.system.name,
         "provenance": provenance,
-        "inputs": list(input_rows(config.spec, shown=u)),
+        "inputs": [row for row in input_rows(config.spec, shown=u) if row[0] not in SOLVER_KEYS],
+        "no_findings": findings_checked(config),
+        "appendix": solver_appendix(config, prediction, document),
         "config_text": config_text,
         "component_columns": [
             (key, symbol, u.unit(_kind(key))) for key, symbol, _ in COMPONENT_COLUMNS
