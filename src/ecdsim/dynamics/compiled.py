@@ -108,9 +108,8 @@ def _factor(par: FloatArray, heating: bool, s: float) -> float:
     Without heating s keeps its start value in every stage (its stages are exactly 0), so
     the factor is the one :func:`_segment` stored at the start: the same number, no exp.
     """
-    if heating:
-        return par[_FA] * math.exp(par[_COEF] * s)
-    return par[_FIXED]
+    factor: float = par[_FA] * math.exp(par[_COEF] * s) if heating else par[_FIXED]
+    return factor
 
 
 @_jit
