@@ -233,7 +233,14 @@ def _heating_rhs(
     return rhs
 
 
-def reference_times(batch: Batch, count: int, model: str) -> Floats:
+def reference_times(
+    batch: Batch,
+    count: int,
+    model: str,
+    rtol: float = LSODA_RTOL,
+    atol: float = LSODA_ATOL,
+    method: str = "LSODA",
+) -> Floats:
     """The LSODA loop over the first ``count`` cases of the batch: deployment times.
 
     The right-hand sides are written here from the equations (docs/dynamics.md), with the
@@ -248,11 +255,12 @@ def reference_times(batch: Batch, count: int, model: str) -> Floats:
         temp0 = batch.temperatures[i]
         bg = float(batch.gearbox_rate[i])
         if model == "linear":
-            out[i] = _lsoda(_linear_rhs(ts, k, friction, batch.damping[i]), [0.0, 0.0], travel)
+            rhs = _linear_rhs(ts, k, friction, batch.damping[i])
+            out[i] = _lsoda(rhs, [0.0, 0.0], travel, rtol, atol, method)
         elif model == "rolloff":
             peak = ROLLOFF.peak_speed * (1 + ROLLOFF.resistivity_coefficient * (temp0 - 25.0))
             rhs = _rolloff_rhs(ts, k, friction, n, bg, float(peak), float(peak_torque[i]))
-            out[i] = _lsoda(rhs, [0.0, 0.0], travel)
+            out[i] = _lsoda(rhs, [0.0, 0.0], travel, rtol, atol, method)
         else:
             rhs = _heating_rhs(
                 ts,
@@ -265,7 +273,7 @@ def reference_times(batch: Batch, count: int, model: str) -> Floats:
                 batch.reference_temperature,
                 temp0,
             )
-            out[i] = _lsoda(rhs, [0.0, 0.0, temp0], travel)
+            out[i] = _lsoda(rhs, [0.0, 0.0, temp0], travel, rtol, atol, method)
     return out
 
 
@@ -328,6 +336,20 @@ def _batch_case(
     def agree(a: Floats, b: Floats) -> float:
         return max_relative_difference(a[:n_reference], b)
 
+    def accuracy() -> Notes:
+        # Both sides against Radau at rtol 1e-12 on the first few cases (not timed).
+        count = 3
+        exact = reference_times(batch, count, model, 1e-12, 1e-14, "Radau")
+        mine = max_relative_difference(dynamic_times(batch, model, count, rtol), exact)
+        lsoda = max_relative_difference(reference_times(batch, count, model), exact)
+        return Notes(
+            lines=(
+                f"error against Radau at rtol 1e-12 (first {count} cases): ecdsim {mine:.1e}, "
+                f"LSODA {lsoda:.1e}",
+            ),
+            data={"ecdsim_error": mine, "lsoda_error": lsoda},
+        )
+
     return Case(
         name=f"dynamic batch, {label[model]}{setting}",
         ecdsim=ours,
@@ -339,6 +361,7 @@ def _batch_case(
         items=n,
         baseline_items=n_reference,
         item_name="deployments",
+        notes=accuracy,
         description=f"predict(..., ['dynamic']) on {n:,} cases (+-10 %, 3 temperatures), "
         f"{label[model]}{setting}, against LSODA per case",
     )
