@@ -130,36 +130,62 @@ class Sums:
         )
 
 
-def sums_of(values: FloatArray, labels: np.ndarray[Any, Any], times: FloatArray, bins: int) -> Sums:
+@dataclass(frozen=True)
+class _Inputs:
+    """What the sums of a set of samples share across temperatures: their inputs' part."""
+
+    mean_x: FloatArray
+    dx: FloatArray
+    gram: FloatArray
+    cells: np.ndarray[Any, Any]
+    counts: FloatArray
+
+    @classmethod
+    def of(cls, values: FloatArray, labels: np.ndarray[Any, Any], bins: int) -> _Inputs:
+        n, d = values.shape
+        mean_x = values.mean(axis=0)
+        dx = values - mean_x
+        # One bincount for all inputs: input j's bin m is cell j * bins + m.
+        cells = (labels + np.arange(d, dtype=np.intp) * bins).ravel()
+        counts = np.bincount(cells, minlength=d * bins).reshape(d, bins).astype(float)
+        # einsum's own loops, not BLAS: a multi-threaded BLAS may split a sum differently
+        # from one process to the next; the sums must be the same bytes whoever computes.
+        return cls(mean_x, dx, np.einsum("ij,ik->jk", dx, dx), cells, counts)
+
+
+def sums_of(
+    values: FloatArray,
+    labels: np.ndarray[Any, Any],
+    times: FloatArray,
+    bins: int,
+    shared: _Inputs | None = None,
+) -> Sums:
     """The sums of one chunk at one temperature, over the samples whose time is finite.
 
     ``values`` (n, d) are the inputs [SI], ``labels`` (n, d) their bins out of ``bins``
     (:func:`ecdsim.montecarlo.stats.bin_labels`), ``times`` (n,) the deployment times [s].
+    ``shared`` is ``_Inputs.of(values, labels, bins)``, reused when every sample arrives.
     """
     n, d = values.shape
     arriving = np.isfinite(times)
     if not arriving.all():
         values, labels, times = values[arriving], labels[arriving], times[arriving]
         n = times.size
+        shared = None
     if n == 0:
         return Sums.empty(d, bins)
-    mean_x = values.mean(axis=0)
+    inputs = shared if shared is not None else _Inputs.of(values, labels, bins)
     mean_y = float(times.mean())
-    dx = values - mean_x
     dy = times - mean_y
-    # One bincount for all inputs: input j's bin m is cell j * bins + m.
-    cells = labels + (np.arange(d, dtype=np.intp) * bins)
-    flat = cells.ravel()
-    counts = np.bincount(flat, minlength=d * bins).reshape(d, bins)
-    sums = np.bincount(flat, weights=np.repeat(times, d), minlength=d * bins)
+    sums = np.bincount(inputs.cells, weights=np.repeat(times, d), minlength=d * bins)
     return Sums(
         count=float(n),
-        mean_x=mean_x,
+        mean_x=inputs.mean_x,
         mean_y=mean_y,
-        gram=dx.T @ dx,
-        cross=dx.T @ dy,
-        total=float(dy @ dy),
-        bin_counts=counts.astype(float),
+        gram=inputs.gram,
+        cross=np.einsum("ij,i->j", inputs.dx, dy),
+        total=float(np.einsum("i,i->", dy, dy)),
+        bin_counts=inputs.counts,
         bin_sums=np.asarray(sums, dtype=float).reshape(d, bins),
     )
 
@@ -175,12 +201,14 @@ def chunk_sums(plan: Plan, columns: Mapping[str, np.ndarray[Any, Any]]) -> list[
     labels = np.stack(
         [bin_labels(t.scores(values[:, j]), bins) for j, t in enumerate(tolerances)], axis=1
     )
+    shared = _Inputs.of(values, labels, bins)
     return [
         sums_of(
             values,
             labels,
             np.asarray(columns[output_column("deployment_time_s", t)], dtype=float),
             bins,
+            shared,
         )
         for t in plan.temperatures
     ]
