@@ -123,6 +123,15 @@ def page(browser: Any) -> Iterator[Any]:
     errors: list[str] = []
     page.on("pageerror", lambda e: errors.append(str(e)))
     page.on("requestfailed", lambda r: errors.append(f"request failed: {r.url}"))
+    # Nothing the page asks for is missing or breaks the server (422s are expected).
+    page.on(
+        "response",
+        lambda r: (
+            errors.append(f"HTTP {r.status}: {r.url}")
+            if r.status == 404 or r.status >= 500
+            else None
+        ),
+    )
     try:
         yield page
         assert not errors, errors
