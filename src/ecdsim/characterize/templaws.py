@@ -82,6 +82,7 @@ from ecdsim.characterize.stats import (
     linearised,
     normal_quantile,
     pooled_variance,
+    student_t_ppf,
     t_quantile,
 )
 from ecdsim.physics.assembly import damper_damping_rate
@@ -468,12 +469,10 @@ def _component_errors(
     over the per-temperature error components and the critical value Student t with the
     Welch-Satterthwaite dof of those terms.
     """
-    from scipy import stats as scipy_stats
-
     contributions = np.atleast_2d(np.asarray(gradient, dtype=float)) @ components.T
     se = np.sqrt(np.sum(contributions**2, axis=1))
     dof = _satterthwaite(contributions, component_dof)
-    return se, as_float(scipy_stats.t.ppf(0.5 + CONFIDENCE / 2.0, dof))
+    return se, as_float(student_t_ppf(0.5 + CONFIDENCE / 2.0, dof))
 
 
 def _parameter_estimates(
