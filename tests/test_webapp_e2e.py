@@ -654,3 +654,15 @@ def test_a_crafted_link_opens_a_case_that_cannot_start(
     assert texts["0:exact.deployment_time_s"] == f"stalls at {float(f'{stall:.4g}'):g} deg"
     _shot(page, "09-cannot-start")
     _axe(page)
+
+
+@pytest.mark.parametrize("case", ["!!!", "WzEsMl0", ""], ids=["not-base64", "a-list", "empty"])
+def test_an_unreadable_link_opens_the_start_config_and_says_so(
+    server: str, page: Any, case: str
+) -> None:
+    _open(page, f"{server}/#case={case}")
+    assert "the link's case could not be read" in page.inner_text("#source")
+    # The start config (the paper example) is shown: the hand value at 25 degC.
+    assert _cells(page)["1:exact.deployment_time_s"] == pytest.approx(
+        hand.exact_time(25.0), rel=CELL_REL
+    )

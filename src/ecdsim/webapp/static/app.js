@@ -509,10 +509,10 @@ async function pinConfig(config) {
 
 // ---------------------------------------------------------------- loading and exporting
 
-async function loadExample(which) {
+async function loadExample(which, note = "") {
   const r = await fetch(`/api/example?which=${which}`);
   const body = await r.json();
-  useConfig(body.config, body.source, body.units);
+  useConfig(body.config, body.source + note, body.units);
 }
 
 function useConfig(config, source, units) {
@@ -744,12 +744,14 @@ async function start() {
   if (units === "si" || units === "us") { state.choice = units; document.getElementById("units").value = units; }
   if (params.has("case")) {
     let config = null;
-    try { config = decodeCase(params.get("case")); } catch (e) { failed(["link: the case in the address cannot be read; starting from the start config"]); }
-    if (config && typeof config === "object") {
-      if (params.has("a")) { try { await pinConfig(decodeCase(params.get("a"))); } catch (e) { /* A is optional */ } }
-      useConfig(config, "from the link");
+    try { config = decodeCase(params.get("case")); } catch (e) { config = null; }
+    if (config === null || typeof config !== "object" || Array.isArray(config)) {
+      loadExample("start", " (the link's case could not be read: the start config instead)");
       return;
     }
+    if (params.has("a")) { try { await pinConfig(decodeCase(params.get("a"))); } catch (e) { /* A is optional */ } }
+    useConfig(config, "from the link");
+    return;
   }
   loadExample("start");
 }
