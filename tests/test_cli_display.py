@@ -132,11 +132,12 @@ def test_size_and_compare_fluid_are_no_longer_forced_wide() -> None:
 def test_a_hidden_column_is_named_and_wide_shows_it() -> None:
     narrow = _run(["deploy", str(DYNAMIC)])
     assert narrow.exit_code == 0, narrow.output
-    assert "not shown at 80 columns: rel. [%]" in narrow.stdout
-    assert "rel." not in narrow.stdout.split("not shown")[0]
+    assert "not shown at 80 columns: paper - exact [s] (--wide)" in narrow.stdout
+    assert "paper -" not in narrow.stdout.split("not shown")[0]
+    assert "rel." in narrow.stdout  # the paper's relative difference stays
     wide = _run(["deploy", str(DYNAMIC), "--wide"])
     assert wide.exit_code == 0, wide.output
-    assert "rel." in wide.stdout
+    assert "paper -" in wide.stdout
     assert "not shown" not in wide.stdout
     assert max(len(line) for line in wide.stdout.splitlines()) > 80
 
@@ -145,7 +146,7 @@ def test_a_wide_terminal_is_used() -> None:
     # COLUMNS=200: the whole deploy table fits, nothing is hidden, nothing squeezed.
     result = _run(["deploy", str(DYNAMIC)], columns=200)
     assert result.exit_code == 0, result.output
-    assert "rel." in result.stdout
+    assert "paper -" in result.stdout
     assert "not shown" not in result.stdout
 
 

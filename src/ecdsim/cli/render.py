@@ -88,7 +88,10 @@ def print_tables(prediction: Prediction, units: UnitSystem = "si") -> None:
             row.append("-" if rel is None else f"{100.0 * rel:+.1f}")
         row.append(stall_text(case, methods))
         table.add_row(*row)
-    display.show(console, table, drop=("rel.", "paper - exact", "start speed"), wrap=("stall",))
+    # The difference in seconds goes first: it follows from the two time columns, while
+    # the relative difference is the paper's figure of merit (docs/model.md).
+    drop = ("paper - exact", "rel.", "start speed")
+    display.show(console, table, drop=drop, wrap=("stall",))
     labels = ", ".join(f"{m} = {SOLVERS[m].label}" for m in methods)
     display.note(console, f"methods: {labels}; speeds from the {reference} method")
     if "dynamic" in methods:
