@@ -21,6 +21,7 @@ import os
 import time
 from collections import Counter
 from collections.abc import Callable, Generator, Iterator, Sequence
+from concurrent.futures import Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from itertools import islice
 from pathlib import Path
@@ -672,6 +673,31 @@ def run(
     if progress:
         progress(samples_done, plan.samples)
     computed = 0
+    # The chunk files are written by one writer thread, one file at a time, while this
+    # thread computes the next chunk: the Parquet encoding and the fsync release the GIL,
+    # so the disk's time overlaps the computation. At most one write is in flight (and one
+    # chunk waits for it), so the memory stays bounded and, when a write fails or Ctrl-C
+    # comes, every chunk before it is on disk and none after it.
+    writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ecdsim-chunk-writer")
+    pending: Future[Any] | None = None
+    pending_result: ChunkResult | None = None
+
+    def finished(result: ChunkResult) -> None:
+        nonlocal computed, samples_done
+        computed += 1
+        start, stop = plan.bounds(result.index)
+        samples_done += stop - start
+        if progress:
+            progress(samples_done, plan.samples)
+
+    def settle() -> None:
+        nonlocal pending, pending_result
+        if pending is not None and pending_result is not None:
+            future, result = pending, pending_result
+            pending, pending_result = None, None
+            future.result()  # re-raises the write's error (ENOSPC, Ctrl-C) here
+            finished(result)
+
     try:
         with contextlib.closing(chosen.results(plan, todo, out)) as results:
             for result in results:
@@ -682,25 +708,31 @@ def run(
                             "install the same version on every worker"
                         ]
                     )
-                if not result.written:
-                    write_result(plan, out, result)
-                computed += 1
-                start, stop = plan.bounds(result.index)
-                samples_done += stop - start
-                if progress:
-                    progress(samples_done, plan.samples)
+                settle()
+                if result.written:
+                    finished(result)
+                else:
+                    pending = writer.submit(write_result, plan, out, result)
+                    pending_result = result
+            settle()
     except KeyboardInterrupt:
+        if pending is not None:
+            wait([pending])  # a write under way finishes (atomically) or fails
         # ecdsim.atomic removes its temporary file when the write is interrupted, except
         # in the instant between creating it and entering its try block: sweep up.
         store.remove_partial_files(out)
         on_disk = sum(store.chunk_path(out, k).exists() for k in range(plan.chunks))
         raise RunInterrupted(out, on_disk, plan.chunks) from None
     except Exception:
+        if pending is not None:
+            wait([pending])
         if created and computed == 0:
             # Nothing was computed (no scheduler, a missing package, a bad first chunk):
             # leave no half-started run behind, so that the same command can be repeated.
             (out / store.MANIFEST).unlink(missing_ok=True)
         raise
+    finally:
+        writer.shutdown(wait=True)
     return RunReport(
         out=out,
         chunks_total=plan.chunks,
