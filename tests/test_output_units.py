@@ -448,3 +448,38 @@ def test_montecarlo_tables_in_us_units(tmp_path: Any) -> None:
     document = json.loads(result.stdout)
     assert document["display_units"] == "us"
     assert [c["temperature_C"] for c in document["cases"]] == [-40.0, 25.0, 100.0]
+
+
+def test_size_and_compare_fluid_in_us_units(tmp_path: Any) -> None:
+    import json
+
+    from tests.conftest import ROOT
+
+    examples = ROOT / "examples"
+    sizing, catalogue = str(examples / "sizing.toml"), str(examples / "catalogue.toml")
+    result = _run("size", sizing, "--catalog", catalogue, "--units", "us", "--wide")
+    assert result.exit_code == 0, result.output
+    # The requirements at -40, 25, 100 degC read -40, 77, 212 degF; the input torque limit
+    # 4 N*m is 4 / 0.1129848290276167 = 35.4030 lbf*in (6 digits: 35.403).
+    assert "-40, 77, 212" in result.stdout
+    assert "35.403 lbf*in" in result.stdout
+    assert "[lbm]" in result.stdout  # the mass column
+    assert "[lbf*in at the ECD input]" in result.stdout
+    document = json.loads(
+        _run("size", sizing, "--catalog", catalogue, "--units", "us", "--json").stdout
+    )
+    assert document["display_units"] == "us"
+
+    fluid = str(examples / "fluid.toml")
+    result = _run("compare-fluid", fluid, "--units", "us", "--wide")
+    assert result.exit_code == 0, result.output
+    assert "matched at 77 degF" in result.stdout
+    assert "[lbf*in]" in result.stdout  # the shock columns
+    si = json.loads(_run("compare-fluid", fluid, "--json").stdout)
+    # The fluid damper's engagement shock at 25 degC (issue 14 item 8: about 134 N*m in the
+    # shipped example), in lbf*in: the JSON's SI value / 0.1129848290276167, 4 digits.
+    case = next(c for c in si["cases"] if c["temperature_C"] == 25.0)
+    shock = case["fluid"]["engagement_torque_Nm"]
+    assert shock == pytest.approx(134.3, abs=0.05)
+    assert f"{shock / LBF_IN_NM:.4g}" == "1189"
+    assert _row(result.stdout, "77")[-2:] == ["1189", "0"]  # fluid and ECD shock

@@ -191,6 +191,7 @@ def test_plot_to_unwritable_place_exits_2(tmp_path: Path) -> None:
                 "--damper": None,
                 "--gearbox": None,
                 "--fail-on": None,
+                "--units": None,
                 "--wide": None,
                 "--plain": None,
                 "--help": None,
@@ -198,7 +199,14 @@ def test_plot_to_unwritable_place_exits_2(tmp_path: Path) -> None:
         ),
         (
             "compare-fluid",
-            {"--json": None, "--plot": None, "--wide": None, "--plain": None, "--help": None},
+            {
+                "--json": None,
+                "--plot": None,
+                "--units": None,
+                "--wide": None,
+                "--plain": None,
+                "--help": None,
+            },
         ),
     ],
 )

@@ -24,7 +24,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
+
+if TYPE_CHECKING:
+    from ecdsim._types import FloatArray
 
 UnitSystem = Literal["si", "us"]
 UNIT_SYSTEMS: tuple[UnitSystem, ...] = ("si", "us")
@@ -290,6 +293,11 @@ class Shown:
     def value(self, si_value: float, kind: str) -> float:
         """The SI value in this system's unit."""
         return convert(si_value, kind, self.system)
+
+    def values(self, si_values: FloatArray, kind: str) -> FloatArray:
+        """An array of SI values in this system's unit (for plots)."""
+        unit = UNITS[kind][self.system]
+        return si_values * unit.scale + unit.offset
 
     def num(self, si_value: float | None, kind: str, none: str = "-") -> str:
         """The SI value converted and formatted, without its unit (a table cell)."""

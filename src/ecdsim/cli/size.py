@@ -13,7 +13,9 @@ from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 import typer
 
 from ecdsim.cli import display, failon
+from ecdsim.cli.common import UnitsOpt, units_option
 from ecdsim.cli.display import PlainOpt, WideOpt
+from ecdsim.units_display import Shown
 
 if TYPE_CHECKING:
     from ecdsim.config import Config
@@ -117,6 +119,7 @@ def size(
     damper: DamperOpt = None,
     gearbox: GearboxOpt = None,
     fail_on: failon.FailOnOpt = None,
+    units: UnitsOpt = None,
     wide: WideOpt = False,
     plain: PlainOpt = False,
 ) -> None:
@@ -136,6 +139,7 @@ def size(
     from ecdsim.sizing.search import deployment_time_curves, search
 
     loaded = _config(config, "requirements")
+    u = Shown(units_option(units, loaded))
     assert loaded.spec.requirements is not None
     try:
         catalogue = load_catalogue(catalog)
@@ -193,16 +197,19 @@ def size(
         )
         written = _write_plots(
             plot,
-            lambda: write_sizing_plots(plot, top, temps, times, requirements, intervals),
+            lambda: write_sizing_plots(
+                plot, top, temps, times, requirements, intervals, units=u.system
+            ),
         )
     if as_json:
         document = result.to_dict()
         document["config"] = loaded.source
         document["ratio_intervals"] = None if intervals is None else intervals.to_dict()
         document["recommendation"] = report.recommendation(result)
+        document["display_units"] = u.system
         typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
     else:
-        tables = [report.requirements_table(result), report.candidates_table(result)]
+        tables = [report.requirements_table(result, u), report.candidates_table(result, u)]
         chosen = [
             c
             for c in valid
@@ -210,22 +217,26 @@ def size(
             and c.candidate.gearbox.name == chosen_gearbox
         ]
         if chosen:
-            tables.append(report.checks_table(chosen[0]))
-            tables.append(report.torque_margin_table(chosen[0]))
+            tables.append(report.checks_table(chosen[0], u))
+            tables.append(report.torque_margin_table(chosen[0], u))
             notes[:0] = report.margin_definitions(chosen[0])
         if intervals is not None:
             tables.append(report.intervals_table(intervals))
-        _print(tables, notes, lead=report.recommendation(result))
+        _print(tables, notes, lead=report.recommendation(result, u))
     for c in result.candidates:
         for warning in c.warnings:
             typer.echo(f"warning: {c.candidate.label}: {warning}", err=True)
     for path in written:
         typer.echo(f"wrote {path}", err=as_json)
-    failon.finish(conditions, _size_failures(conditions, valid, chosen_damper, chosen_gearbox))
+    failon.finish(conditions, _size_failures(conditions, valid, chosen_damper, chosen_gearbox, u))
 
 
 def _size_failures(
-    conditions: frozenset[str], valid: list[Any], damper: str | None, gearbox: str | None
+    conditions: frozenset[str],
+    valid: list[Any],
+    damper: str | None,
+    gearbox: str | None,
+    u: Shown | None = None,
 ) -> list[str]:
     """Why ``--fail-on`` fails for the chosen candidate (best-ranked or --damper/--gearbox)."""
     if not conditions:
@@ -238,15 +249,22 @@ def _size_failures(
     if not chosen:
         return [f"{sorted(conditions)[0]}: no catalogue candidate could be evaluated"]
     result = chosen[0]
+    u = u or Shown()
     label = result.candidate.label
     reasons = []
     if "stall" in conditions:
-        stalled = [f"{t:g}" for t, s in zip(result.temperatures, result.stalled, strict=True) if s]
+        stalled = [
+            u.num(t, "temperature")
+            for t, s in zip(result.temperatures, result.stalled, strict=True)
+            if s
+        ]
         if stalled:
-            reasons.append(f"stall: {label} stalls at {', '.join(stalled)} degC")
+            where = f"{', '.join(stalled)} {u.unit('temperature')}"
+            reasons.append(f"stall: {label} stalls at {where}")
     if "requirements" in conditions:
         reasons += [
-            f"requirements: {label}: {check.label} missed (worst at {check.temperature_C:g} degC)"
+            f"requirements: {label}: {check.label} missed "
+            f"(worst at {u.text(check.temperature_C, 'temperature')})"
             for check in result.checks
             if not check.passed
         ]
@@ -257,6 +275,7 @@ def compare_fluid(
     config: ConfigArg,
     as_json: JsonOpt = False,
     plot: PlotOpt = None,
+    units: UnitsOpt = None,
     wide: WideOpt = False,
     plain: PlainOpt = False,
 ) -> None:
@@ -271,6 +290,7 @@ def compare_fluid(
     from ecdsim.sizing.fluid import compare_fluid as run
 
     loaded = _config(config, "fluid_damper")
+    u = Shown(units_option(units, loaded))
     spec = loaded.spec.fluid_damper
     assert spec is not None
     temps = np.asarray(loaded.temperatures, dtype=float)
@@ -288,21 +308,22 @@ def compare_fluid(
     if plot is not None:
         from ecdsim.sizing.plots import write_fluid_plots
 
-        written = _write_plots(plot, lambda: write_fluid_plots(plot, dense))
+        written = _write_plots(plot, lambda: write_fluid_plots(plot, dense, units=u.system))
     warnings = [
-        f"warning: viscosity at {t:g} degC is extrapolated beyond the fitted points"
+        f"warning: viscosity at {u.text(t, 'temperature')} is extrapolated beyond the fitted points"
         for t, out in zip(comparison.temperatures, comparison.extrapolated, strict=True)
         if out
     ]
     for label, side in (("ECD", comparison.ecd), ("fluid damper", comparison.fluid)):
         warnings += [
-            f"warning: the {label} stalls at {t:g} degC"
+            f"warning: the {label} stalls at {u.text(t, 'temperature')}"
             for t, stalled in zip(comparison.temperatures, side.stalled, strict=True)
             if stalled
         ]
     if as_json:
         document = comparison.to_dict()
         document["config"] = loaded.source
+        document["display_units"] = u.system
         typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
     else:
         notes = [
@@ -323,7 +344,7 @@ def compare_fluid(
                 f"the ECD's lost motion is {lost:.3g} deg"
                 + (", so it engages at rest" if lost == 0.0 else "")
             )
-        _print([report.fluid_table(comparison)], notes, _FLUID_DROP)
+        _print([report.fluid_table(comparison, u)], notes, _FLUID_DROP)
     for line in warnings:
         typer.echo(line, err=True)
     for path in written:

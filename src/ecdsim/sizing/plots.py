@@ -17,6 +17,7 @@ from ecdsim.sizing.fluid import FluidComparison
 from ecdsim.sizing.ratio import RatioIntervals
 from ecdsim.sizing.requirements import Requirements
 from ecdsim.sizing.search import CandidateResult
+from ecdsim.units_display import Shown, UnitSystem
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -50,22 +51,23 @@ def plot_candidate_times(
     temperatures: FloatArray,
     times: FloatArray,
     requirements: Requirements,
+    units: UnitSystem = "si",
 ) -> Figure:
     """Deployment time against temperature for the given candidates, with the window.
 
     ``times`` has shape (len(results), len(temperatures)) [s]; +inf (stall) is not drawn.
     Illustrative (invented) catalogue entries are labelled so in the legend.
     """
+    u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
+    shown_t = u.values(np.asarray(temperatures, dtype=float), "temperature")
     for result, row in zip(results, np.atleast_2d(times), strict=True):
         shown = np.where(np.isfinite(row), row, np.nan)
         tag = " (illustrative, not vendor data)" if result.candidate.illustrative else ""
-        ax.plot(
-            temperatures, shown, marker=".", label=f"#{result.rank} {result.candidate.label}{tag}"
-        )
+        ax.plot(shown_t, shown, marker=".", label=f"#{result.rank} {result.candidate.label}{tag}")
     _window(ax, requirements)
-    ax.set_xlabel("temperature [degC]")
+    ax.set_xlabel(u.head("temperature", "temperature"))
     ax.set_ylabel("exact deployment time [s]")
     ax.set_title("Deployment time over temperature, best-ranked candidates")
     ax.grid(True, alpha=0.3)
@@ -97,30 +99,40 @@ def plot_ratio_margins(intervals: RatioIntervals) -> Figure:
     return fig
 
 
-def plot_fluid_comparison(comparison: FluidComparison) -> Figure:
+def plot_fluid_comparison(comparison: FluidComparison, units: UnitSystem = "si") -> Figure:
     """Deployment time of the ECD and the matched fluid damper against temperature.
 
     The fluid curve is the damped phase after its deadband (plus the free time through
     the deadband when a load inertia is given); the lower panel shows both dampings.
     """
+    u = Shown(units)
     fig = _figure(7.5, 6.4)
     top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
-    t = comparison.temperatures
+    t = u.values(np.asarray(comparison.temperatures, dtype=float), "temperature")
     for label, side in (("ECD", comparison.ecd), (comparison.name, comparison.fluid)):
         times = side.total_time if side.total_time is not None else side.damped_time
         top.plot(t, np.where(np.isfinite(times), times, np.nan), marker=".", label=label)
-    top.axvline(comparison.match_temperature, color="0.4", linestyle=":")
+    top.axvline(u.value(comparison.match_temperature, "temperature"), color="0.4", linestyle=":")
     top.set_ylabel("deployment time [s]")
     top.set_title("ECD against a fluid damper matched at "
-                  f"{comparison.match_temperature:g} degC")  # fmt: skip
+                  f"{u.text(comparison.match_temperature, 'temperature')}")  # fmt: skip
     top.grid(True, alpha=0.3)
     top.legend(fontsize="small")
-    bottom.plot(t, comparison.ecd_damping_rate, label="ECD: BECD_T [N*m*s/rad]")
-    bottom.plot(t, comparison.fluid_coefficient, label=f"fluid: c(T) (n = {comparison.exponent:g})")
+    # One axis for both: the ECD's rate is the n = 1 case of the fluid's c(T), and a
+    # torque per speed^n converts as the torque does.
+    bottom.plot(
+        t,
+        u.values(np.asarray(comparison.ecd_damping_rate), "torque"),
+        label=f"ECD: BECD_T [{u.unit('damping_rate')}]",
+    )
+    bottom.plot(
+        t,
+        u.values(np.asarray(comparison.fluid_coefficient), "torque"),
+        label=f"fluid: c(T) (n = {comparison.exponent:g})",
+    )
     bottom.set_yscale("log")
-    bottom.set_xlabel("temperature [degC]")
-    # One axis for both: the ECD's rate is the n = 1 case of the fluid's c(T).
-    bottom.set_ylabel("damping [N*m*(s/rad)^n]")
+    bottom.set_xlabel(u.head("temperature", "temperature"))
+    bottom.set_ylabel(f"damping [{u.unit('torque')}*(s/rad)^n]")
     bottom.grid(True, alpha=0.3, which="both")
     bottom.legend(fontsize="small")
     return fig
@@ -133,12 +145,13 @@ def write_sizing_plots(
     times: FloatArray,
     requirements: Requirements,
     intervals: RatioIntervals | None,
+    units: UnitSystem = "si",
 ) -> list[Path]:
-    """Write the sizing plots as PNG files into ``folder``; returns the paths."""
+    """Write the sizing plots as PNG files into ``folder``, in ``units``; returns the paths."""
     out = Path(folder)
     written = [
         save_figure(
-            plot_candidate_times(results, temperatures, times, requirements),
+            plot_candidate_times(results, temperatures, times, requirements, units),
             out / "sizing_time_vs_temperature.png",
         )
     ]
@@ -147,7 +160,9 @@ def write_sizing_plots(
     return written
 
 
-def write_fluid_plots(folder: str | Path, comparison: FluidComparison) -> list[Path]:
-    """Write the ECD-against-fluid plot as PNG into ``folder``; returns the paths."""
+def write_fluid_plots(
+    folder: str | Path, comparison: FluidComparison, units: UnitSystem = "si"
+) -> list[Path]:
+    """Write the ECD-against-fluid plot as PNG into ``folder``, in ``units``; returns the paths."""
     out = Path(folder)
-    return [save_figure(plot_fluid_comparison(comparison), out / "ecd_vs_fluid.png")]
+    return [save_figure(plot_fluid_comparison(comparison, units), out / "ecd_vs_fluid.png")]

@@ -1,6 +1,7 @@
 """Tables of sizing results as plain rows of strings (the CLI renders them with rich).
 
-Each function returns ``(title, headers, rows)``; no printing here.
+Each function returns ``(title, headers, rows)``; no printing here. Each takes the
+display units as a :class:`~ecdsim.units_display.Shown` (SI by default).
 """
 
 from __future__ import annotations
@@ -13,6 +14,9 @@ from ecdsim.formatting import format_number
 from ecdsim.sizing.fluid import DeadbandDeployment, FluidComparison
 from ecdsim.sizing.ratio import RatioIntervals
 from ecdsim.sizing.search import CandidateResult, SearchResult
+from ecdsim.units_display import KIND_BY_SI_UNIT, Shown
+
+SI = Shown()
 
 Table = tuple[str, list[str], list[list[str]]]
 
@@ -26,10 +30,10 @@ def percent(value: float | None) -> str:
     return f"{100.0 * value:+.1f} %"
 
 
-def requirements_table(result: SearchResult) -> Table:
+def requirements_table(result: SearchResult, u: Shown = SI) -> Table:
     """The requirements in words."""
     r = result.requirements
-    rows = [[name, limit] for name, limit in r.describe()]
+    rows = [[name, limit] for name, limit in r.describe(u.system)]
     m = r.margin
     factors = ", ".join(f"{k} {v:g}" for k, v in m.factors.items())
     rows.append(
@@ -47,19 +51,33 @@ def requirements_table(result: SearchResult) -> Table:
     return "Requirements", ["requirement", "limit"], rows
 
 
-def candidates_table(result: SearchResult) -> Table:
+def _temps(temps: tuple[float, ...] | list[float], u: Shown) -> str:
+    """Temperatures [degC] as "-40 / 77 / 212 degF" in ``u``'s unit."""
+    shown = " / ".join(u.num(float(t), "temperature") for t in temps)
+    return f"{shown} {u.unit('temperature')}"
+
+
+def _quantity(value: float, si_unit: str, u: Shown) -> str:
+    """A value in ``si_unit`` shown in ``u``'s system, with its unit ("4.2 lbf*in")."""
+    kind = KIND_BY_SI_UNIT.get(si_unit)
+    if kind is None:
+        return f"{format_number(value)} {si_unit}".rstrip()
+    return u.text(value, kind)
+
+
+def candidates_table(result: SearchResult, u: Shown = SI) -> Table:
     """The ranked candidates: pass/fail, mass, worst margin, times, spread, torque margin."""
     temps = result.requirements.temperatures
     headers = [
         "#",
         "damper + gearbox N:1",
         "pass",
-        "mass [kg]",
+        u.head("mass", "mass"),
         "worst margin",
-        "t [s] at " + " / ".join(f"{t:g}" for t in temps) + " degC",
+        "t [s] at " + _temps(temps, u),
         "spread [s]",
         "torque margin",
-        "at [deg, degC]",
+        f"at [deg, {u.unit('temperature')}]",
     ]
     rows = []
     for c in result.candidates:
@@ -70,7 +88,7 @@ def candidates_table(result: SearchResult) -> Table:
                     str(c.rank),
                     label,
                     "error",
-                    format_number(c.candidate.mass, none="-"),
+                    u.num(c.candidate.mass, "mass"),
                     c.error,
                     "",
                     "",
@@ -85,12 +103,12 @@ def candidates_table(result: SearchResult) -> Table:
                 str(c.rank),
                 label,
                 "yes" if c.passed else "no",
-                format_number(c.candidate.mass, none="-"),
+                u.num(c.candidate.mass, "mass"),
                 percent(c.margin),
                 " / ".join(format_number(t) for t in c.deployment_time),
                 format_number(c.spread),
                 format_number(c.torque_margin),
-                f"{angle:.0f}, {format_number(c.torque_margin_temperature)}",
+                f"{angle:.0f}, {u.num(c.torque_margin_temperature, 'temperature')}",
             ]
         )
     title = "Candidates, ranked: pass, then mass (unknown last), worst margin, time spread"
@@ -112,7 +130,7 @@ MARGIN_DEFINITIONS = {
 }
 
 
-def checks_table(candidate: CandidateResult) -> Table:
+def checks_table(candidate: CandidateResult, u: Shown = SI) -> Table:
     """Each requirement's pass/fail and its margin at every temperature, for one candidate.
 
     The worst value and where it occurs follow (secondary columns); the margins'
@@ -127,16 +145,16 @@ def checks_table(candidate: CandidateResult) -> Table:
                 o.label,
                 o.result,
                 *("-" if math.isnan(m) else percent(m) for m in margins),
-                "-" if o.cannot_start else f"{format_number(o.value)} {o.unit}",
-                format_number(o.temperature_C),
+                "-" if o.cannot_start else _quantity(o.value, o.unit, u),
+                u.num(o.temperature_C, "temperature"),
             ]
         )
     title = (
         f"Requirements for #{candidate.rank} {candidate.candidate.label}: "
         "margin at each temperature"
     )
-    headers = ["requirement", "result", *(f"{t:g} degC" for t in temps)]
-    return title, [*headers, "value (worst)", "at T [degC]"], rows
+    headers = ["requirement", "result", *(u.text(t, "temperature") for t in temps)]
+    return title, [*headers, "value (worst)", u.head("at T", "temperature")], rows
 
 
 def margin_definitions(candidate: CandidateResult) -> list[str]:
@@ -151,7 +169,7 @@ def margin_definitions(candidate: CandidateResult) -> list[str]:
     ]
 
 
-def recommendation(result: SearchResult) -> list[str]:
+def recommendation(result: SearchResult, u: Shown = SI) -> list[str]:
     """The recommended candidate (rank 1) and why it ranks first, in words.
 
     The ranking (:func:`ecdsim.sizing.search.rank_key`): meeting every requirement first,
@@ -160,30 +178,37 @@ def recommendation(result: SearchResult) -> list[str]:
     of these that separates #1 from the next candidate that also meets everything.
     """
     valid = [c for c in result.candidates if c.error is None]
-    temps = ", ".join(f"{t:g}" for t in result.requirements.temperatures)
+    temps = ", ".join(u.num(t, "temperature") for t in result.requirements.temperatures)
+    temps += f" {u.unit('temperature')}"
     if not valid:
         return ["No candidate could be evaluated (see the errors in the table)."]
     best = valid[0]
     label = best.candidate.label + (" (illustrative *)" if best.candidate.illustrative else "")
     worst = min(best.checks, key=lambda o: o.margin) if best.checks else None
-    at_worst = "" if worst is None else f" ({worst.label}, at {worst.temperature_C:g} degC)"
+    at_worst = (
+        ""
+        if worst is None
+        else f" ({worst.label}, at {u.text(worst.temperature_C, 'temperature')})"
+    )
     passing = [c for c in valid if c.passed]
     if not passing:
         return [
-            f"No candidate meets every requirement at {temps} degC. Closest: #{best.rank} "
+            f"No candidate meets every requirement at {temps}. Closest: #{best.rank} "
             f"{label}, worst margin {percent(best.margin)}{at_worst}; the gear-ratio "
             "intervals below show which ratios would."
         ]
     mass = best.candidate.mass
     return [
-        f"Recommended: #{best.rank} {label}: meets every requirement at {temps} degC; "
-        f"mass {'-' if mass is None else f'{format_number(mass)} kg'}; smallest margin "
+        f"Recommended: #{best.rank} {label}: meets every requirement at {temps}; "
+        f"mass {u.text(mass, 'mass')}; smallest margin "
         f"{percent(best.margin)}{at_worst}.",
-        f"Why first: {_why(best, passing, len(valid))}",
+        f"Why first: {_why(best, passing, len(valid), u)}",
     ]
 
 
-def _why(best: CandidateResult, passing: list[CandidateResult], evaluated: int) -> str:
+def _why(
+    best: CandidateResult, passing: list[CandidateResult], evaluated: int, u: Shown = SI
+) -> str:
     """The first ranking criterion that puts ``best`` ahead of the next passing one."""
     if len(passing) == 1:
         return f"the only one of the {evaluated} candidates that meets every requirement."
@@ -197,8 +222,8 @@ def _why(best: CandidateResult, passing: list[CandidateResult], evaluated: int) 
         )
     if mass is not None and other_mass is not None and mass != other_mass:
         return (
-            f"the lightest of the {len(passing)} that pass: {format_number(mass)} kg "
-            f"against {format_number(other_mass)} kg for {versus}."
+            f"the lightest of the {len(passing)} that pass: {u.text(mass, 'mass')} "
+            f"against {u.text(other_mass, 'mass')} for {versus}."
         )
     same = "no passing candidate has a known mass" if mass is None else "same mass as " + versus
     if best.margin != other.margin:
@@ -226,25 +251,25 @@ _KIND_HEADERS = {
 }
 
 
-def torque_margin_table(candidate: CandidateResult) -> Table:
+def torque_margin_table(candidate: CandidateResult, u: Shown = SI) -> Table:
     """The torque margin at each temperature with its terms (docs/sizing.md section 5).
 
-    Every torque is in N*m at the ECD input, unfactored, at the angle where the margin is
-    smallest; ``sum f*R`` is the factored sum the drive is divided by.
+    Every torque is in N*m (lbf*in in US units) at the ECD input, unfactored, at the
+    angle where the margin is smallest; ``sum f*R`` is the factored sum the drive is divided by.
     """
     kinds = [k for k in _KIND_HEADERS if any(k in m.resistive for m in candidate.torque_margins)]
-    headers = ["T [degC]", "at [deg]", "drive"]
+    headers = [u.head("T", "temperature"), "at [deg]", "drive"]
     headers += [_KIND_HEADERS[k] for k in kinds] + ["sum f*R", "TM"]
     rows = []
     for m in candidate.torque_margins:
-        row = [format_number(m.temperature_C), f"{math.degrees(m.angle):.0f}"]
-        row += [format_number(m.drive)]
-        row += [format_number(m.resistive.get(k, 0.0)) for k in kinds]
-        row += [format_number(m.factored), format_number(m.margin)]
+        row = [u.num(m.temperature_C, "temperature"), f"{math.degrees(m.angle):.0f}"]
+        row += [u.num(m.drive, "torque")]
+        row += [u.num(m.resistive.get(k, 0.0), "torque") for k in kinds]
+        row += [u.num(m.factored, "torque"), format_number(m.margin)]
         rows.append(row)
     title = (
         f"Torque margin TM = drive / sum(f*R) - 1 of #{candidate.rank} "
-        f"{candidate.candidate.label} [N*m at the ECD input]"
+        f"{candidate.candidate.label} [{u.unit('torque')} at the ECD input]"
     )
     return title, headers, rows
 
@@ -276,13 +301,17 @@ def _time(side: DeadbandDeployment, i: int) -> str:
     return format_number(float(side.damped_time[i]))
 
 
-def fluid_table(comparison: FluidComparison) -> Table:
+def fluid_table(comparison: FluidComparison, u: Shown = SI) -> Table:
     """ECD against fluid damper at each temperature."""
     inertia = comparison.fluid.free_time is not None
-    unit = "N*m*s/rad" if comparison.exponent == 1.0 else f"N*m*(s/rad)^{comparison.exponent:g}"
+    # The fluid coefficient is a torque per speed^n: its factor is the torque's.
+    torque = u.unit("torque")
+    rate = u.unit("damping_rate")
+    exponent = comparison.exponent
+    unit = rate if exponent == 1.0 else f"{torque}*(s/rad)^{exponent:g}"
     headers = [
-        "T [degC]",
-        "BECD [N*m*s/rad]",
+        u.head("T", "temperature"),
+        u.head("BECD", "damping_rate"),
         f"fluid c [{unit}]",
         "ECD t [s]",
         "fluid t (damped) [s]",
@@ -292,7 +321,7 @@ def fluid_table(comparison: FluidComparison) -> Table:
     headers += ["fluid / ECD"]
     ecd_shock, fluid_shock = comparison.engagement_torques()
     if ecd_shock is not None:
-        headers += ["fluid shock [N*m]", "ECD shock [N*m]"]
+        headers += [u.head("fluid shock", "torque"), u.head("ECD shock", "torque")]
     rows = []
     for i, t in enumerate(comparison.temperatures):
         ecd_t = comparison.ecd.total_time if inertia else comparison.ecd.damped_time
@@ -301,9 +330,10 @@ def fluid_table(comparison: FluidComparison) -> Table:
         assert fluid_t is not None
         ratio = float(fluid_t[i] / ecd_t[i]) if np.isfinite(ecd_t[i] * fluid_t[i]) else None
         row = [
-            format_number(float(t)) + (" (extrapolated)" if comparison.extrapolated[i] else ""),
-            format_number(float(comparison.ecd_damping_rate[i])),
-            format_number(float(comparison.fluid_coefficient[i])),
+            u.num(float(t), "temperature")
+            + (" (extrapolated)" if comparison.extrapolated[i] else ""),
+            u.num(float(comparison.ecd_damping_rate[i]), "damping_rate"),
+            u.num(float(comparison.fluid_coefficient[i]), "torque"),
             format_number(float(ecd_t[i])),
             _time(comparison.fluid, i),
         ]
@@ -317,10 +347,14 @@ def fluid_table(comparison: FluidComparison) -> Table:
             ]
         row.append(format_number(ratio, 3))
         if ecd_shock is not None and fluid_shock is not None:
-            row += [format_number(float(fluid_shock[i])), format_number(float(ecd_shock[i]))]
+            row += [
+                u.num(float(fluid_shock[i]), "torque"),
+                u.num(float(ecd_shock[i]), "torque"),
+            ]
         rows.append(row)
     title = (
-        f"ECD against {comparison.name}, matched at {comparison.match_temperature:g} degC "
+        f"ECD against {comparison.name}, matched at "
+        f"{u.text(comparison.match_temperature, 'temperature')} "
         f"({comparison.law.describe()}; deadband {np.degrees(comparison.fluid.deadband):.3g} deg)"
     )
     return title, headers, rows

@@ -19,12 +19,16 @@ torque margin >= m_min        m - m_min
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ecdsim._types import ArrayLike, FloatArray, as_float
 from ecdsim.config.sizing_schema import RequirementsSpec
 from ecdsim.sizing.margin import MarginSettings
+
+if TYPE_CHECKING:
+    from ecdsim.units_display import UnitSystem
 
 
 def min_time_margin(deployment_time: ArrayLike, minimum: float) -> FloatArray:
@@ -155,11 +159,14 @@ class Requirements:
             ),
         )
 
-    def describe(self) -> list[tuple[str, str]]:
-        """(requirement, limit) pairs in words, for reports."""
+    def describe(self, units: UnitSystem = "si") -> list[tuple[str, str]]:
+        """(requirement, limit) pairs in words, for reports, in ``units``."""
+        from ecdsim.units_display import Shown
+
+        u = Shown(units, digits=6)  # %g's six digits
         rows: list[tuple[str, str]] = []
-        temps = ", ".join(f"{t:g}" for t in self.temperatures)
-        rows.append(("temperatures [degC]", temps))
+        temps = ", ".join(u.num(t, "temperature") for t in self.temperatures)
+        rows.append((u.head("temperatures", "temperature"), temps))
         if self.min_deployment_time is not None:
             rows.append(("deployment time >=", f"{self.min_deployment_time:g} s"))
         if self.max_deployment_time is not None:
@@ -167,7 +174,7 @@ class Requirements:
         if self.max_end_speed is not None:
             rows.append(("end (latch) speed <=", f"{self.max_end_speed:g} rad/s"))
         if self.max_input_torque is not None:
-            rows.append(("ECD input torque <=", f"{self.max_input_torque:g} N*m"))
+            rows.append(("ECD input torque <=", u.text(self.max_input_torque, "torque")))
         if self.min_torque_margin is not None:
             rows.append(("torque margin >=", f"{self.min_torque_margin:g}"))
         rows.append(("no stall", "required" if self.no_stall else "not required"))
