@@ -39,6 +39,7 @@ fit_app = typer.Typer(
     rich_markup_mode="rich",
     cls=HelpGroup,
     no_args_is_help=True,
+    epilog="Example: [bold]ecdsim fit drop-test examples/drop_test.csv -o fitted.toml[/bold]",
 )
 
 DataArg = Annotated[
