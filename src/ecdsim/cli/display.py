@@ -183,8 +183,6 @@ def show(
     if not _DISPLAY.wide and _needed(console, table) > console.width:
         # Still too wide: let every column with spaces in its cells wrap there, so that
         # rich narrows those rather than cutting a number or a name without spaces.
-        from rich.measure import Measurement
-
         options = console.options.update(width=100_000)
         for column in table.columns:
             cells = [c for c in [column.header, *column._cells] if c is not None]
@@ -198,13 +196,24 @@ def show(
         width = console.width
         console.width = max(width, need)
         try:
-            console.print(table)
+            _print(console, table)
         finally:
             console.width = width
     else:
-        console.print(table)
+        _print(console, table)
     if hidden:
         note(console, f"not shown at {console.width} columns: {'; '.join(hidden)} (--wide)")
+
+
+def _print(console: Console, table: Table) -> None:
+    """Print a table; with ``--plain`` without the spaces rich pads each line with."""
+    if not _DISPLAY.plain:
+        console.print(table)
+        return
+    with console.capture() as captured:
+        console.print(table)
+    lines = captured.get().splitlines()
+    console.file.write("".join(line.rstrip() + "\n" for line in lines))
 
 
 def note(console: Console, text: str) -> None:
