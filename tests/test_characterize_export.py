@@ -15,7 +15,7 @@ from ecdsim.characterize.export import (
     ExportError,
     fitted_ecd,
     fitted_parameter_text,
-    spring_parameter_text,
+    spring_config_text,
     toml_string,
     write_parameter_file,
 )
@@ -78,9 +78,15 @@ def test_noisy_round_trip_reproduces_the_fitted_laws(tmp_path: Path) -> None:
             1.0 + linear["temperature_coefficient_per_K"] * (t - 25.0)
         )
         law_f = line["slope_Nm_per_K"] * t + line["at_0C_Nm"]
-        # The file writes every number with repr: deploy evaluates the same law exactly.
-        assert case["damping_rate_Nms_per_rad"] == pytest.approx(law_b, rel=1e-13)
-        assert case["friction_Nm"] == pytest.approx(law_f, rel=1e-12)
+        # The file writes each fitted number to 6 significant digits at least (more where
+        # its interval is narrow): each rounded by <= 5e-6 relative, so BECD and FECD,
+        # sums of two such terms, lie within 2e-5 of the law (they are far from 0 here).
+        assert case["damping_rate_Nms_per_rad"] == pytest.approx(law_b, rel=2e-5)
+        assert case["friction_Nm"] == pytest.approx(law_f, rel=2e-5)
+    written = tomllib.loads(out.read_text())["damper"]
+    # No float noise: 6 significant digits where the interval is wider than 1e-4 relative.
+    b_ref = linear["damping_rate_ref_Nms_per_rad"]
+    assert written["damping_rate"] == f"{b_ref:.6g} N*m*s/rad"
     text = out.read_text()
     assert "PLACEHOLDER LOAD" in text  # no --config: a marked placeholder
     largest = max(p.true_torque for p in points)
@@ -96,7 +102,7 @@ def test_single_temperature_round_trip(tmp_path: Path) -> None:
     fit = invoke("fit", "drop-test", str(data), "-o", str(out), "--json")
     assert "single_temperature_export" in [w["code"] for w in fit["warnings"]]
     spec = tomllib.loads(out.read_text())
-    assert spec["damper"]["damping_temperature_coefficient"] == "0.0 / K"
+    assert spec["damper"]["damping_temperature_coefficient"] == "0 / K"
     (case,) = deploy(out).values()
     assert case["temperature_C"] == 40.0
     assert case["damping_rate_Nms_per_rad"] == pytest.approx(TRUTH.damping(40.0), rel=1e-9)
@@ -175,23 +181,64 @@ def test_exports_that_cannot_be_written() -> None:
         fitted_ecd([25.0], [Estimate(-1.0, None, None)], f[:1], None)
 
 
-def test_a_spring_fit_writes_the_whole_configuration_back() -> None:
-    source = parse_config(
+def test_a_spring_fit_writes_the_users_file_back() -> None:
+    # A config in the user's own units and comments, with a title and [analysis].
+    user = (
         PAPER_CONFIG.read_text().replace(
             'coulomb_friction = "4.5e-4 N*m"',
-            'coulomb_friction = "4.5e-4 N*m"\nlost_motion = "0.25 deg"',
+            'coulomb_friction = "4.5e-4 N*m"\nlost_motion = "0.25 deg"  # my gearbox',
         )
-        + '\nmethods = ["exact"]\n'
-    ).spec
-    text = spring_parameter_text(
-        source,
-        Estimate(3.5, 0.01, (3.48, 3.52)),
-        Estimate(1.5, 0.01, (1.48, 1.52)),
-        [0.0, 50.0],
-        ["test"],
+        + '\nmethods = ["exact"]   # only the exact method\n'
     )
-    written = parse_config(text).spec.model_dump()
+    text = spring_config_text(
+        user,
+        Estimate(3.5123456789, 0.01, (3.48, 3.52)),
+        Estimate(1.5, 0.01, (1.48, 1.52)),
+        ["test"],
+        "paper_cc16.toml",
+    )
+    # Everything else as the user wrote it, line for line (after the header).
+    body = text[text.index(user.splitlines()[0]) :]
+    changed = [(a, b) for a, b in zip(user.splitlines(), body.splitlines(), strict=True) if a != b]
+    # The interval's half-width 0.02 N*m: 1 % of it is 2e-4, so 6 digits (3.51235).
+    assert changed == [
+        ('start_torque = "3.73 N*m"', 'start_torque = "3.51235 N*m"'),
+        ('end_torque = "1.58 N*m"', 'end_torque = "1.5 N*m"'),
+    ]
+    written = parse_config(text).spec
+    source = parse_config(user).spec
     expected = source.model_dump()
-    expected["load"].update(start_torque=3.5, end_torque=1.5)
-    expected["analysis"]["temperatures"] = [0.0, 50.0]
-    assert written == expected  # every other key and section unchanged, to the last bit
+    expected["load"].update(start_torque=3.51235, end_torque=1.5)
+    assert written.model_dump() == expected
+
+
+def test_a_damper_fit_keeps_the_users_file(tmp_path: Path) -> None:
+    # The case: a config in degF with a title, [analysis] and comments. fit -o
+    # used to drop the title and [analysis] and write -40 degF as -39.99999999999997 degC.
+    user = tmp_path / "mine.toml"
+    text = PAPER_CONFIG.read_text().replace(
+        'temperatures = ["-40 degC", "25 degC", "100 degC"]',
+        'temperatures = ["-40 degF", "77 degF", "212 degF"]   # our qualification range',
+    )
+    assert "degF" in text
+    user.write_text(text)
+    data = tmp_path / "drops.csv"
+    data.write_text(drop_csv(drop_points(TRUTH, TEMPERATURES, MASSES), inertia_column=False))
+    out = tmp_path / "fitted.toml"
+    invoke("fit", "drop-test", str(data), "-o", str(out), "--config", str(user), "--json")
+    written = out.read_text()
+    assert 'title = "CDA Cc-16 test deployment (paper section 6)"' in written
+    assert 'temperatures = ["-40 degF", "77 degF", "212 degF"]   # our qualification range' in (
+        written
+    )
+    assert "-39.99" not in written  # the user's -40 degF, not its conversion
+    assert 'travel = "1.57 rad"' in written  # the [load] as the user wrote it
+    assert "ratio = 1 # BECD and FECD are already at the input shaft" in written
+    # The paper's own comments on its [damper] go with the damper they described.
+    assert "# FD" not in written
+    assert written.startswith("# Written by ecdsim")
+    # deploy reads it: the analysis temperatures are the user's (-40 degF = -40 degC).
+    cases = deploy(out)
+    assert sorted(cases) == pytest.approx([-40.0, 25.0, 100.0], abs=1e-12)
+    for t, case in cases.items():
+        assert case["damping_rate_Nms_per_rad"] == pytest.approx(TRUTH.damping(t), rel=1e-9)

@@ -15,12 +15,16 @@ exactly. The configuration format holds only the paper's linear damping law; whe
 resistivity law fits better the file says so in a comment. With one temperature no law
 can be fitted: c = 0 and the FECD slope is 0 (a warning says so).
 
-The ``[load]`` section is copied from a configuration the user gives (every key it set,
-generically, so keys added to the schema later are copied too); without one a clearly
-marked placeholder load is written (constant torque equal to the largest bench torque
-over a 90 deg travel) that must be edited before any deployment time means anything. A
-spring fit writes the whole configuration back with the fitted spring torques. Every file
-is validated with the configuration reader before it is written, and written atomically.
+With a configuration from the user (``--config``) the file written is that file as the
+user wrote it (comments, order, title, units, ``[load]``, ``[analysis]``, every other
+section; tomlkit), with only the fitted parts replaced: ``[damper]`` and ``[gearbox]``
+for a damper fit (:func:`fitted_config_text`), ``[load] start_torque`` and ``end_torque``
+for a spring fit (:func:`spring_config_text`). Without one, a clearly marked placeholder
+load is written (constant torque equal to the largest bench torque over a 90 deg travel)
+that must be edited before any deployment time means anything. Fitted numbers are
+written to the digits their 95 % intervals support (:func:`significant`), with no float
+noise. Every file is validated with the configuration reader before it is written, and
+written atomically.
 """
 
 from __future__ import annotations
@@ -43,7 +47,7 @@ from ecdsim.characterize.findings import FitWarning
 from ecdsim.characterize.stats import Estimate
 from ecdsim.characterize.templaws import TemperatureLaws
 from ecdsim.config import ConfigError, parse_config
-from ecdsim.config.schema import ConfigSpec, LoadSpec
+from ecdsim.config.schema import LoadSpec
 from ecdsim.config.units import Kind
 
 PLACEHOLDER_TRAVEL = math.pi / 2.0  # rad
@@ -76,9 +80,51 @@ def toml_string(text: str) -> str:
 
 
 def quantity(value: float, unit: str) -> str:
-    """A quantity as a TOML string, the number written exactly (``repr``) with its unit."""
+    """A quantity as a TOML string, the number written exactly (``repr``) with its unit.
+
+    For a value copied from a validated configuration, which must read back bit for bit;
+    a fitted value is written by :func:`fitted_quantity`.
+    """
     number = repr(float(value))
     return toml_string(f"{number} {unit}" if unit else number)
+
+
+def fitted_quantity(value: float, unit: str, half_width: float | None = None) -> str:
+    """A fitted quantity as a TOML string, to its :func:`significant` digits, with its unit.
+
+    ``half_width`` is the half-width of the value's 95 % interval (None: none).
+    """
+    number = significant(float(value), half_width)
+    return toml_string(f"{number} {unit}" if unit else number)
+
+
+MIN_DIGITS = 6  # significant digits of a fitted number at least (the header's precision)
+
+
+def significant(value: float, half_width: float | None = None) -> str:
+    """``value`` to the digits its 95 % interval supports, at least :data:`MIN_DIGITS`.
+
+    Enough digits (15 at most) that the rounding stays below 1 % of the interval's
+    half-width, so that the written number is the fit's to well within its uncertainty;
+    6 digits at least.
+    Without a (positive, finite) half-width: 15 significant digits, trailing zeros
+    dropped, which removes float noise (-39.99999999999997 reads -40) and keeps the
+    value to 5e-16 relative.
+
+    >>> significant(24.058730239258235, 0.1055)
+    '24.0587'
+    >>> significant(-0.003998517629040172, 5.27e-05)
+    '-0.00399852'
+    >>> significant(-39.99999999999997), significant(25.0), significant(1.3e-4)
+    ('-40', '25', '0.00013')
+    """
+    if not math.isfinite(value) or value == 0.0:
+        return repr(value) if value != 0.0 else "0"
+    if half_width is not None and math.isfinite(half_width) and half_width > 0.0:
+        needed = math.floor(math.log10(abs(value))) - math.floor(math.log10(half_width / 100))
+        digits = min(max(MIN_DIGITS, needed + 1), 15)  # beyond 15: float noise
+        return f"{value:.{digits}g}"
+    return f"{value:.15g}"  # 15 digits: the float noise of the 16th and 17th is gone
 
 
 @dataclass(frozen=True)
@@ -118,6 +164,9 @@ class FittedEcd:
     temperatures : the test temperatures (the file's analysis temperatures) [degC]
     comments : lines about the fit (intervals, law choice) for the file's header
     warnings : findings to show the user
+    half_widths : half-widths of the 95 % intervals of damping_rate,
+        temperature_coefficient, friction_slope and friction_at_0c (None: no interval),
+        which set the digits written
     """
 
     damping_rate: float
@@ -128,6 +177,12 @@ class FittedEcd:
     temperatures: tuple[float, ...]
     comments: tuple[str, ...]
     warnings: tuple[FitWarning, ...]
+    half_widths: tuple[float | None, float | None, float | None, float | None] = (
+        None,
+        None,
+        None,
+        None,
+    )
 
     def damping_at(self, temperature: float) -> float:
         """BECD(T) [N*m*s/rad] as the file states it."""
@@ -137,6 +192,14 @@ class FittedEcd:
     def friction_at(self, temperature: float) -> float:
         """FECD(T) [N*m] as the file states it."""
         return self.friction_slope * temperature + self.friction_at_0c
+
+
+def _half_width(estimate: Estimate) -> float | None:
+    """Half the width of an estimate's 95 % interval, None without one."""
+    if estimate.ci95 is None:
+        return None
+    low, high = estimate.ci95
+    return (high - low) / 2.0
 
 
 def _ci(estimate: Estimate, unit: str) -> str:
@@ -180,6 +243,7 @@ def fitted_ecd(
                 f"FECD {_ci(f, 'N*m')}",
                 "no temperature law could be fitted: coefficient and friction slope are 0",
             ),
+            half_widths=(_half_width(b), None, None, _half_width(f)),
             warnings=(
                 FitWarning(
                     "single_temperature_export",
@@ -230,6 +294,12 @@ def fitted_ecd(
             temperatures=temps,
             comments=tuple(comments),
             warnings=tuple(warnings),
+            half_widths=(
+                _half_width(b_ref),
+                _half_width(c),
+                _half_width(slope),
+                _half_width(at_0c),
+            ),
         )
     if not result.damping_rate > 0.0:
         raise ExportError(
@@ -244,25 +314,26 @@ def fitted_ecd(
 
 def ecd_sections(ecd: FittedEcd) -> list[tuple[str, list[Entry]]]:
     """The ``[damper]`` and ``[gearbox]`` sections of a fitted ECD (N = 1, no losses)."""
+    hw_b, hw_c, hw_slope, hw_f = ecd.half_widths
     damper = [
         Entry(
             "damping_rate",
-            quantity(ecd.damping_rate, "N*m*s/rad"),
+            fitted_quantity(ecd.damping_rate, "N*m*s/rad", hw_b),
             "BECD at reference_temperature, at the input shaft",
         ),
-        Entry("reference_temperature", quantity(ecd.reference_temperature, "degC")),
+        Entry("reference_temperature", fitted_quantity(ecd.reference_temperature, "degC")),
         Entry(
             "damping_temperature_coefficient",
-            quantity(ecd.temperature_coefficient, "/ K"),
+            fitted_quantity(ecd.temperature_coefficient, "/ K", hw_c),
             "fitted linear law",
         ),
-        Entry("coulomb_friction", quantity(0.0, "N*m"), "all friction is in the line below"),
+        Entry("coulomb_friction", fitted_quantity(0.0, "N*m"), "all friction is in the line below"),
         Entry(
             "lubrication_friction",
             "{ slope = "
-            + quantity(ecd.friction_slope, "N*m/K")
+            + fitted_quantity(ecd.friction_slope, "N*m/K", hw_slope)
             + ", at_0C = "
-            + quantity(ecd.friction_at_0c, "N*m")
+            + fitted_quantity(ecd.friction_at_0c, "N*m", hw_f)
             + " }",
             "FECD(T) = slope * T + at_0C",
         ),
@@ -270,7 +341,7 @@ def ecd_sections(ecd: FittedEcd) -> list[tuple[str, list[Entry]]]:
     gearbox = [
         Entry("ratio", "1", "BECD and FECD are already at the input shaft"),
         Entry("damping_fraction", "0.0"),
-        Entry("coulomb_friction", quantity(0.0, "N*m")),
+        Entry("coulomb_friction", fitted_quantity(0.0, "N*m")),
     ]
     return [("damper", damper), ("gearbox", gearbox)]
 
@@ -375,7 +446,7 @@ PLACEHOLDER_NOTICE = (
 
 
 def _analysis(temperatures: Sequence[float]) -> list[Entry]:
-    temps = ", ".join(quantity(t, "degC") for t in temperatures)
+    temps = ", ".join(fitted_quantity(t, "degC") for t in temperatures)
     return [Entry("temperatures", f"[{temps}]", "the test temperatures")]
 
 
@@ -408,49 +479,108 @@ def fitted_parameter_text(
     return render_toml(header, sections)
 
 
-def spring_parameter_text(
-    spec: ConfigSpec,
+def _table(entries: Sequence[Entry]) -> Any:
+    """A tomlkit table of ``entries`` (values are TOML text), with their comments."""
+    import tomlkit
+
+    table = tomlkit.table()
+    for entry in entries:
+        table.add(entry.key, tomlkit.parse(f"v = {entry.value}\n")["v"])
+        if entry.comment:
+            table[entry.key].comment(entry.comment)
+    return table
+
+
+def _replace_table(document: Any, name: str, entries: Sequence[Entry]) -> None:
+    """Put ``entries`` in the place of the table ``name`` (its keys, subtables, comments).
+
+    The table keeps its place and the blank line after it; a new one goes at the end.
+    """
+    from tomlkit.items import Comment, Table
+
+    old = document.get(name)
+    if not isinstance(old, Table):
+        document[name] = _table(entries)
+        return
+    for key in list(old.keys()):
+        del old[key]
+    body = old.value.body  # only unkeyed items (comments, blank lines) are left
+    body[:] = [(key, item) for key, item in body if not isinstance(item, Comment)]
+    new = _table(entries)
+    for key in new:
+        old.add(key, new[key])
+
+
+def _with_header(header: Sequence[str], body: str) -> str:
+    lines = [f"# {line}" if line else "#" for line in header]
+    return "\n".join(lines) + "\n\n" + body.lstrip("\n")
+
+
+def fitted_config_text(
+    user_text: str, ecd: FittedEcd, provenance: Sequence[str], config_name: str
+) -> str:
+    """The user's configuration file with the fitted ECD in place of its own.
+
+    The file the user gave (``--config``) is kept as written, its comments, order, title,
+    units, ``[load]``, ``[analysis]`` and every other section (tomlkit); only ``[damper]``
+    and ``[gearbox]`` are replaced by the fitted ECD at the input shaft (N = 1, see the
+    module docstring). A file with no ``[analysis]`` gets the test temperatures. The
+    header names the tool, the data and the fit.
+    """
+    import tomlkit
+
+    document = tomlkit.parse(user_text)
+    sections = dict(ecd_sections(ecd))
+    for name in ("damper", "gearbox"):
+        _replace_table(document, name, sections[name])
+    if "analysis" not in document:
+        document["analysis"] = _table(_analysis(ecd.temperatures))
+    header = [
+        *provenance,
+        f"from {config_name}: every section as written there, except [damper] and [gearbox],",
+        "which hold the fitted ECD at its input shaft (1:1, docs/characterize.md)",
+        "",
+        *ecd.comments,
+    ]
+    return _with_header(header, tomlkit.dumps(document))
+
+
+def spring_config_text(
+    user_text: str,
     start_torque: Estimate,
     end_torque: Estimate,
-    temperatures: Sequence[float],
     provenance: Sequence[str],
+    config_name: str,
 ) -> str:
-    """The parameter file of a spring fit: the configuration with the fitted torques.
+    """The user's configuration file with the fitted spring torques (tomlkit).
 
-    Every section and key the configuration set is written back (in SI units); only
-    ``load.start_torque``, ``load.end_torque`` and ``analysis.temperatures`` change.
-
-    Parameters
-    ----------
-    spec : the configuration the spring was fitted with
-    start_torque : fitted Ts at the spring's reference temperature [N*m]
-    end_torque : fitted Te at the spring's reference temperature [N*m]
-    temperatures : the trace temperatures (the file's analysis temperatures) [degC]
-    provenance : header comment lines
+    Only ``[load] start_torque`` and ``end_torque`` change, written to their significant
+    digits in N*m; comments, order, units and every other key stay as the user wrote them.
     """
+    import tomlkit
+
+    document = tomlkit.parse(user_text)
+    load = document["load"]
+    for key, estimate in (("start_torque", start_torque), ("end_torque", end_torque)):
+        text = fitted_quantity(estimate.value, "N*m", _half_width(estimate))
+        item = tomlkit.parse(f"v = {text}\n")["v"]
+        if key in load:
+            old = load[key]
+            comment = getattr(getattr(old, "trivia", None), "comment", "")
+            load[key] = item
+            if comment:
+                load[key].comment(comment.lstrip("# "))
+        else:
+            load[key] = item
     header = [
         *provenance,
         "",
         "spring torques fitted to the traces (at the spring's reference temperature):",
         f"  start_torque = {_ci(start_torque, 'N*m')}",
         f"  end_torque = {_ci(end_torque, 'N*m')}",
-        "everything else as in the configuration given",
+        f"everything else as written in {config_name}",
     ]
-    replaced: dict[str, dict[str, Any]] = {
-        "load": {"start_torque": start_torque.value, "end_torque": end_torque.value},
-        "analysis": {"temperatures": list(temperatures)},
-    }
-    top: list[Entry] = []
-    sections: list[tuple[str, Sequence[Entry]]] = []
-    for name, info in type(spec).model_fields.items():
-        value = getattr(spec, name)
-        if value is None or (name not in spec.model_fields_set and name not in replaced):
-            continue
-        if isinstance(value, BaseModel):
-            sections.append((name, model_entries(value, **replaced.get(name, {}))))
-        else:
-            top.append(Entry(name, toml_value(value, info.annotation, info.metadata)))
-    return render_toml(header, [("", top), *sections])
+    return _with_header(header, tomlkit.dumps(document))
 
 
 def provenance(command: str, source: str, sha256: str) -> list[str]:

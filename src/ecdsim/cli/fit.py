@@ -110,6 +110,14 @@ def _parameter(u: Shown, key: str) -> tuple[str, str]:
     return u.head(name, kind), kind
 
 
+def _config_text(path: Path) -> str:
+    """The --config file's text, to be written back with the fit (read once loaded)."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except OSError as exc:
+        fail([f"--config {path}: cannot read ({exc.strerror or exc})"])
+
+
 def _load_config(path: Path) -> Config:
     from ecdsim.config import ConfigError, load_config
 
@@ -273,7 +281,12 @@ def drop_test(
     """Fit BECD and FECD per temperature from drop tests, then laws over temperature."""
     display.configure(wide=wide, plain=plain)
     from ecdsim.characterize.droptest import fit_drop_test, noise_model
-    from ecdsim.characterize.export import fitted_parameter_text, largest_torque, provenance
+    from ecdsim.characterize.export import (
+        fitted_config_text,
+        fitted_parameter_text,
+        largest_torque,
+        provenance,
+    )
     from ecdsim.config import ConfigError
 
     reference = temperature_option("--reference-temperature", reference_temperature)
@@ -311,17 +324,22 @@ def drop_test(
                     "edit it before trusting a deployment time",
                 )
             )
-        text = fitted_parameter_text(
-            ecd,
-            loaded.spec.load if loaded else None,
-            largest_torque([t for f in fits for t in f.torque]),
-            f"ECD fitted from drop tests ({Path(data).name})",
-            provenance(
-                f"ecdsim fit drop-test --noise {result.noise}",
-                result.table.source,
-                result.table.sha256,
-            ),
+        lines = provenance(
+            f"ecdsim fit drop-test --noise {result.noise}",
+            result.table.source,
+            result.table.sha256,
         )
+        if config is not None:
+            # The user's file as written, with the fitted ECD (comments, title, units kept).
+            text = fitted_config_text(_config_text(config), ecd, lines, config.name)
+        else:
+            text = fitted_parameter_text(
+                ecd,
+                None,
+                largest_torque([t for f in fits for t in f.torque]),
+                f"ECD fitted from drop tests ({Path(data).name})",
+                lines,
+            )
 
     def plotter(folder: Path) -> list[Path]:
         from ecdsim.characterize.plots import write_drop_test_plots
@@ -481,11 +499,7 @@ def trace(
 ) -> None:
     """Fit recorded deployments (angle against time) against the exact solution."""
     display.configure(wide=wide, plain=plain)
-    from ecdsim.characterize.export import (
-        fitted_parameter_text,
-        provenance,
-        spring_parameter_text,
-    )
+    from ecdsim.characterize.export import fitted_config_text, provenance, spring_config_text
     from ecdsim.characterize.tracefit import fit_traces
     from ecdsim.config import ConfigError
 
@@ -510,9 +524,12 @@ def trace(
     source = provenance("ecdsim fit trace", result.table.source, result.table.sha256)
     text: str | None = None
     if output is not None and result.spring is not None:
-        temps = [c.trace.temperature for c in result.spring.curves]
-        text = spring_parameter_text(
-            loaded.spec, result.spring.start_torque, result.spring.end_torque, temps, source
+        text = spring_config_text(
+            _config_text(config),
+            result.spring.start_torque,
+            result.spring.end_torque,
+            source,
+            config.name,
         )
     elif output is not None:
         fits = result.fits
@@ -524,9 +541,7 @@ def trace(
             result.laws,
         )
         warnings.extend(ecd.warnings)
-        text = fitted_parameter_text(
-            ecd, loaded.spec.load, 0.0, f"ECD fitted from deployment traces ({data.name})", source
-        )
+        text = fitted_config_text(_config_text(config), ecd, source, config.name)
 
     def plotter(folder: Path) -> list[Path]:
         from ecdsim.characterize.plots import write_trace_plots
