@@ -483,3 +483,29 @@ def test_size_and_compare_fluid_in_us_units(tmp_path: Any) -> None:
     assert shock == pytest.approx(134.3, abs=0.05)
     assert f"{shock / LBF_IN_NM:.4g}" == "1189"
     assert _row(result.stdout, "77")[-2:] == ["1189", "0"]  # fluid and ECD shock
+
+
+def test_warnings_in_us_units(tmp_path: Any) -> None:
+    from ecdsim.units_display import convert_text
+
+    # By hand: 1.45 N*m / 0.1129848290276167 = 12.8336 lbf*in; 1.343 N*m = 11.8865 lbf*in;
+    # -40 degC = -40 degF; 23.65 N*m*s/rad = 209.32 in*lbf*s/rad; rad and s are unchanged.
+    text = "drive torque 1.45 N*m < friction 1.343 N*m at -40 degC; BECD 23.65 N*m*s/rad"
+    assert convert_text(text, "us") == (
+        "drive torque 12.83 lbf*in < friction 11.89 lbf*in at -40 degF; BECD 209.3 in*lbf*s/rad"
+    )
+    assert convert_text(text, "si") == text
+    assert convert_text("stalls at 1.481 rad (84.9 deg) after 3 s", "us") == (
+        "stalls at 1.481 rad (84.9 deg) after 3 s"
+    )
+    # The paper example with end torque 1.2 N*m stalls at -40 degC (docs/json.md: at 1.481
+    # rad); the report's stderr line says so in degF.
+    path = tmp_path / "stall.toml"
+    path.write_text(_PAPER_TEXT.replace('end_torque = "1.58 N*m"', 'end_torque = "1.2 N*m"'))
+    result = _run("report", str(path), "-o", str(tmp_path / "r.html"), "--units", "us")
+    assert result.exit_code == 0, result.output
+    stall_lines = [line for line in result.stderr.splitlines() if "stalls at 1.481 rad" in line]
+    assert stall_lines
+    assert all("at -40 degF" in line for line in stall_lines)
+    assert "degC" not in result.stderr
+    assert "at -40 degF" in (tmp_path / "r.html").read_text(encoding="utf-8")

@@ -23,6 +23,7 @@ in the displayed numbers too.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -308,3 +309,35 @@ class Shown:
     def text(self, si_value: float | None, kind: str, none: str = "-") -> str:
         """The SI value converted and formatted with its unit ("77 degF")."""
         return format_quantity(si_value, kind, self.system, self.digits, none)
+
+
+# A number followed by an SI unit in a sentence ("at 25 degC", "drive torque 1.45 N*m").
+_TEXT_UNITS: dict[str, str] = {
+    "degC": "temperature",
+    "N*m*s/rad": "damping_rate",
+    "N*m/K": "torque_per_kelvin",
+    "N*m": "torque",
+    "kg*m^2": "inertia",
+    "J": "energy",
+}
+_QUANTITY_IN_TEXT = re.compile(
+    r"(?<![\w.])([-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?) "
+    r"(degC|N\*m\*s/rad|N\*m/K|N\*m|kg\*m\^2|J)(?![\w*/^])"
+)
+
+
+def convert_text(text: str, system: UnitSystem, digits: int = 4) -> str:
+    """A sentence with its SI quantities ("at 25 degC", "1.45 N*m") shown in ``system``.
+
+    For messages built in SI by the library (warnings), shown on a terminal in US units.
+
+    >>> convert_text("cannot start: drive torque 1.45 N*m < friction 1.5 N*m at -40 degC", "us")
+    'cannot start: drive torque 12.83 lbf*in < friction 13.28 lbf*in at -40 degF'
+    """
+    if system == "si":
+        return text
+
+    def shown(match: re.Match[str]) -> str:
+        return format_quantity(float(match.group(1)), _TEXT_UNITS[match.group(2)], system, digits)
+
+    return _QUANTITY_IN_TEXT.sub(shown, text)

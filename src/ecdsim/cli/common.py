@@ -132,8 +132,10 @@ def predict_run(config: Config) -> Prediction:
         fail([f"{config.source}: {exc}"])
 
 
-def echo_warnings(prediction: Prediction) -> None:
-    """Print the prediction's findings on stderr, one ``warning:`` line each."""
+def echo_warnings(prediction: Prediction, units: UnitSystem = "si") -> None:
+    """Print the prediction's findings on stderr, one ``warning:`` line each, in ``units``."""
+    from ecdsim.units_display import convert_text
+
     for warning in prediction.warnings:
         where = f"[{warning.method}] " if warning.method else ""
-        typer.echo(f"warning: {where}{warning.message}", err=True)
+        typer.echo(f"warning: {where}{convert_text(warning.message, units)}", err=True)

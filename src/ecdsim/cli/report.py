@@ -74,7 +74,7 @@ def report(
             f"interrupted: {output} not written (an earlier file there is unchanged)", err=True
         )
         raise typer.Exit(INTERRUPTED) from None
-    echo_warnings(prediction)
+    echo_warnings(prediction, system)
     typer.echo(f"wrote {written}")
     if pdf:
         target = output.with_suffix(".pdf")

@@ -28,7 +28,7 @@ from ecdsim.deployment import Prediction, predict
 from ecdsim.formatting import format_number
 from ecdsim.methods import SOLVERS
 from ecdsim.model import TabulatedTemperatureLaw
-from ecdsim.units_display import KIND_BY_SI_UNIT, Shown, UnitSystem, kind_of_key
+from ecdsim.units_display import KIND_BY_SI_UNIT, Shown, UnitSystem, convert_text, kind_of_key
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -562,7 +562,10 @@ def build_context(
         "figures": _figures(prediction, units),
         "u": u,
         "t_unit": u.unit("temperature"),
-        "warnings": document["warnings"],
+        # The messages are SI sentences from the library; shown in the report's units.
+        "warnings": [
+            {**w, "message": convert_text(w["message"], units)} for w in document["warnings"]
+        ],
         "margins": margins,
         "montecarlo": montecarlo,
         "percentile_keys": PERCENTILE_KEYS,
