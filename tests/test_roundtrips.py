@@ -1,0 +1,61 @@
+"""Round trips a user makes (issue 14, item 10): make demo's config path, report -o folders,
+and the test extra's dependencies."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import tomllib
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from ecdsim.cli.app import app
+from tests.conftest import PAPER_CONFIG, ROOT
+
+runner = CliRunner()
+
+
+def test_demo_prints_a_config_path_that_exists(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)  # anywhere, as after `pip install ecdsim`: no examples/ here
+    result = runner.invoke(app, ["demo", "--out", "ecdsim-demo"])
+    assert result.exit_code == 0, result.output
+    (line,) = [line for line in result.stdout.splitlines() if line.startswith("(config: ")]
+    path = Path(re.match(r"\(config: ([^;]+);", line).group(1))  # type: ignore[union-attr]
+    assert path == Path("ecdsim-demo") / "paper_cc16.toml"
+    assert path.is_file()
+    # It is the paper's example, and `ecdsim deploy` runs it as printed.
+    assert tomllib.loads(path.read_text()) == tomllib.loads(PAPER_CONFIG.read_text())
+    assert line.endswith(f"edit it, then: ecdsim deploy {path})")
+    assert runner.invoke(app, ["deploy", str(path)]).exit_code == 0
+
+
+def test_report_says_when_it_creates_the_folder(tmp_path: Path) -> None:
+    out = tmp_path / "new" / "deeper" / "report.html"
+    result = runner.invoke(app, ["report", str(PAPER_CONFIG), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert out.is_file()
+    notes = [line for line in result.stderr.splitlines() if line.startswith("note: created")]
+    assert notes == [f"note: created the folder {out.parent} (it did not exist)"]
+    again = runner.invoke(app, ["report", str(PAPER_CONFIG), "-o", str(out)])
+    assert again.exit_code == 0, again.output
+    assert "note: created" not in again.stderr  # it exists now: nothing to say
+
+
+def test_no_unused_test_dependency() -> None:
+    extra = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    test_extra = extra["optional-dependencies"]["test"]
+    assert not any(dep.startswith("httpx2") for dep in test_extra)
+    # tomlkit keeps the user's file in `fit -o`: a core dependency, importable.
+    assert any(dep.startswith("tomlkit") for dep in extra["dependencies"])
+    found = subprocess.run(
+        ["git", "grep", "-l", "httpx2", "--", "src", "tests", "benchmarks", "validation"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert found.stdout.splitlines() in ([], ["tests/test_roundtrips.py"])
