@@ -194,10 +194,19 @@ def demo(
     display.configure(wide=wide, plain=plain)
     from importlib.resources import as_file, files
 
+    from ecdsim.atomic import write_text
+
     resource = files("ecdsim") / "data" / "paper_cc16.toml"
     with as_file(resource) as path:
         loaded = load_run(path, None, None)
-    typer.echo(f"{loaded.system.name}\n(config: examples/paper_cc16.toml)")
+        text = path.read_text(encoding="utf-8")
+    # The example ships inside the package, wherever ecdsim is installed: copy it beside
+    # the plots so that the path printed exists, to edit and run with `ecdsim deploy`.
+    try:
+        config = write_text(out / "paper_cc16.toml", text)
+    except OSError as exc:
+        fail([f"--out {out}: cannot write ({exc.strerror or exc})"])
+    typer.echo(f"{loaded.system.name}\n(config: {config}; edit it, then: ecdsim deploy {config})")
     _render(predict_run(loaded), False, out)
 
 
