@@ -129,3 +129,14 @@ def test_chunk_sums_bin_like_the_summary_did() -> None:
     tolerance = plan.tolerances.tolerances[0]
     labels = bin_labels(tolerance.scores(columns[tolerance.key]), bins)
     assert np.array_equal(first.bin_counts[0], np.bincount(labels, minlength=bins))
+
+
+def test_an_in_process_summary_from_memory_equals_one_from_the_files(tmp_path: Path) -> None:
+    """run() keeps the summary's columns; the summary is the same read from the files."""
+    plan = build_plan(load_config(EXAMPLE), 3000, "exact", chunk_size=1024)
+    out = tmp_path / "study"
+    run(plan, out)
+    assert sorted(store._KEPT[0].chunks) == [0, 1, 2]
+    from_memory = summarize(plan, out)
+    assert not store._KEPT  # taken, and forgotten
+    assert summarize(plan, out) == from_memory

@@ -161,6 +161,11 @@ class Plan:
         return tuple(output_column(o, t) for t in self.temperatures for o in self.outputs)
 
     @property
+    def summary_columns(self) -> tuple[str, ...]:
+        """The columns the summary reads whole (for order statistics): sample, outputs."""
+        return ("sample", *self.output_columns)
+
+    @property
     def columns(self) -> tuple[str, ...]:
         """Every column of a chunk file, in order."""
         return ("sample", *self.tolerances.keys, *self.output_columns)
@@ -682,8 +687,13 @@ def run(
     pending: Future[Any] | None = None
     pending_result: ChunkResult | None = None
 
+    store.start_keeping(out, identity)
+
     def finished(result: ChunkResult) -> None:
         nonlocal computed, samples_done
+        if result.columns:
+            kept = {name: result.columns[name] for name in plan.summary_columns}
+            store.keep(out, identity, result.index, kept)
         computed += 1
         start, stop = plan.bounds(result.index)
         samples_done += stop - start

@@ -427,16 +427,15 @@ def _merged_sums(
 def summarize(plan: Plan, out: Path) -> dict[str, Any]:
     """The study's statistics per temperature, read from its chunk files (JSON-ready)."""
     from ecdsim.montecarlo.run import output_column
-    from ecdsim.montecarlo.store import ChunkReader
+    from ecdsim.montecarlo.store import ChunkReader, take_kept
 
     reader = ChunkReader(out, plan.chunks)
     tags = reader.tags()
     # Order statistics need whole columns, but only these: the inputs' columns (the bulk
     # of the files) enter through the sums each chunk carries (module streaming).
-    wanted = ["sample"]
-    for temperature in plan.temperatures:
-        wanted += [output_column(o, temperature) for o in plan.outputs]
-    data = reader.read(wanted)
+    # A run in this process kept them in memory (store.keep): only reused chunks are read.
+    kept = take_kept(out, plan.identity_sha256)
+    data = reader.read(plan.summary_columns, [int(t["_rows"]) for t in tags], kept)
     if not np.array_equal(data["sample"], np.arange(plan.samples)):
         raise ValueError(f"{out}: the chunk files do not hold samples 0..{plan.samples - 1}")
     del data["sample"]

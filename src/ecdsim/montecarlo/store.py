@@ -156,6 +156,49 @@ def chunk_is_valid(
     )
 
 
+@dataclass
+class _Kept:
+    """The summary's columns of the chunks this process wrote for one study."""
+
+    out: Path
+    identity_sha256: str
+    chunks: dict[int, dict[str, np.ndarray[Any, Any]]]
+
+
+_KEPT: list[_Kept] = []  # at most one study's: the latest run in this process
+
+
+def start_keeping(out: Path, identity_sha256: str) -> None:
+    """Drop what an earlier run kept; keep this study's columns from now on."""
+    _KEPT.clear()
+    _KEPT.append(_Kept(Path(out).resolve(), identity_sha256, {}))
+
+
+def keep(out: Path, identity_sha256: str, index: int, columns: dict[str, Any]) -> None:
+    """Keep the summary's columns of chunk ``index``, just written by this process.
+
+    So that the summary of an in-process run need not read them back from the files
+    (the values are the same: Parquet stores float64 and bool exactly).
+    """
+    if (
+        _KEPT
+        and _KEPT[0].out == Path(out).resolve()
+        and _KEPT[0].identity_sha256 == (identity_sha256)
+    ):
+        _KEPT[0].chunks[index] = columns
+
+
+def take_kept(out: Path, identity_sha256: str) -> dict[int, dict[str, np.ndarray[Any, Any]]]:
+    """The columns kept for this study (and forget them); empty if none."""
+    if (
+        _KEPT
+        and _KEPT[0].out == Path(out).resolve()
+        and _KEPT[0].identity_sha256 == (identity_sha256)
+    ):
+        return _KEPT.pop().chunks
+    return {}
+
+
 @dataclass(frozen=True)
 class ChunkReader:
     """Reads columns of a finished study, chunk by chunk, in sample order.
@@ -178,21 +221,33 @@ class ChunkReader:
         ]
         return np.concatenate(parts)
 
-    def read(self, names: Sequence[str]) -> dict[str, np.ndarray[Any, Any]]:
+    def read(
+        self,
+        names: Sequence[str],
+        rows: Sequence[int] | None = None,
+        kept: Mapping[int, Mapping[str, np.ndarray[Any, Any]]] | None = None,
+    ) -> dict[str, np.ndarray[Any, Any]]:
         """Several columns over all samples, each chunk file opened once.
 
         Each column is filled chunk by chunk into one array, so that the peak memory is
         the columns plus one chunk (not the columns twice, as concatenating would).
+        ``rows`` are the chunks' row counts if known (their tags hold them); a chunk in
+        ``kept`` (:func:`take_kept`) is taken from memory instead of its file.
         """
         pq = require("pyarrow.parquet")
+        kept = kept or {}
         paths = [chunk_path(self.out, k) for k in range(self.chunks)]
-        rows = [pq.read_metadata(path).num_rows for path in paths]
+        if rows is None:
+            rows = [pq.read_metadata(path).num_rows for path in paths]
         found: dict[str, np.ndarray[Any, Any]] = {}
         start = 0
-        for path, count in zip(paths, rows, strict=True):
-            table = pq.read_table(path, columns=list(names))
+        for k, (path, count) in enumerate(zip(paths, rows, strict=True)):
+            columns = kept.get(k)
+            if columns is None or any(len(columns.get(n, ())) != count for n in names):
+                table = pq.read_table(path, columns=list(names))
+                columns = {name: table.column(name).to_numpy() for name in names}
             for name in names:
-                part = table.column(name).to_numpy()
+                part = columns[name]
                 if name not in found:
                     found[name] = np.empty(sum(rows), dtype=part.dtype)
                 found[name][start : start + count] = part
