@@ -509,3 +509,30 @@ def test_warnings_in_us_units(tmp_path: Any) -> None:
     assert all("at -40 degF" in line for line in stall_lines)
     assert "degC" not in result.stderr
     assert "at -40 degF" in (tmp_path / "r.html").read_text(encoding="utf-8")
+
+
+def test_fit_plots_in_us_units() -> None:
+    from ecdsim.characterize.droptest import fit_drop_test
+    from ecdsim.characterize.plots import plot_parameters, plot_torque_speed
+    from tests.conftest import ROOT
+
+    result = fit_drop_test(ROOT / "examples" / "drop_test.csv", 25.0)
+    si, us = plot_torque_speed(result, "si").axes[0], plot_torque_speed(result, "us").axes[0]
+    assert us.get_ylabel() == "drive torque [lbf*in]"
+    # Same points, torque divided by 0.1129848290276167 N*m per lbf*in (rounding only).
+    np_si, np_us = si.get_lines()[0].get_ydata(), us.get_lines()[0].get_ydata()
+    assert list(np_us) == pytest.approx([y / LBF_IN_NM for y in np_si], rel=1e-12)
+    fits = result.fits
+    fig = plot_parameters(
+        [f.temperature for f in fits],
+        [f.line.slope for f in fits],
+        [f.line.intercept for f in fits],
+        result.laws,
+        "us",
+    )
+    assert fig.axes[1].get_xlabel() == "temperature [degF]"
+    assert fig.axes[0].get_ylabel() == "BECD [in*lbf*s/rad]"
+    # The per-temperature points sit at -40, 77, 212 degF (the CSV's -40, 25, 100 degC).
+    points = [line.get_xdata() for line in fig.axes[1].get_lines() if len(line.get_xdata()) == 3]
+    assert points  # the error bars (and their caps) at the fitted temperatures
+    assert sorted(points[0]) == pytest.approx([-40.0, 77.0, 212.0], abs=1e-9)

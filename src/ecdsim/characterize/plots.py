@@ -7,6 +7,7 @@
 * :func:`plot_line_residuals` and :func:`plot_trace_residuals`: residuals;
 * :func:`plot_traces`: recorded and fitted deployments.
 
+Each takes the display unit system (``units``, "si" or "us"; :mod:`ecdsim.units_display`).
 matplotlib is imported inside the functions (Agg canvas, no display needed).
 """
 
@@ -24,6 +25,7 @@ from ecdsim.characterize.stats import Estimate
 from ecdsim.characterize.templaws import TemperatureLaws
 from ecdsim.characterize.tracefit import TraceResult, model_angle
 from ecdsim.plotting import save_figure, temperature_colors
+from ecdsim.units_display import Shown, UnitSystem
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -47,8 +49,9 @@ def _finish(ax: Axes, title: str, xlabel: str, ylabel: str) -> None:
         ax.legend(fontsize="small")
 
 
-def plot_torque_speed(result: DropTestResult) -> Figure:
+def plot_torque_speed(result: DropTestResult, units: UnitSystem = "si") -> Figure:
     """Drive torque against (corrected) speed with each temperature's line (paper Fig. 8)."""
+    u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
     colors = temperature_colors(len(result.fits))
@@ -56,37 +59,43 @@ def plot_torque_speed(result: DropTestResult) -> Figure:
     speeds = np.linspace(0.0, top, 50)
     for fit, color in zip(result.fits, colors, strict=True):
         b, f = fit.line.slope, fit.line.intercept
-        ax.plot(fit.corrected, fit.torque, "o", color=color, markersize=4)
+        ax.plot(fit.corrected, u.values(fit.torque, "torque"), "o", color=color, markersize=4)
         ax.plot(
             speeds,
-            f.value + b.value * speeds,
+            u.values(f.value + b.value * speeds, "torque"),
             color=color,
             label=(
-                f"{fit.temperature:g} degC: BECD {b.value:.4g} N*m*s/rad, FECD {f.value:.3g} N*m"
+                f"{u.text(fit.temperature, 'temperature')}: BECD "
+                f"{u.text(b.value, 'damping_rate')}, FECD {Shown(units, 3).text(f.value, 'torque')}"
             ),
         )
         out = fit.line.outliers
         if np.any(out):
             ax.plot(
                 fit.corrected[out],
-                fit.torque[out],
+                u.values(fit.torque[out], "torque"),
                 "o",
                 markersize=11,
                 markerfacecolor="none",
                 markeredgecolor="black",
-                label=f"outlier ({fit.temperature:g} degC)",
+                label=f"outlier ({u.text(fit.temperature, 'temperature')})",
             )
     ax.set_xlim(left=0.0)
     ax.set_ylim(bottom=0.0)
-    _finish(ax, "Drop test: torque against speed", "speed [rad/s]", "drive torque [N*m]")
+    _finish(
+        ax, "Drop test: torque against speed", "speed [rad/s]", u.head("drive torque", "torque")
+    )
     return fig
 
 
-def _error_bars(ax: Axes, temperatures: ArrayLike, values: Sequence[Estimate]) -> None:
-    t = np.asarray(temperatures, dtype=float)
-    y = np.array([v.value for v in values])
-    low = np.array([v.value - v.ci95[0] if v.ci95 else 0.0 for v in values])
-    high = np.array([v.ci95[1] - v.value if v.ci95 else 0.0 for v in values])
+def _error_bars(
+    ax: Axes, temperatures: ArrayLike, values: Sequence[Estimate], u: Shown, kind: str
+) -> None:
+    t = u.values(np.asarray(temperatures, dtype=float), "temperature")
+    scale = u.value(1.0, kind) - u.value(0.0, kind)  # a length on the axis: no offset
+    y = u.values(np.array([v.value for v in values]), kind)
+    low = scale * np.array([v.value - v.ci95[0] if v.ci95 else 0.0 for v in values])
+    high = scale * np.array([v.ci95[1] - v.value if v.ci95 else 0.0 for v in values])
     ax.errorbar(t, y, yerr=[low, high], fmt="o", color="black", capsize=3, label="per temperature")
 
 
@@ -95,6 +104,7 @@ def plot_parameters(
     damping: Sequence[Estimate],
     friction: Sequence[Estimate],
     laws: TemperatureLaws | None,
+    units: UnitSystem = "si",
 ) -> Figure:
     """BECD and FECD against temperature: 95 % intervals, laws and their 95 % bands.
 
@@ -104,50 +114,74 @@ def plot_parameters(
     damping : BECD at each [N*m*s/rad]
     friction : FECD at each [N*m]
     laws : the laws over temperature, or None
+    units : the display unit system
     """
+    u = Shown(units)
     fig = _figure(7.5, 7.0)
     top, bottom = fig.subplots(2, 1, sharex=True)
     t = np.asarray(temperatures, dtype=float)
     span = max(float(np.ptp(t)), 1.0)
     grid = np.linspace(float(np.min(t)) - 0.1 * span, float(np.max(t)) + 0.1 * span, 100)
-    _error_bars(top, t, damping)
-    _error_bars(bottom, t, friction)
+    _error_bars(top, t, damping, u, "damping_rate")
+    _error_bars(bottom, t, friction, u, "torque")
+    x = u.values(grid, "temperature")
     if laws is not None:
         for name, fit in laws.damping.items():
-            line = top.plot(grid, fit(grid), _LAW_STYLES.get(name, ":"), label=f"{name} law")[0]
+            y = u.values(fit(grid), "damping_rate")
+            line = top.plot(x, y, _LAW_STYLES.get(name, ":"), label=f"{name} law")[0]
             band = fit.band(grid)
             if band is not None:
-                top.fill_between(grid, *band, color=line.get_color(), alpha=0.15)
+                shown = [u.values(edge, "damping_rate") for edge in band]
+                top.fill_between(x, *shown, color=line.get_color(), alpha=0.15)
         if laws.friction is not None:
-            line = bottom.plot(grid, laws.friction(grid), "-", label="line")[0]
+            y = u.values(laws.friction(grid), "torque")
+            line = bottom.plot(x, y, "-", label="line")[0]
             band = laws.friction.band(grid)
             if band is not None:
-                bottom.fill_between(grid, *band, color=line.get_color(), alpha=0.15)
-    _finish(top, "Damping rate against temperature (95 % intervals)", "", "BECD [N*m*s/rad]")
-    _finish(bottom, "Friction against temperature", "temperature [degC]", "FECD [N*m]")
+                shown = [u.values(edge, "torque") for edge in band]
+                bottom.fill_between(x, *shown, color=line.get_color(), alpha=0.15)
+    _finish(
+        top,
+        "Damping rate against temperature (95 % intervals)",
+        "",
+        u.head("BECD", "damping_rate"),
+    )
+    _finish(
+        bottom,
+        "Friction against temperature",
+        u.head("temperature", "temperature"),
+        u.head("FECD", "torque"),
+    )
     return fig
 
 
-def plot_line_residuals(result: DropTestResult) -> Figure:
+def plot_line_residuals(result: DropTestResult, units: UnitSystem = "si") -> Figure:
     """Residual torque of each drop-test point against its speed, per temperature."""
+    u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
     for fit, color in zip(result.fits, temperature_colors(len(result.fits)), strict=True):
         ax.plot(
             fit.corrected,
-            fit.torque - fit.line.fitted,
+            u.values(fit.torque - fit.line.fitted, "torque"),
             "o-",
             color=color,
             markersize=4,
-            label=f"{fit.temperature:g} degC",
+            label=u.text(fit.temperature, "temperature"),
         )
     ax.axhline(0.0, color="black", linewidth=0.8)
-    _finish(ax, "Drop test: residuals of the lines", "speed [rad/s]", "residual torque [N*m]")
+    _finish(
+        ax,
+        "Drop test: residuals of the lines",
+        "speed [rad/s]",
+        u.head("residual torque", "torque"),
+    )
     return fig
 
 
-def plot_traces(result: TraceResult, n_points: int = 400) -> Figure:
+def plot_traces(result: TraceResult, n_points: int = 400, units: UnitSystem = "si") -> Figure:
     """Recorded angle against time (dots) and the fitted exact solution (lines)."""
+    u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
     curves = result.curves
@@ -159,14 +193,15 @@ def plot_traces(result: TraceResult, n_points: int = 400) -> Figure:
             times,
             np.degrees(model_angle(curve.problem, times)),
             color=color,
-            label=f"{trace.temperature:g} degC, fitted (exact solution)",
+            label=f"{u.text(trace.temperature, 'temperature')}, fitted (exact solution)",
         )
     _finish(ax, "Recorded deployments and fits", "time since release [s]", "angle [deg]")
     return fig
 
 
-def plot_trace_residuals(result: TraceResult) -> Figure:
+def plot_trace_residuals(result: TraceResult, units: UnitSystem = "si") -> Figure:
     """Recorded minus fitted angle against time, per trace."""
+    u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
     curves = result.curves
@@ -178,38 +213,43 @@ def plot_trace_residuals(result: TraceResult) -> Figure:
             color=color,
             markersize=3,
             linewidth=0.6,
-            label=f"{curve.trace.temperature:g} degC",
+            label=u.text(curve.trace.temperature, "temperature"),
         )
     ax.axhline(0.0, color="black", linewidth=0.8)
     _finish(ax, "Trace fit residuals", "time since release [s]", "residual angle [deg]")
     return fig
 
 
-def write_drop_test_plots(result: DropTestResult, folder: str | Path) -> list[Path]:
-    """Write the drop-test figures as PNG files into ``folder``; their paths."""
+def write_drop_test_plots(
+    result: DropTestResult, folder: str | Path, units: UnitSystem = "si"
+) -> list[Path]:
+    """Write the drop-test figures as PNG files into ``folder``, in ``units``; their paths."""
     out = Path(folder)
     fits = result.fits
     return [
-        save_figure(plot_torque_speed(result), out / "torque_vs_speed_fit.png"),
+        save_figure(plot_torque_speed(result, units), out / "torque_vs_speed_fit.png"),
         save_figure(
             plot_parameters(
                 [f.temperature for f in fits],
                 [f.line.slope for f in fits],
                 [f.line.intercept for f in fits],
                 result.laws,
+                units,
             ),
             out / "parameters_vs_temperature.png",
         ),
-        save_figure(plot_line_residuals(result), out / "drop_test_residuals.png"),
+        save_figure(plot_line_residuals(result, units), out / "drop_test_residuals.png"),
     ]
 
 
-def write_trace_plots(result: TraceResult, folder: str | Path) -> list[Path]:
-    """Write the trace-fit figures as PNG files into ``folder``; their paths."""
+def write_trace_plots(
+    result: TraceResult, folder: str | Path, units: UnitSystem = "si"
+) -> list[Path]:
+    """Write the trace-fit figures as PNG files into ``folder``, in ``units``; their paths."""
     out = Path(folder)
     written = [
-        save_figure(plot_traces(result), out / "trace_fit.png"),
-        save_figure(plot_trace_residuals(result), out / "trace_residuals.png"),
+        save_figure(plot_traces(result, units=units), out / "trace_fit.png"),
+        save_figure(plot_trace_residuals(result, units), out / "trace_residuals.png"),
     ]
     if result.fits:
         fits = result.fits
@@ -220,6 +260,7 @@ def write_trace_plots(result: TraceResult, folder: str | Path) -> list[Path]:
                     [f.damping_rate for f in fits],
                     [f.friction for f in fits],
                     result.laws,
+                    units,
                 ),
                 out / "parameters_vs_temperature.png",
             )

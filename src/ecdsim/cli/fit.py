@@ -344,7 +344,7 @@ def drop_test(
     def plotter(folder: Path) -> list[Path]:
         from ecdsim.characterize.plots import write_drop_test_plots
 
-        return write_drop_test_plots(result, folder)
+        return write_drop_test_plots(result, folder, u.system)
 
     _finish(
         result,
@@ -546,7 +546,7 @@ def trace(
     def plotter(folder: Path) -> list[Path]:
         from ecdsim.characterize.plots import write_trace_plots
 
-        return write_trace_plots(result, folder)
+        return write_trace_plots(result, folder, u.system)
 
     _finish(
         result,
