@@ -1,0 +1,71 @@
+"""Each command imports only what it uses (issue 13, item 4).
+
+Every case runs one command in a fresh interpreter, in process through the typer app
+(``ecdsim.cli.app.main`` with its output captured), then lists the top-level packages
+loaded. Heavy packages the command does not use must be absent: jinja2 (the HTML
+report), matplotlib (plots), pandas (Monte Carlo tables), scipy where no fit or
+integration runs, pint where every unit is in the lean table, dask (pint imports it).
+No wall-clock assertion: timings are benchmarks (benchmarks/bench_startup.py).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SCRIPT = """
+import contextlib, io, json, sys
+from ecdsim.cli.app import main
+sys.argv = ["ecdsim", *sys.argv[1:]]
+code = 0
+with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+    try:
+        main()
+    except SystemExit as exit:
+        code = exit.code or 0
+print(json.dumps({"code": code, "modules": sorted({m.split(".")[0] for m in sys.modules})}))
+"""
+
+NEVER_FOR_THESE = ("jinja2", "matplotlib", "pandas", "dask", "pint")
+CASES = [
+    (["--help"], (*NEVER_FOR_THESE, "scipy", "numpy", "pydantic")),
+    (["deploy", "examples/paper_cc16.toml"], (*NEVER_FOR_THESE, "scipy")),
+    (["deploy", "examples/paper_cc16.toml", "--json"], (*NEVER_FOR_THESE, "scipy")),
+    (["fit", "drop-test", "examples/drop_test.csv"], NEVER_FOR_THESE),
+    (["fit", "drop-test", "examples/drop_test.csv", "--json"], NEVER_FOR_THESE),
+]
+
+
+def loaded(arguments: list[str]) -> tuple[int, list[str]]:
+    """Exit code and top-level modules loaded by ``ecdsim *arguments`` run in process."""
+    done = subprocess.run(
+        [sys.executable, "-c", SCRIPT, *arguments],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    return int(result["code"]), list(result["modules"])
+
+
+@pytest.mark.parametrize(("arguments", "absent"), CASES, ids=[" ".join(c[0]) for c in CASES])
+def test_command_imports_only_what_it_uses(arguments: list[str], absent: tuple[str, ...]) -> None:
+    code, modules = loaded(arguments)
+    assert code == 0
+    assert [m for m in absent if m in modules] == []
+
+
+def test_the_check_sees_what_a_command_uses() -> None:
+    # The fit uses scipy (least squares) and deploy uses numpy and pydantic: were the
+    # listing broken, the absence checks above would pass vacuously.
+    _, fit_modules = loaded(["fit", "drop-test", "examples/drop_test.csv"])
+    _, deploy_modules = loaded(["deploy", "examples/paper_cc16.toml"])
+    assert "scipy" in fit_modules
+    assert {"numpy", "pydantic", "ecdsim"} <= set(deploy_modules)
