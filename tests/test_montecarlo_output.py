@@ -310,3 +310,15 @@ def test_unit_to_unit_tolerances_are_called_out(tmp_path: Path) -> None:
     words = " ".join(result.stdout.split())
     assert f"At -40, 25, 100 degC the spread is {low:.2g} to {high:.2g} times that" in words
     assert "'no' says that different units differ by more than +-0.5 s" in words
+
+
+def test_every_sample_within_shows_the_lower_bound_below_100() -> None:
+    from ecdsim.cli.montecarlo import _lower_bound
+
+    # 20 000 samples all within: the exact (Clopper-Pearson) 95 % interval's lower end is
+    # 0.025^(1/20000) = 0.999816 by hand, and 500 runs all within at least its 500th
+    # power, 0.912. Shown so that it never reads "> 100".
+    low = 0.025 ** (1 / 20000)
+    assert _lower_bound(low) == "99.98"
+    assert _lower_bound(low**500) == "91.2"
+    assert _lower_bound(1e-5) == "0"

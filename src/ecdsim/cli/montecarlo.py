@@ -20,7 +20,7 @@ from ecdsim.cli import display
 from ecdsim.cli.common import UnitsOpt, fail, load_run, units_option
 from ecdsim.cli.display import PlainOpt, WideOpt
 from ecdsim.formatting import format_number
-from ecdsim.units_display import Shown
+from ecdsim.units_display import Shown, UnitSystem
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -177,7 +177,7 @@ def montecarlo(
             f"in {report.elapsed_s:.1f} s",
             highlight=False,
         )
-        summary = _summarize(plan, folder, plot, console)
+        summary = _summarize(plan, folder, plot, console, u.system)
     except RunInterrupted as exc:
         console.print(
             f"interrupted: {exc.chunks_done:,} of {exc.chunks_total:,} chunks are on disk in "
@@ -335,7 +335,9 @@ class _progress:  # noqa: N801 - used as a context manager, like a function
             self.bar.stop()
 
 
-def _summarize(plan: Plan, out: Path, plot: bool, console: Console) -> dict[str, Any]:
+def _summarize(
+    plan: Plan, out: Path, plot: bool, console: Console, units: UnitSystem = "si"
+) -> dict[str, Any]:
     from ecdsim import atomic
     from ecdsim.montecarlo.stats import summarize
     from ecdsim.montecarlo.store import SUMMARY
@@ -346,7 +348,7 @@ def _summarize(plan: Plan, out: Path, plot: bool, console: Console) -> dict[str,
     if plot:
         from ecdsim.montecarlo.plots import write_plots
 
-        written += write_plots(plan, out, summary)
+        written += write_plots(plan, out, summary, units)
     for path in written:
         console.print(f"wrote {path}", highlight=False)
     return summary
@@ -499,6 +501,21 @@ def _chance(probability: float, possible: bool) -> str:
     return f"{100 * probability:.3g}"
 
 
+def _lower_bound(probability: float) -> str:
+    """A lower bound in percent, with the digits that keep it below 100 ("> 99.98").
+
+    >>> [_lower_bound(p) for p in (0.631, 0.99982, 0.0)]
+    ['63.1', '99.98', '0']
+    """
+    if probability < 1e-4:
+        return "0"
+    for digits in range(3, 8):
+        text = f"{100 * probability:.{digits}g}"
+        if text != "100":
+            return text
+    return text
+
+
 def _print_repeatability(console: Console, cases: list[dict[str, Any]], u: Shown) -> None:
     """The repeated-deployment table and what it means, in words (docs/montecarlo.md)."""
     from rich.markup import escape
@@ -541,7 +558,7 @@ def _print_repeatability(console: Console, cases: list[dict[str, Any]], u: Shown
         every = _chance(r["probability_all_within"], possible)
         if r["fraction_within"] >= 1.0:  # every sample within: the lower 95 % bounds
             one, every = (
-                "> " + (f"{100 * low:.3g}" if low >= 1e-4 else "0")
+                "> " + _lower_bound(low)
                 for low in (
                     r["fraction_within_interval95"][0],
                     r["probability_all_within_interval95"][0],
