@@ -102,12 +102,18 @@ def _missing_folder(output: Path) -> Path | None:
 def explore(
     config: Annotated[
         Path | None,
-        typer.Argument(help="TOML configuration to start from (default: the paper example)."),
+        typer.Argument(
+            help="TOML configuration to start from (default: the paper example).",
+            metavar="CONFIG",
+        ),
     ] = None,
     host: Annotated[
-        str, typer.Option("--host", help="Interface to bind; keep 127.0.0.1 (local only).")
+        str,
+        typer.Option(
+            "--host", help="Interface to bind; keep 127.0.0.1 (local only).", metavar="HOST"
+        ),
     ] = "127.0.0.1",
-    port: Annotated[int, typer.Option("--port", help="TCP port.")] = 8765,
+    port: Annotated[int, typer.Option("--port", help="TCP port.", metavar="PORT")] = 8765,
     units: UnitsOpt = None,
 ) -> None:
     """Start the local explorer (web app + JSON API with OpenAPI docs at /docs)."""
