@@ -536,3 +536,23 @@ def test_fit_plots_in_us_units() -> None:
     points = [line.get_xdata() for line in fig.axes[1].get_lines() if len(line.get_xdata()) == 3]
     assert points  # the error bars (and their caps) at the fitted temperatures
     assert sorted(points[0]) == pytest.approx([-40.0, 77.0, 212.0], abs=1e-9)
+
+
+def test_montecarlo_plot_legends_in_us_units() -> None:
+    import numpy as np
+
+    from ecdsim.montecarlo.plots import plot_cdf, plot_histogram
+
+    # Two temperatures, -40 and 100 degC: -40 and 212 degF in the legends.
+    samples = {-40.0: np.array([1.0, 2.0, 3.0]), 100.0: np.array([2.0, 3.0, np.inf])}
+    labels = [
+        t.get_text()
+        for t in plot_histogram(samples, "deployment time [s]", "t", units="us")
+        .axes[0]
+        .get_legend()
+        .get_texts()
+    ]
+    assert labels == ["-40 degF", "212 degF (33 % stall)"]
+    legend = plot_cdf(samples, "deployment time [s]", "t", "us").axes[0].get_legend()
+    labels = [t.get_text() for t in legend.get_texts()]
+    assert labels == ["-40 degF", "212 degF"]

@@ -15,6 +15,7 @@ import numpy as np
 
 from ecdsim._types import FloatArray
 from ecdsim.plotting import temperature_colors
+from ecdsim.units_display import Shown, UnitSystem
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -81,7 +82,11 @@ def density_label(quantity: str) -> str:
 
 
 def plot_histogram(
-    samples: Mapping[float, FloatArray], quantity: str, title: str, bins: int | None = None
+    samples: Mapping[float, FloatArray],
+    quantity: str,
+    title: str,
+    bins: int | None = None,
+    units: UnitSystem = "si",
 ) -> Figure:
     """Histogram of a quantity's finite samples at each temperature [degC].
 
@@ -90,6 +95,7 @@ def plot_histogram(
     one is resolved too; as densities, the areas stay comparable. The legend gives each
     temperature's share of non-finite (stalled) samples, which a histogram cannot show.
     """
+    u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
     for color, (temperature, x) in zip(
@@ -97,9 +103,10 @@ def plot_histogram(
     ):
         finite = x[np.isfinite(x)]
         stalled = 1.0 - finite.size / x.size if x.size else 0.0
-        label = f"{temperature:g} degC" + (f" ({100 * stalled:.2g} % stall)" if stalled else "")
+        at = u.text(temperature, "temperature")
+        label = at + (f" ({100 * stalled:.2g} % stall)" if stalled else "")
         if finite.size == 0:
-            ax.plot([], [], color=color, label=f"{temperature:g} degC: every sample stalls")
+            ax.plot([], [], color=color, label=f"{at}: every sample stalls")
             continue
         low, high = float(finite.min()), float(finite.max())
         if not high > low:  # one value: a bin of 1 % of it (or of 1) around it
@@ -118,8 +125,11 @@ def plot_histogram(
     return fig
 
 
-def plot_cdf(samples: Mapping[float, FloatArray], quantity: str, title: str) -> Figure:
+def plot_cdf(
+    samples: Mapping[float, FloatArray], quantity: str, title: str, units: UnitSystem = "si"
+) -> Figure:
     """Empirical CDF at each temperature; stalled samples keep it below 1 (they never arrive)."""
+    u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
     for color, (temperature, x) in zip(
@@ -133,7 +143,11 @@ def plot_cdf(samples: Mapping[float, FloatArray], quantity: str, title: str) -> 
         levels = (ranks + 1) / n
         keep = np.isfinite(ordered)
         ax.step(
-            ordered[keep], levels[keep], where="post", color=color, label=f"{temperature:g} degC"
+            ordered[keep],
+            levels[keep],
+            where="post",
+            color=color,
+            label=u.text(temperature, "temperature"),
         )
     for p in (0.01, 0.5, 0.99):
         ax.axhline(p, color="grey", linewidth=0.6, linestyle=":")
@@ -147,8 +161,9 @@ def plot_cdf(samples: Mapping[float, FloatArray], quantity: str, title: str) -> 
     return fig
 
 
-def plot_tornado(summary: Mapping[str, Any]) -> Figure:
+def plot_tornado(summary: Mapping[str, Any], units: UnitSystem = "si") -> Figure:
     """Standardised regression coefficients of the deployment time, per input and temperature."""
+    u = Shown(units)
     cases = summary["cases"]
     keys = [t["key"] for t in summary["tolerances"]]
     table = np.zeros((len(cases), len(keys)))
@@ -162,7 +177,9 @@ def plot_tornado(summary: Mapping[str, Any]) -> Figure:
     positions = np.arange(len(keys))
     for i, (color, case) in enumerate(zip(temperature_colors(len(cases)), cases, strict=True)):
         r2 = case["sensitivity"]["r_squared"]
-        label = f"{case['temperature_C']:g} degC" + (f" (R^2 = {r2:.3f})" if r2 is not None else "")
+        label = u.text(case["temperature_C"], "temperature") + (
+            f" (R^2 = {r2:.3f})" if r2 is not None else ""
+        )
         ax.barh(
             positions + (i - (len(cases) - 1) / 2) * height,
             table[i, order],
@@ -181,8 +198,10 @@ def plot_tornado(summary: Mapping[str, Any]) -> Figure:
     return fig
 
 
-def write_plots(plan: Plan, out: Path, summary: Mapping[str, Any]) -> list[Path]:
-    """Write the study's plots as PNG files into ``out/plots``."""
+def write_plots(
+    plan: Plan, out: Path, summary: Mapping[str, Any], units: UnitSystem = "si"
+) -> list[Path]:
+    """Write the study's plots as PNG files into ``out/plots``, temperatures in ``units``."""
     from ecdsim.montecarlo.run import output_column
     from ecdsim.montecarlo.store import ChunkReader
     from ecdsim.plotting import save_figure
@@ -199,9 +218,11 @@ def write_plots(plan: Plan, out: Path, summary: Mapping[str, Any]) -> list[Path]
         plan.system.name, f"end (latch) speed of the samples that arrive, {study}"
     )
     figures = {
-        "time_histogram": plot_histogram(times, "deployment time [s]", time_title),
-        "time_cdf": plot_cdf(times, "deployment time [s]", time_title),
-        "end_speed_histogram": plot_histogram(speeds, "end (latch) speed [rad/s]", speed_title),
-        "tornado": plot_tornado(summary),
+        "time_histogram": plot_histogram(times, "deployment time [s]", time_title, units=units),
+        "time_cdf": plot_cdf(times, "deployment time [s]", time_title, units),
+        "end_speed_histogram": plot_histogram(
+            speeds, "end (latch) speed [rad/s]", speed_title, units=units
+        ),
+        "tornado": plot_tornado(summary, units),
     }
     return [save_figure(figures[name], out / "plots" / f"{name}.png") for name in PLOT_NAMES]
