@@ -7,8 +7,9 @@ the curves of the paper's Fig. 8 (drive torque against speed per temperature wit
 line) and of the laws over temperature with their 95 % bands, and, where the fitted ECD
 can be written, the parameter file of ``ecdsim fit drop-test -o FILE --config CONFIG``
 (``toml``, and ``config`` as the API's JSON form) so that the page can use the fitted
-damper in the model. With no ``config`` in the request the file's ``[load]`` is the
-CLI's marked placeholder.
+damper in the model: the request's config as written, with the fitted ECD in place of
+its ``[damper]`` and ``[gearbox]``. With no ``config`` in the request the file's
+``[load]`` is the CLI's marked placeholder.
 """
 
 from __future__ import annotations
@@ -32,6 +33,9 @@ if TYPE_CHECKING:
 # A dropped file is read whole into the request: the body limit (1,000,000 bytes) bounds
 # it too; this bound is on the decoded text, for a clear message.
 MAX_CSV_CHARS = 900_000
+# The name the request's config goes by in the parameter file's header: the file name
+# under which the page exports the same config (/api/config.toml).
+CONFIG_NAME = "ecdsim-config.toml"
 # Samples of each law over temperature for the plots.
 LAW_POINTS = 61
 _SAFE_NAME = re.compile(r"[^A-Za-z0-9._-]+")
@@ -67,8 +71,9 @@ class FitBody(BaseModel):
     )
     config: dict[str, Any] | None = Field(
         None,
-        description="The configuration whose [load] goes into the parameter file (--config); "
-        "same JSON form as /api/deploy. Without it the load is a marked placeholder.",
+        description="The configuration the fitted ECD goes into (--config): the parameter "
+        "file is it with the fit's [damper] and [gearbox]; same JSON form as /api/deploy. "
+        "Without it the load is a marked placeholder.",
     )
 
 
@@ -149,11 +154,17 @@ def fit_curves(result: DropTestResult) -> dict[str, Any]:
 
 
 def _parameter_file(
-    result: DropTestResult, filename: str, load: Any
+    result: DropTestResult, filename: str, config_text: str | None
 ) -> tuple[str | None, str | None]:
-    """The ``-o`` file's text as the CLI writes it, or why it cannot be written."""
+    """The ``-o`` file's text as the CLI writes it, or why it cannot be written.
+
+    With ``config_text`` (the request's config as TOML, what /api/config.toml exports as
+    :data:`CONFIG_NAME`), as ``--config CONFIG_NAME``: that file with the fitted ECD in
+    place of its ``[damper]`` and ``[gearbox]``; without, the placeholder-load file.
+    """
     from ecdsim.characterize.export import (
         ExportError,
+        fitted_config_text,
         fitted_ecd,
         fitted_parameter_text,
         largest_torque,
@@ -170,12 +181,17 @@ def _parameter_file(
         )
     except ExportError as exc:
         return None, str(exc)
+    lines = provenance(
+        f"ecdsim fit drop-test --noise {result.noise}", filename, result.table.sha256
+    )
+    if config_text is not None:
+        return fitted_config_text(config_text, ecd, lines, CONFIG_NAME), None
     text = fitted_parameter_text(
         ecd,
-        load,
+        None,
         largest_torque([t for f in fits for t in f.torque]),
         f"ECD fitted from drop tests ({filename})",
-        provenance(f"ecdsim fit drop-test --noise {result.noise}", filename, result.table.sha256),
+        lines,
     )
     return text, None
 
@@ -186,11 +202,10 @@ def fit_drop_test_text(body: FitBody) -> dict[str, Any]:
     from ecdsim.config import ConfigError
     from ecdsim.webapp.server import _refuse, load_body
 
-    load = None
+    config_text: str | None = None
     units: str = body.units or "si"
     if body.config is not None:
-        config, _ = load_body(body.config)
-        load = config.spec.load
+        config, config_text = load_body(body.config)
         units = body.units or config.spec.output.units
     name = _SAFE_NAME.sub("_", Path(body.filename).name).strip("._") or "drop_test.csv"
     with tempfile.TemporaryDirectory(prefix="ecdsim-fit-") as folder:
@@ -210,7 +225,7 @@ def fit_drop_test_text(body: FitBody) -> dict[str, Any]:
     document["parameter_file"] = None
     document["plots"] = []
     document["display_units"] = units
-    text, why = _parameter_file(result, name, load)
+    text, why = _parameter_file(result, name, config_text)
     return {
         "fit": document,
         "curves": fit_curves(result),

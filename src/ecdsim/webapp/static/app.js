@@ -698,10 +698,9 @@ async function runFit(file) {
 
 function useFit() {
   if (!state.fit || !state.fit.config) return;
+  // The case sent with the fit, with the fitted ECD in place of [damper] and [gearbox]
+  // (the server's answer, as ecdsim fit drop-test -o FILE --config CASE writes it).
   const config = JSON.parse(JSON.stringify(state.fit.config));
-  // Keep the current case's analysis (temperatures, methods) and output: only the ECD changes.
-  if (state.config && state.config.analysis) config.analysis = JSON.parse(JSON.stringify(state.config.analysis));
-  if (state.config && state.config.output) config.output = JSON.parse(JSON.stringify(state.config.output));
   useConfig(config, `ECD fitted from ${state.fit.fit.source}`);
 }
 
