@@ -297,11 +297,19 @@ class ChunkResult:
 
 def chunk_values(plan: Plan, index: int) -> np.ndarray[Any, np.dtype[np.float64]]:
     """The toleranced quantities' values for chunk ``index``: shape (count, d) [SI]."""
+    return chunk_scores_and_values(plan, index)[1]
+
+
+def chunk_scores_and_values(
+    plan: Plan, index: int
+) -> tuple[np.ndarray[Any, np.dtype[np.float64]], np.ndarray[Any, np.dtype[np.float64]]]:
+    """Chunk ``index``'s uniform scores after the copula, and its values, each (count, d)."""
     start, stop = plan.bounds(index)
-    scores = sampling.uniforms(
+    uniforms = sampling.uniforms(
         plan.sampling, plan.seed, plan.tolerances.dimension, plan.chunk_size, index, stop - start
     )
-    return plan.tolerances.values(scores)
+    scores = plan.tolerances.correlate(uniforms)
+    return scores, plan.tolerances.values_of_scores(scores)
 
 
 def outputs_of(plan: Plan, prediction: Prediction) -> dict[str, np.ndarray[Any, Any]]:
@@ -340,7 +348,7 @@ def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
     from ecdsim.deployment import predict
 
     start, stop = plan.bounds(index)
-    values = chunk_values(plan, index)
+    scores, values = chunk_scores_and_values(plan, index)
     keys = plan.tolerances.keys
     varied = apply.apply(plan.parameters, {key: values[:, j] for j, key in enumerate(keys)})
     temperatures = np.asarray(plan.temperatures, dtype=float)[:, np.newaxis]
@@ -369,7 +377,7 @@ def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
         for (c, t, m), n in sorted(counts.items(), key=lambda item: repr(item[0]))
     ]
     ordered = {name: columns[name] for name in plan.columns}
-    sums = streaming.encode(streaming.chunk_sums(plan, ordered))
+    sums = streaming.encode(streaming.chunk_sums(plan, ordered, scores))
     return ChunkResult(index, ordered, warnings, __version__, sensitivity_sums=sums)
 
 

@@ -135,7 +135,7 @@ class _Inputs:
     """What the sums of a set of samples share across temperatures: their inputs' part."""
 
     mean_x: FloatArray
-    dx: FloatArray
+    dx_rows: FloatArray
     gram: FloatArray
     cells: np.ndarray[Any, Any]
     counts: FloatArray
@@ -143,14 +143,20 @@ class _Inputs:
     @classmethod
     def of(cls, values: FloatArray, labels: np.ndarray[Any, Any], bins: int) -> _Inputs:
         n, d = values.shape
-        mean_x = values.mean(axis=0)
-        dx = values - mean_x
+        rows = np.array(values.T, order="C")  # (d, n), a copy: each input contiguous
+        mean_x = rows.mean(axis=1)
+        rows -= mean_x[:, np.newaxis]
         # One bincount for all inputs: input j's bin m is cell j * bins + m.
         cells = (labels + np.arange(d, dtype=np.intp) * bins).ravel()
         counts = np.bincount(cells, minlength=d * bins).reshape(d, bins).astype(float)
-        # einsum's own loops, not BLAS: a multi-threaded BLAS may split a sum differently
-        # from one process to the next; the sums must be the same bytes whoever computes.
-        return cls(mean_x, dx, np.einsum("ij,ik->jk", dx, dx), cells, counts)
+        # NumPy's own (pairwise) sums, not BLAS: a multi-threaded BLAS may split a sum
+        # differently from one process to the next; the sums must be the same bytes
+        # whoever computes them.
+        gram = np.empty((d, d))
+        for j in range(d):
+            for k in range(j, d):
+                gram[j, k] = gram[k, j] = np.add.reduce(rows[j] * rows[k])
+        return cls(mean_x, rows, gram, cells, counts)
 
 
 def sums_of(
@@ -183,24 +189,32 @@ def sums_of(
         mean_x=inputs.mean_x,
         mean_y=mean_y,
         gram=inputs.gram,
-        cross=np.einsum("ij,i->j", inputs.dx, dy),
-        total=float(np.einsum("i,i->", dy, dy)),
+        cross=np.add.reduce(inputs.dx_rows * dy, axis=1),
+        total=float(np.add.reduce(dy * dy)),
         bin_counts=inputs.counts,
         bin_sums=np.asarray(sums, dtype=float).reshape(d, bins),
     )
 
 
-def chunk_sums(plan: Plan, columns: Mapping[str, np.ndarray[Any, Any]]) -> list[Sums]:
-    """One chunk's sums at each of the plan's temperatures, from its columns."""
+def chunk_sums(
+    plan: Plan, columns: Mapping[str, np.ndarray[Any, Any]], scores: FloatArray | None = None
+) -> list[Sums]:
+    """One chunk's sums at each of the plan's temperatures, from its columns.
+
+    ``scores`` (n, d) are the inputs' uniform scores as sampled (after the copula); the
+    bins are cut on them. Without them (a chunk read back from its file) they are the
+    inputs' distribution functions at the values, the same numbers up to rounding (a
+    sample within 1e-16 of a bin edge could change bin).
+    """
     from ecdsim.montecarlo.run import output_column
     from ecdsim.montecarlo.stats import bin_count, bin_labels
 
     tolerances = plan.tolerances.tolerances
     bins = bin_count(plan.samples)
     values = np.stack([np.asarray(columns[t.key], dtype=float) for t in tolerances], axis=1)
-    labels = np.stack(
-        [bin_labels(t.scores(values[:, j]), bins) for j, t in enumerate(tolerances)], axis=1
-    )
+    if scores is None:
+        scores = np.stack([t.scores(values[:, j]) for j, t in enumerate(tolerances)], axis=1)
+    labels = bin_labels(scores, bins)
     shared = _Inputs.of(values, labels, bins)
     return [
         sums_of(

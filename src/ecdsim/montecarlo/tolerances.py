@@ -205,9 +205,12 @@ class ToleranceSet:
 
     def values(self, u: FloatArray) -> FloatArray:
         """Parameter values of shape (n, d) from uniform scores u of shape (n, d)."""
-        scores = self.correlate(u)
+        return self.values_of_scores(self.correlate(u))
+
+    def values_of_scores(self, scores: FloatArray) -> FloatArray:
+        """Parameter values (n, d) from scores that already carry the correlation."""
         columns = [t.values(scores[:, j]) for j, t in enumerate(self.tolerances)]
-        return np.stack(columns, axis=1) if columns else np.zeros((u.shape[0], 0))
+        return np.stack(columns, axis=1) if columns else np.zeros((scores.shape[0], 0))
 
     def to_dict(self) -> list[dict[str, object]]:
         """JSON-ready description of every tolerance."""
