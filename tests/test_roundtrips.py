@@ -3,7 +3,6 @@ and the test extra's dependencies."""
 
 from __future__ import annotations
 
-import re
 import subprocess
 import tomllib
 from pathlib import Path
@@ -23,13 +22,14 @@ def test_demo_prints_a_config_path_that_exists(
     monkeypatch.chdir(tmp_path)  # anywhere, as after `pip install ecdsim`: no examples/ here
     result = runner.invoke(app, ["demo", "--out", "ecdsim-demo"])
     assert result.exit_code == 0, result.output
-    (line,) = [line for line in result.stdout.splitlines() if line.startswith("(config: ")]
-    path = Path(re.match(r"\(config: ([^;]+);", line).group(1))  # type: ignore[union-attr]
+    lines = result.stdout.splitlines()
+    (line,) = [line for line in lines if line.startswith("config: ")]
+    path = Path(line.removeprefix("config: "))
     assert path == Path("ecdsim-demo") / "paper_cc16.toml"
     assert path.is_file()
     # It is the paper's example, and `ecdsim deploy` runs it as printed.
     assert tomllib.loads(path.read_text()) == tomllib.loads(PAPER_CONFIG.read_text())
-    assert line.endswith(f"edit it, then: ecdsim deploy {path})")
+    assert f"edit it, then: ecdsim deploy {path}" in lines  # each line fits 80 columns
     assert runner.invoke(app, ["deploy", str(path)]).exit_code == 0
 
 

@@ -206,7 +206,8 @@ def demo(
         config = write_text(out / "paper_cc16.toml", text)
     except OSError as exc:
         fail([f"--out {out}: cannot write ({exc.strerror or exc})"])
-    typer.echo(f"{loaded.system.name}\n(config: {config}; edit it, then: ecdsim deploy {config})")
+    # Two lines, so that they fit 80 columns with the default folder (issue 14 item 2).
+    typer.echo(f"{loaded.system.name}\nconfig: {config}\nedit it, then: ecdsim deploy {config}")
     _render(predict_run(loaded), False, out)
 
 
