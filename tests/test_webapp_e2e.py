@@ -369,6 +369,7 @@ def test_degf_config_keeps_its_units(degf_server: str, page: Any) -> None:
     assert "T [degF]" in header
     assert "FECD [lbf*in]" in header
     assert _plot(page, "sweep-plot")["x"] == "temperature [degF]"
+    assert "77 degF, exact" in _plot(page, "angle-plot")["legend"]
     config = page.evaluate("window.ecdsim.sentConfig")
     cases = _api_cases(degf_server, config)
     cells = _cells(page)
@@ -404,6 +405,9 @@ def test_degf_config_keeps_its_units(degf_server: str, page: Any) -> None:
     assert "FECD [N*m]" in page.inner_text("#results thead")
     # The field still holds the config's degF (the inputs are never converted).
     assert page.input_value("#temperatures") == "-40, 77, 300"
+    assert page.inner_text("#temperatures-label") == "temperatures [degF], comma-separated"
+    # Legends in degC, to 6 significant digits: (-40 - 32) * 5 / 9 is exactly -40.
+    assert "-40 degC, exact" in _plot(page, "angle-plot")["legend"]
 
 
 def test_compare_two_designs(server: str, page: Any) -> None:
