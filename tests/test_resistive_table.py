@@ -161,3 +161,30 @@ def test_bad_tables_are_refused_by_name(table: str, message: str, tmp_path: Path
     result = CliRunner().invoke(app, ["deploy", str(path)])
     assert result.exit_code == 2
     assert "Traceback" not in result.output
+
+
+@pytest.mark.parametrize(
+    "name", ["paper_cc16.toml", "paper_cc16_dynamic.toml", "paper_cc16_tolerances.toml"]
+)
+def test_a_zero_table_changes_nothing_in_the_shipped_examples(name: str) -> None:
+    # Omitting the key and giving an all-zero table are the same physics: every method's
+    # times and speeds agree, so adding the key cannot have moved today's results.
+    text = (EXAMPLE.parent / name).read_text()
+    travel_line = next(line for line in text.splitlines() if line.startswith("travel ="))
+    zero = 'resistive_table = [["0 rad", "0 N*m"], ["1 rad", "0 N*m"], ["10 rad", "0 N*m"]]'
+    plain = parse_config(text)
+    zeroed = parse_config(text.replace(travel_line, f"{travel_line}\n{zero}", 1))
+    dynamics = plain.spec.dynamics()
+    methods = ("paper", "exact", "dynamic") if dynamics is not None else ("paper", "exact")
+    temps = np.array(plain.temperatures)
+    a = predict(plain.system, temps, methods, dynamics=dynamics)
+    b = predict(zeroed.system, temps, methods, dynamics=zeroed.spec.dynamics())
+    for method in methods:
+        for field in ("deployment_time", "end_speed"):
+            # 1e-12: the zero table only adds breakpoints (pieces of the same line)
+            np.testing.assert_allclose(
+                getattr(b.solutions[method], field),
+                getattr(a.solutions[method], field),
+                rtol=1e-12,
+                err_msg=f"{name} {method} {field}",
+            )
