@@ -151,8 +151,12 @@ def test_kernels_against_hand_calculations(kernel: str) -> None:
 
 def test_choice_by_batch_size_and_environment(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv(exact_kernel.ENVIRONMENT, raising=False)
+    monkeypatch.delenv("ECDSIM_NUMBA", raising=False)
     assert exact_kernel.choose(3) == "numpy"
     assert exact_kernel.choose(exact_kernel.NUMBA_MIN_CASES) == "numba"
+    monkeypatch.setenv("ECDSIM_NUMBA", "0")  # the switch the dynamic method obeys too
+    assert exact_kernel.choose(exact_kernel.NUMBA_MIN_CASES) == "numpy"
+    monkeypatch.delenv("ECDSIM_NUMBA")
     monkeypatch.setenv(exact_kernel.ENVIRONMENT, "reference")
     assert exact_kernel.choose(10**7) == "reference"
     monkeypatch.setenv(exact_kernel.ENVIRONMENT, "fortran")
@@ -183,6 +187,7 @@ def test_a_small_prediction_does_not_import_numba() -> None:
 def test_large_batch_uses_numba_and_matches(monkeypatch: pytest.MonkeyPatch) -> None:
     """The automatic choice for a Monte Carlo-sized batch runs the compiled kernel."""
     monkeypatch.delenv(exact_kernel.ENVIRONMENT, raising=False)
+    monkeypatch.delenv("ECDSIM_NUMBA", raising=False)
     rng = np.random.default_rng(11)
     count = exact_kernel.NUMBA_MIN_CASES
     problem = QuasiStaticProblem(

@@ -24,7 +24,8 @@ reference implementation, so that its edge-case semantics exist in one place onl
 
 :func:`choose` picks the kernel: ``numba`` when it is importable and the batch holds at
 least :data:`NUMBA_MIN_CASES` cases (importing numba costs about 0.3 s, which only a large
-batch repays, so that ``ecdsim deploy`` never imports it), ``numpy`` otherwise. The
+batch repays, so that ``ecdsim deploy`` never imports it), ``numpy`` otherwise or when
+``ECDSIM_NUMBA=0`` (the switch the dynamic method's compiled integrator obeys too). The
 environment variable ``ECDSIM_EXACT_KERNEL`` (``reference``, ``numpy``, ``numba``) forces
 one, for benchmarks and tests.
 """
@@ -244,6 +245,8 @@ def choose(cases: int) -> str:
         if forced not in KERNELS:
             raise ValueError(f"{ENVIRONMENT}={forced!r}: expected one of {list(KERNELS)}")
         return forced
+    if os.environ.get("ECDSIM_NUMBA", "").strip() == "0":  # as the dynamic method's switch
+        return "numpy"
     if cases >= NUMBA_MIN_CASES and numba_available():
         return "numba"
     return "numpy"
