@@ -242,3 +242,11 @@ def test_a_damper_fit_keeps_the_users_file(tmp_path: Path) -> None:
     assert sorted(cases) == pytest.approx([-40.0, 25.0, 100.0], abs=1e-12)
     for t, case in cases.items():
         assert case["damping_rate_Nms_per_rad"] == pytest.approx(TRUTH.damping(t), rel=1e-9)
+
+
+def test_a_user_file_the_fit_cannot_keep_is_an_export_error() -> None:
+    estimate = Estimate(3.5, 0.01, (3.48, 3.52))
+    with pytest.raises(ExportError, match="no \\[load\\]"):
+        spring_config_text('title = "x"\n', estimate, estimate, ["test"], "x.toml")
+    with pytest.raises(ExportError, match="cannot keep the --config file's text"):
+        spring_config_text("[load\n", estimate, estimate, ["test"], "x.toml")

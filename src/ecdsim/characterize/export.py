@@ -516,6 +516,17 @@ def _with_header(header: Sequence[str], body: str) -> str:
     return "\n".join(lines) + "\n\n" + body.lstrip("\n")
 
 
+def _parse_user(text: str) -> Any:
+    """The user's configuration as a tomlkit document; ExportError if tomlkit cannot."""
+    import tomlkit
+    from tomlkit.exceptions import TOMLKitError
+
+    try:
+        return tomlkit.parse(text)
+    except TOMLKitError as exc:
+        raise ExportError(f"cannot keep the --config file's text ({exc})") from None
+
+
 def fitted_config_text(
     user_text: str, ecd: FittedEcd, provenance: Sequence[str], config_name: str
 ) -> str:
@@ -529,7 +540,7 @@ def fitted_config_text(
     """
     import tomlkit
 
-    document = tomlkit.parse(user_text)
+    document = _parse_user(user_text)
     sections = dict(ecd_sections(ecd))
     for name in ("damper", "gearbox"):
         _replace_table(document, name, sections[name])
@@ -559,8 +570,10 @@ def spring_config_text(
     """
     import tomlkit
 
-    document = tomlkit.parse(user_text)
-    load = document["load"]
+    document = _parse_user(user_text)
+    load = document.get("load")
+    if load is None:
+        raise ExportError("the --config file has no [load] to write the spring torques into")
     for key, estimate in (("start_torque", start_torque), ("end_torque", end_torque)):
         text = fitted_quantity(estimate.value, "N*m", _half_width(estimate))
         item = tomlkit.parse(f"v = {text}\n")["v"]

@@ -110,6 +110,16 @@ def _parameter(u: Shown, key: str) -> tuple[str, str]:
     return u.head(name, kind), kind
 
 
+def _export(output: Path, build: Callable[[], str]) -> str:
+    """The -o file's text from ``build``; an ``error:`` line where it cannot be written."""
+    from ecdsim.characterize.export import ExportError
+
+    try:
+        return build()
+    except ExportError as exc:
+        fail([f"-o {output}: {exc}"])
+
+
 def _config_text(path: Path) -> str:
     """The --config file's text, to be written back with the fit (read once loaded)."""
     try:
@@ -331,7 +341,9 @@ def drop_test(
         )
         if config is not None:
             # The user's file as written, with the fitted ECD (comments, title, units kept).
-            text = fitted_config_text(_config_text(config), ecd, lines, config.name)
+            text = _export(
+                output, lambda: fitted_config_text(_config_text(config), ecd, lines, config.name)
+            )
         else:
             text = fitted_parameter_text(
                 ecd,
@@ -524,12 +536,12 @@ def trace(
     source = provenance("ecdsim fit trace", result.table.source, result.table.sha256)
     text: str | None = None
     if output is not None and result.spring is not None:
-        text = spring_config_text(
-            _config_text(config),
-            result.spring.start_torque,
-            result.spring.end_torque,
-            source,
-            config.name,
+        spring = result.spring
+        text = _export(
+            output,
+            lambda: spring_config_text(
+                _config_text(config), spring.start_torque, spring.end_torque, source, config.name
+            ),
         )
     elif output is not None:
         fits = result.fits
@@ -541,7 +553,9 @@ def trace(
             result.laws,
         )
         warnings.extend(ecd.warnings)
-        text = fitted_config_text(_config_text(config), ecd, source, config.name)
+        text = _export(
+            output, lambda: fitted_config_text(_config_text(config), ecd, source, config.name)
+        )
 
     def plotter(folder: Path) -> list[Path]:
         from ecdsim.characterize.plots import write_trace_plots
