@@ -55,3 +55,30 @@ def test_make_test_installs_the_browser_and_ci_only_calls_make_test() -> None:
     ]
     assert ci[-1] == "make test"
     assert not any("apt-get" in line or "pip install" in line for line in ci)
+
+
+AXE_SCRIPT = ROOT / "scripts" / "ensure-axe.sh"
+
+
+def test_missing_npm_without_apt_stops_with_one_line(tmp_path: Path) -> None:
+    # axe-core absent (an empty prefix), no npm and no apt-get on the PATH: one line
+    # naming Debian's npm package, exit 2, before anything is installed.
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    bash = shutil.which("bash")
+    assert bash is not None
+    (bin_dir / "bash").symlink_to(bash)
+    env = {
+        **os.environ,
+        "PATH": str(bin_dir),
+        "ECDSIM_AXE_PREFIX": str(tmp_path / "axe"),
+        "ECDSIM_NPM": "npm-that-is-not-there",
+    }
+    result = subprocess.run(
+        [bash, str(AXE_SCRIPT)], env=env, capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert "'npm'" in lines[0]
+    assert not (tmp_path / "axe").exists()
