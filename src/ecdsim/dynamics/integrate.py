@@ -3,13 +3,15 @@
 The segment's equations, in its forward frame with the state ``y = [x, u, s, E]``
 (displacement, speed, the damping law's log factor standing for the damper temperature,
 damper dissipation), are those of :mod:`ecdsim.dynamics.equations`. They are integrated,
-with the analytic Jacobian, either for the whole batch at once by the vectorised
-Rosenbrock method of :mod:`ecdsim.dynamics.rosenbrock` (``"RODAS4"``, the default) or
-case by case with scipy's ``solve_ivp`` (stiff methods ``"Radau"``, ``"BDF"`` or
-``"LSODA"``), until the first event: the segment's length is reached, the speed falls to
-zero, the speed falls below ``1e-9`` of its scale while the static equilibrium lies
-ahead (asymptotic approach to rest, "creep"), or the time cap. The damper cannot heat
-beyond its damping law's zero (Eq. 1's ``BD_T = 0``): the state s keeps it out of reach.
+with the analytic Jacobian, either by the Rosenbrock method RODAS4 (``"RODAS4"``, the
+default: compiled per segment by :mod:`ecdsim.dynamics.compiled` when numba is
+installed, else the whole batch at once in NumPy by :mod:`ecdsim.dynamics.rosenbrock`;
+see :func:`compiled_kernel`) or case by case with scipy's ``solve_ivp`` (stiff methods
+``"Radau"``, ``"BDF"`` or ``"LSODA"``), until the first event: the segment's length is
+reached, the speed falls to zero, the speed falls below ``1e-9`` of its scale while the
+static equilibrium lies ahead (asymptotic approach to rest, "creep"), or the time cap.
+The damper cannot heat beyond its damping law's zero (Eq. 1's ``BD_T = 0``): the state s
+keeps it out of reach.
 """
 
 from __future__ import annotations

@@ -6,6 +6,11 @@ damping, friction direction and spring slope), advances it to its first event (c
 form for linear segments, :mod:`ecdsim.dynamics.integrate` for roll-off and heating) and
 applies the events: lost motion closing, spring breakpoints, end of travel (latch or
 rebound), zero speed, stop time, asymptotic rest. See ``docs/dynamics.md``.
+
+One pass over the running cases is :func:`_advance_cases`: event finding
+(:func:`_segments`, with the spring piece found by walking from the previous one, O(1)
+per event), stepping (:func:`_step_closed_form`, :func:`_step_integrated`) and
+bookkeeping (:func:`_account`, :func:`_apply_events`, :func:`_impact`).
 """
 
 from __future__ import annotations
