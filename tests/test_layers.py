@@ -46,6 +46,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("report", ("ecdsim.report",)),
     ("explorer", ("ecdsim.webapp",)),
     ("notebook", ("ecdsim.api",)),
+    ("export", ("ecdsim.fmu",)),
     ("command line", ("ecdsim.cli",)),
     ("entry points", ("ecdsim", "ecdsim.__main__")),
 ]

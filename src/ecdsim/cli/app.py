@@ -28,6 +28,8 @@ from ecdsim.cli.common import (
 )
 from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, WideOpt
 from ecdsim.cli.fit import fit_app
+from ecdsim.cli.fmu import EPILOG as FMU_EPILOG
+from ecdsim.cli.fmu import export_fmu
 from ecdsim.cli.montecarlo import EPILOG as MONTECARLO_EPILOG
 from ecdsim.cli.montecarlo import montecarlo
 from ecdsim.cli.report import APP_EPILOG, REPORT_EPILOG, explore, report
@@ -218,6 +220,7 @@ app.command(cls=HelpCommand, epilog=SIZE_EPILOG)(size)
 app.command(cls=HelpCommand, name="compare-fluid", epilog=FLUID_EPILOG)(compare_fluid)
 app.command(cls=HelpCommand, epilog=MONTECARLO_EPILOG)(montecarlo)
 app.command(cls=HelpCommand, epilog=SWEEP_EPILOG)(sweep)
+app.command(cls=HelpCommand, name="export-fmu", epilog=FMU_EPILOG)(export_fmu)
 app.command(cls=HelpCommand, epilog=REPORT_EPILOG)(report)
 app.command(cls=HelpCommand, name="app", epilog=APP_EPILOG)(explore)
 

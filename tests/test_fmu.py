@@ -1,0 +1,205 @@
+"""FMU export (issue 17 item 1): the model by hand, and the FMUs run by FMPy.
+
+* the damper model against the paper's Eq. 1-4 by hand (tests/hand.py) and its heat
+  balance against the closed-form adiabatic solution;
+* the damper FMU driven by FMPy with the speed history of an ecdsim dynamic run
+  reproduces the run's damper torque and damper temperature (to 1e-6);
+* the deployment FMU reproduces the dynamic method's angle and speed and latches at its
+  deployment time.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import ecdsim
+from ecdsim.cli.app import app
+from ecdsim.fmu.model import DamperModel
+from tests import hand
+
+ROOT = Path(__file__).resolve().parent.parent
+PAPER = ROOT / "examples" / "paper_cc16.toml"
+DYNAMIC = ROOT / "examples" / "paper_cc16_dynamic.toml"
+BD, C_T, N = 1.3e-4, -0.004, 380.0  # the paper's damper (section 6)
+
+
+def heated_config(folder: Path, heat_capacity: str = "5 J/K") -> Path:
+    """The paper's dynamic example with a small lumped damper (rises about 0.34 K)."""
+    text = DYNAMIC.read_text(encoding="utf-8").replace(
+        "[gearbox]",
+        f'[damper.thermal]\nheat_capacity = "{heat_capacity}"\n'
+        'thermal_resistance = "20 K/W"\n\n[gearbox]',
+        1,
+    )
+    path = folder / "heated.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_damper_model_is_the_papers_ecd_by_hand() -> None:
+    model = DamperModel.from_config(ecdsim.load(PAPER), 25.0)
+    for t in (-40.0, 25.0, 100.0):
+        # BECD_T * u and FECD_T of Eq. 1-4 (tests/hand.py), the same sums in another
+        # order: 1e-12.
+        assert model.damper_torque(0.1, t) == pytest.approx(hand.becd(t) * 0.1, rel=1e-12)
+        assert model.friction_torque(0.1, t) == pytest.approx(hand.fecd(t), rel=1e-12)
+        assert model.friction_torque(-0.1, t) == pytest.approx(-hand.fecd(t), rel=1e-12)
+    assert model.friction_torque(0.0, 25.0) == 0.0
+    # No [damper.thermal]: the damper is at the ambient temperature.
+    model.advance(0.2, 0.0, 40.0, 1.0)
+    assert model.temperature == 40.0
+
+
+def test_heat_balance_matches_the_adiabatic_closed_form(tmp_path: Path) -> None:
+    # The [damper.thermal] table replaced by one without a resistance: adiabatic.
+    thermal = {"heat_capacity": "0.05 J/K"}
+    config = ecdsim.load(heated_config(tmp_path), overrides={"damper.thermal": thermal})
+    model = DamperModel.from_config(config, 25.0)
+    u = 0.1  # slow shaft [rad/s]
+    # Adiabatic, constant speed: C dT/dt = BD f(T) (N u)^2 with f = 1 + c (T - 25), so
+    # f(t) = exp(c k t), k = BD (N u)^2 / C, and T = 25 + (f - 1) / c.
+    k = BD * (N * u) ** 2 / 0.05
+    for _ in range(10):
+        model.advance(u, 0.0, 25.0, 1.0)
+    expected = 25.0 + (math.exp(C_T * k * 10.0) - 1.0) / C_T
+    assert expected - 25.0 > 30.0  # a real rise, so that the factor matters
+    # Runge-Kutta 4 with 1 ms steps on a smooth exponential: far below 1e-9 K.
+    assert model.temperature == pytest.approx(expected, abs=1e-9)
+
+
+def _run(kind: str, fmu: Path, folder: Path, **inputs: Any) -> Any:
+    """Simulate ``fmu`` with FMPy in a child process (tests/fmu_driver.py says why)."""
+    pytest.importorskip("pythonfmu")
+    pytest.importorskip("fmpy")
+    source, target = folder / f"{kind}-in.npz", folder / f"{kind}-out.npz"
+    start = inputs.pop("start", {})
+    np.savez(
+        source,
+        start_names=np.array(list(start), dtype=str),
+        start_values=np.array(list(start.values()), dtype=float),
+        **inputs,
+    )
+    subprocess.run(
+        [sys.executable, "-m", "tests.fmu_driver", kind, str(fmu), str(source), str(target)],
+        cwd=ROOT,
+        check=True,
+        timeout=600,
+    )
+    with np.load(target) as data:
+        return {name: data[name] for name in data.files}
+
+
+@pytest.mark.slow
+def test_damper_fmu_reproduces_a_dynamic_run(tmp_path: Path) -> None:
+    pytest.importorskip("pythonfmu")
+    from ecdsim.fmu import build_fmu
+    from ecdsim.plotting_dynamic import dynamic_result
+
+    config = heated_config(tmp_path)
+    fmu = build_fmu(config, tmp_path / "damper.fmu")
+    ambient = 25.0
+    run = ecdsim.deploy(config, temperatures=ambient, methods="dynamic")
+    result = dynamic_result(run.prediction)
+    assert result is not None
+    latch = run.deployment_time("dynamic")[ambient]
+    step = 2e-3
+    times = np.arange(0.0, latch, step)
+    series = result.sample(times)
+    speed = series.speed[:, 0]
+    heat = series.damper_temperature[:, 0]
+    torque = -series.damping_torque[:, 0]  # the run's, opposing the motion
+    assert heat[-1] - ambient > 0.3  # the damper heats: the check has something to see
+
+    got = _run(
+        "damper", fmu, tmp_path, time=times, speed=speed, start={"ambient_temperature": ambient}
+    )
+    # 1e-6: the FMU integrates the heat balance with the speed extrapolated over each
+    # 2 ms step from the last two inputs (error ~ step^2, about 4e-7 K here); the run's
+    # own tolerance (rtol 1e-8) is far below.
+    assert np.max(np.abs(got["damper_temperature"] - heat)) < 1e-6
+    moving = np.abs(torque) > 0.0
+    assert np.max(np.abs(got["damper_torque"][moving] / torque[moving] - 1.0)) < 1e-6
+    # The same torque by hand from the run's speed and damper temperature (Eq. 1, 3):
+    # N^2 (BD (1 + c (T_d - 25)) + BG) u, BG = 0.26 BD.
+    by_hand = N**2 * (BD * (1.0 + C_T * (heat - 25.0)) + 0.26 * BD) * speed
+    assert np.max(np.abs(got["damper_torque"][moving] / by_hand[moving] - 1.0)) < 1e-6
+    # Friction: the ECD's FECD(25 degC) (hand.fecd); the run's friction also holds FS_T.
+    friction = got["friction_torque"][moving]
+    assert friction == pytest.approx(np.full(friction.size, hand.fecd(25.0)), rel=1e-12)
+    assert hand.fecd(25.0) + hand.fs(25.0) == pytest.approx(
+        -float(series.friction_torque[5, 0]), rel=1e-12
+    )
+
+
+@pytest.mark.slow
+def test_damper_fmu_parameters_override_the_config(tmp_path: Path) -> None:
+    pytest.importorskip("pythonfmu")
+    from ecdsim.fmu import build_fmu
+
+    fmu = build_fmu(PAPER, tmp_path / "damper.fmu")
+    got = _run(
+        "damper",
+        fmu,
+        tmp_path,
+        time=np.array([0.0]),
+        speed=np.array([0.05]),
+        start={"gear_ratio": 400.0, "ambient_temperature": -40.0},
+    )
+    # Eq. 1 and 3 at -40 degC with N = 400, by hand.
+    becd = (BD * (1.0 + C_T * (-40.0 - 25.0)) + 0.26 * BD) * 400.0**2
+    assert float(got["damper_torque"][0]) == pytest.approx(becd * 0.05, rel=1e-12)
+    assert float(got["damper_temperature"][0]) == -40.0
+
+
+@pytest.mark.slow
+def test_deployment_fmu_follows_the_dynamic_method(tmp_path: Path) -> None:
+    pytest.importorskip("pythonfmu")
+    code = CliRunner().invoke(
+        app, ["export-fmu", str(DYNAMIC), "--deployment", "-o", str(tmp_path / "d.fmu")]
+    )
+    assert code.exit_code == 0, code.output
+    out = _run(
+        "deployment",
+        tmp_path / "d.fmu",
+        tmp_path,
+        stop_time=35.0,
+        output_interval=0.25,
+        start={"ambient_temperature": 100.0},
+    )
+    run = ecdsim.deploy(DYNAMIC, temperatures=100.0, methods="dynamic")
+    latch = run.deployment_time("dynamic")[100.0]
+    before = out["time"] < latch
+    trajectory = run.prediction.trajectory("dynamic", out["time"][before])
+    # The FMU evaluates the same solution at the same times: equal to rounding.
+    assert out["angle"][before] == pytest.approx(np.ravel(trajectory.angle), abs=1e-12)
+    assert out["speed"][before] == pytest.approx(np.ravel(trajectory.speed), abs=1e-12)
+    assert not out["latched"][before].any()
+    assert out["latched"][~before].all()
+    assert out["angle"][-1] == pytest.approx(1.57, abs=1e-9)  # the travel
+    assert out["speed"][-1] == 0.0
+
+
+def test_export_fmu_errors_are_one_line_exit_2(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    runner = CliRunner()
+    result = runner.invoke(app, ["export-fmu", str(PAPER), "--deployment", "-o", "x.fmu"])
+    assert result.exit_code == 2
+    assert result.stderr.count("\n") == 1
+    assert "load.inertia: missing" in result.stderr
+    result = runner.invoke(app, ["export-fmu", str(PAPER), "-o", str(tmp_path / "x.zip")])
+    assert result.exit_code == 2
+    assert "--out" in result.stderr
+    monkeypatch.setitem(sys.modules, "pythonfmu.builder", None)
+    result = runner.invoke(app, ["export-fmu", str(PAPER), "-o", str(tmp_path / "x.fmu")])
+    assert result.exit_code == 2
+    assert "pip install 'ecdsim[fmu]'" in result.stderr
+    assert not (tmp_path / "x.fmu").exists()
