@@ -440,3 +440,14 @@ def test_help_has_no_type_noise() -> None:
     assert re.search(r"--temperature\s+-T\s+TEMP\s", deploy)
     assert re.search(r"--method\s+-m\s+METHOD\s", deploy)
     assert re.search(r"--fail-on\s+WHAT\s", deploy)
+
+
+def test_report_says_cannot_start(tmp_path: Path) -> None:
+    # The report's deployment table words a stall as deploy's table does: at -40 degC
+    # the drive 1.2 N*m < 1.343 N*m friction (by hand, FRICTION_M40) for every method.
+    out = tmp_path / "r.html"
+    result = _run(["report", str(_no_start(tmp_path)), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    html = out.read_text(encoding="utf-8")
+    assert html.count("<td>cannot start</td>") == 3  # paper, exact, dynamic at -40 degC
+    assert "<td>at 0 rad</td>" not in html

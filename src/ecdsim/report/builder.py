@@ -221,12 +221,22 @@ def _deployment_rows(document: dict[str, Any], shown: Shown | None = None) -> li
                     "cells": cells,
                     "difference": fmt(diff),
                     "relative": "-" if rel is None else f"{100.0 * rel:+.3f}",
-                    "stall": (
-                        f"at {result['stall_angle_rad']:.4g} rad" if result["stalled"] else "no"
-                    ),
+                    "stall": _stall_cell(method, result),
                 }
             )
     return rows
+
+
+def _stall_cell(method: str, result: dict[str, Any]) -> str:
+    """The stall cell as ``ecdsim deploy``'s table says it: "no", "cannot start" or
+    "at X rad"; for the dynamic method also a stop for good after a rebound (stuck)."""
+    if method == "dynamic" and result.get("stuck"):
+        angle = result["stuck_angle_rad"]
+    elif result["stalled"]:
+        angle = result["stall_angle_rad"]
+    else:
+        return "no"
+    return "cannot start" if angle == 0.0 else f"at {angle:.4g} rad"
 
 
 # What each requirement check measures, in words, for the report's requirements table.
