@@ -203,6 +203,8 @@ def test_help_and_version(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> No
         "size",
         "compare-fluid",
         "montecarlo",
+        "sweep",
+        "export-fmu",
         "report",
         "app",
         "fit",
