@@ -203,3 +203,17 @@ def test_export_fmu_errors_are_one_line_exit_2(
     assert result.exit_code == 2
     assert "pip install 'ecdsim[fmu]'" in result.stderr
     assert not (tmp_path / "x.fmu").exists()
+
+
+@pytest.mark.slow
+def test_help_lists_the_options_and_its_example_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pytest.importorskip("pythonfmu")
+    from tests.helptext import assert_options, read_help, run_example
+
+    runner = CliRunner()
+    screen = read_help(runner, app, ["export-fmu"])
+    assert_options(screen, {"--out": "-o", "--deployment": None, "--help": None})
+    run_example(runner, app, screen, tmp_path, monkeypatch)
+    assert (tmp_path / "damper.fmu").read_bytes().startswith(b"PK")  # a zip archive

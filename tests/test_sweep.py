@@ -148,3 +148,30 @@ def test_plot(tmp_path: Path) -> None:
     )  # fmt: skip
     assert code == 0, stderr
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_help_lists_the_options_and_its_example_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tests.helptext import assert_options, read_help, run_example
+
+    runner = CliRunner()
+    screen = read_help(runner, app, ["sweep"])
+    assert_options(
+        screen,
+        {
+            "--vary": None,
+            "--out": "-o",
+            "--latin": None,
+            "--seed": None,
+            "--temperature": "-T",
+            "--method": "-m",
+            "--plot": None,
+            "--output": None,
+            "--help": None,
+        },
+    )
+    run_example(runner, app, screen, tmp_path, monkeypatch)
+    rows = list(csv.DictReader(io.StringIO((tmp_path / "sweep.csv").read_text("utf-8"))))
+    assert len(rows) == 21 * 3 * 3 * 2  # ratios x torques x temperatures x methods
+    assert (tmp_path / "sweep.png").read_bytes().startswith(b"\x89PNG")
