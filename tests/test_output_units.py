@@ -556,3 +556,20 @@ def test_montecarlo_plot_legends_in_us_units() -> None:
     legend = plot_cdf(samples, "deployment time [s]", "t", "us").axes[0].get_legend()
     labels = [t.get_text() for t in legend.get_texts()]
     assert labels == ["-40 degF", "212 degF"]
+
+
+def test_deploy_warnings_in_us_units(tmp_path: Any) -> None:
+    # The paper example with end torque 1.2 N*m stalls at -40 degC (1.481 rad, docs/json.md);
+    # in US units the warning names -40 degF; --json keeps the SI sentence.
+    path = tmp_path / "stall.toml"
+    path.write_text(_PAPER_TEXT.replace('end_torque = "1.58 N*m"', 'end_torque = "1.2 N*m"'))
+    result = _run("deploy", str(path), "--units", "us")
+    assert result.exit_code == 0, result.output
+    stall_lines = [line for line in result.stderr.splitlines() if "stalls at 1.481 rad" in line]
+    assert stall_lines
+    assert all("at -40 degF" in line for line in stall_lines)
+    result = _run("deploy", str(path), "--units", "us", "--json")
+    import json
+
+    messages = [w["message"] for w in json.loads(result.stdout)["warnings"]]
+    assert any("at -40 degC" in m for m in messages)

@@ -108,7 +108,7 @@ def _render(
         typer.echo(render.to_json(prediction, units))
     else:
         render.print_tables(prediction, units)
-    echo_warnings(prediction)
+    echo_warnings(prediction, units)
     for path in written:
         typer.echo(f"wrote {path}", err=as_json)
 
