@@ -168,8 +168,12 @@ def test_fit_matches_the_cli() -> None:
             row["damping_rate_ci95_high_Nms_per_rad"],
         ] == pytest.approx(t["damping_rate_ci95"], 1e-12)
     assert len(result.plot()) == 3
-    with pytest.raises(ConfigError, match="noise"):
+    with pytest.raises(ConfigError, match="noise: unknown noise model 'loud'"):
         ecdsim.fit(csv, noise="loud")
+    with pytest.raises(ConfigError, match="reference_temperature: expected one"):
+        ecdsim.fit(csv, reference_temperature=[20, 30])
+    with pytest.raises(ConfigError, match="not found"):
+        ecdsim.fit(ROOT / "no-such.csv")
 
 
 def test_size_matches_the_cli() -> None:

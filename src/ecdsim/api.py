@@ -424,16 +424,16 @@ def fit(
     ``reference_temperature``: T_ref of the damping laws (a number in degC, a string or a
     pint quantity); ``noise``: where the scatter lies (docs/characterize.md).
     """
-    from ecdsim.characterize.droptest import fit_drop_test
+    from ecdsim.characterize.droptest import fit_drop_test, noise_model
 
-    (reference,) = _temperatures(reference_temperature)
+    temps = _temperatures(reference_temperature)
+    if len(temps) != 1:
+        raise ConfigError([f"reference_temperature: expected one temperature, got {len(temps)}"])
     try:
-        result = fit_drop_test(Path(csv_path), reference, noise=noise)
-    except ConfigError:
-        raise
+        noise_model(noise)
     except ValueError as exc:
-        raise ConfigError([f"noise = {noise!r}: {exc}"]) from None
-    return FitResults(result)
+        raise ConfigError([f"noise: {exc}"]) from None
+    return FitResults(fit_drop_test(Path(csv_path), temps[0], noise=noise))
 
 
 # ----------------------------------------------------------------------------- size
