@@ -464,6 +464,8 @@ def test_size_and_compare_fluid_in_us_units(tmp_path: Any) -> None:
     assert "-40, 77, 212" in result.stdout
     assert "35.403 lbf*in" in result.stdout
     assert "[lbm]" in result.stdout  # the mass column
+    assert "ECD input torque <= 35.4 lbf*in" in result.stdout  # 4 N*m, 4 digits
+    assert "N*m" not in result.stdout
     assert "[lbf*in at the ECD input]" in result.stdout
     document = json.loads(
         _run("size", sizing, "--catalog", catalogue, "--units", "us", "--json").stdout

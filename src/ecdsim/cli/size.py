@@ -15,7 +15,7 @@ import typer
 from ecdsim.cli import display, failon
 from ecdsim.cli.common import UnitsOpt, units_option
 from ecdsim.cli.display import PlainOpt, WideOpt
-from ecdsim.units_display import Shown
+from ecdsim.units_display import Shown, convert_text
 
 if TYPE_CHECKING:
     from ecdsim.config import Config
@@ -219,7 +219,7 @@ def size(
         if chosen:
             tables.append(report.checks_table(chosen[0], u))
             tables.append(report.torque_margin_table(chosen[0], u))
-            notes[:0] = report.margin_definitions(chosen[0])
+            notes[:0] = report.margin_definitions(chosen[0], u)
         if intervals is not None:
             tables.append(report.intervals_table(intervals))
         _print(tables, notes, lead=report.recommendation(result, u))
@@ -263,7 +263,7 @@ def _size_failures(
             reasons.append(f"stall: {label} stalls at {where}")
     if "requirements" in conditions:
         reasons += [
-            f"requirements: {label}: {check.label} missed "
+            f"requirements: {label}: {convert_text(check.label, u.system)} missed "
             f"(worst at {u.text(check.temperature_C, 'temperature')})"
             for check in result.checks
             if not check.passed

@@ -14,7 +14,7 @@ from ecdsim.formatting import format_number
 from ecdsim.sizing.fluid import DeadbandDeployment, FluidComparison
 from ecdsim.sizing.ratio import RatioIntervals
 from ecdsim.sizing.search import CandidateResult, SearchResult
-from ecdsim.units_display import KIND_BY_SI_UNIT, Shown
+from ecdsim.units_display import KIND_BY_SI_UNIT, Shown, convert_text
 
 SI = Shown()
 
@@ -142,7 +142,7 @@ def checks_table(candidate: CandidateResult, u: Shown = SI) -> Table:
         margins = o.margins or tuple(o.margin if t == o.temperature_C else math.nan for t in temps)
         rows.append(
             [
-                o.label,
+                convert_text(o.label, u.system),
                 o.result,
                 *("-" if math.isnan(m) else percent(m) for m in margins),
                 "-" if o.cannot_start else _quantity(o.value, o.unit, u),
@@ -157,12 +157,12 @@ def checks_table(candidate: CandidateResult, u: Shown = SI) -> Table:
     return title, [*headers, "value (worst)", u.head("at T", "temperature")], rows
 
 
-def margin_definitions(candidate: CandidateResult) -> list[str]:
+def margin_definitions(candidate: CandidateResult, u: Shown = SI) -> list[str]:
     """Lines defining the margins of ``candidate``'s checks (>= 0 is met)."""
     return [
         "margin, >= 0 where met (the smallest over the temperatures decides):",
         *(
-            f"  {o.label}: {MARGIN_DEFINITIONS[o.name]}"
+            f"  {convert_text(o.label, u.system)}: {MARGIN_DEFINITIONS[o.name]}"
             for o in candidate.checks
             if o.name in MARGIN_DEFINITIONS
         ),
@@ -188,7 +188,8 @@ def recommendation(result: SearchResult, u: Shown = SI) -> list[str]:
     at_worst = (
         ""
         if worst is None
-        else f" ({worst.label}, at {u.text(worst.temperature_C, 'temperature')})"
+        else f" ({convert_text(worst.label, u.system)}, at "
+        f"{u.text(worst.temperature_C, 'temperature')})"
     )
     passing = [c for c in valid if c.passed]
     if not passing:
