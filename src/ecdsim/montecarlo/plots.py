@@ -45,9 +45,23 @@ def study_title(system: str, what: str, width: int = TITLE_WIDTH) -> str:
     A rather long system name
     deployment time: 10 samples
     """
+    return "\n".join([*_balanced(system, width), *_balanced(what, width)])
+
+
+def _balanced(text: str, width: int) -> list[str]:
+    """``text`` wrapped to at most ``width`` characters on as few, evenly long lines.
+
+    >>> _balanced("CDA Cc-16 test deployment (paper section 6), illustrative tolerances", 60)
+    ['CDA Cc-16 test deployment (paper', 'section 6), illustrative tolerances']
+    """
     import textwrap
 
-    return "\n".join([*textwrap.wrap(system, width), *textwrap.wrap(what, width)])
+    lines = textwrap.wrap(text, width)
+    for narrower in range(math.ceil(len(text) / max(len(lines), 1)), width):
+        candidate = textwrap.wrap(text, narrower)
+        if len(candidate) <= len(lines):
+            return candidate
+    return lines
 
 
 def bin_count(n: int) -> int:
