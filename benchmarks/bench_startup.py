@@ -23,9 +23,11 @@ import argparse
 import compileall
 import importlib.util
 import json
+import resource
+import statistics
 import subprocess
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import partial
 from typing import Any
 
@@ -102,7 +104,24 @@ def import_times(arguments: Sequence[str], top: int) -> list[dict[str, Any]]:
     return rows[:top]
 
 
-def checks(arguments: Sequence[str], forbidden: Sequence[str]) -> Notes:
+def with_cpu_time(command: Command, sink: list[float]) -> Callable[[], str]:
+    """``command``, also appending the CPU time (user + sys) of its process to ``sink``.
+
+    On a loaded machine the wall time includes waiting for a core; the CPU time is what
+    the process itself spent, closer to the wall time it takes on a quiet machine.
+    """
+
+    def run() -> str:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        out = command()
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        sink.append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+        return out
+
+    return run
+
+
+def checks(arguments: Sequence[str], forbidden: Sequence[str], cpu_times: Sequence[float]) -> Notes:
     """Heavy modules loaded by the command (those in ``forbidden`` fail) and slow imports."""
     names = loaded_modules(arguments)
     heavy = [m for m in HEAVY if m in names]
@@ -110,7 +129,10 @@ def checks(arguments: Sequence[str], forbidden: Sequence[str]) -> Notes:
     slowest = import_times(arguments, top=60)
     top_level = [r for r in slowest if "." not in r["module"] and r["module"] != "ecdsim"]
     slowest = slowest[:10]
+    timed = list(cpu_times[1:])  # the first is the warm-up's
     lines = [
+        f"CPU time (user + sys) of the ecdsim process: min {min(timed):.3f} s, median "
+        f"{statistics.median(timed):.3f} s (the wall time adds waiting for a core)",
         f"heavy modules loaded: {', '.join(heavy) or 'none'}; must be absent: "
         f"{', '.join(forbidden)}: {'OK' if not bad else 'FAILED (' + ', '.join(bad) + ')'}",
         "slowest imports (-X importtime, cumulative, one run): "
@@ -118,7 +140,12 @@ def checks(arguments: Sequence[str], forbidden: Sequence[str]) -> Notes:
     ]
     return Notes(
         lines=tuple(lines),
-        data={"heavy_loaded": heavy, "forbidden": list(forbidden), "slowest_imports": slowest},
+        data={
+            "cpu_times_s": timed,
+            "heavy_loaded": heavy,
+            "forbidden": list(forbidden),
+            "slowest_imports": slowest,
+        },
         ok=not bad,
     )
 
@@ -142,15 +169,16 @@ def cases(quick: bool) -> list[Case[Any]]:
     bare = Command((sys.executable, "-c", "pass"))
     out = []
     for name, arguments, goal, forbidden in COMMANDS:
+        cpu_times: list[float] = []
         out.append(
             Case(
                 name=name,
-                ecdsim=Command((ecdsim, *arguments)),
+                ecdsim=with_cpu_time(Command((ecdsim, *arguments)), cpu_times),
                 baseline=bare,
                 baseline_name="a bare interpreter start, python -c pass",
                 goal_s=goal,
                 repeats=7,
-                notes=partial(checks, arguments, forbidden),
+                notes=partial(checks, arguments, forbidden, cpu_times),
                 description=f"ecdsim {' '.join(arguments)} as a whole process",
             )
         )
