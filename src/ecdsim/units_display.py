@@ -28,7 +28,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 if TYPE_CHECKING:
-    from ecdsim._types import FloatArray
+    import numpy as np
+    from numpy.typing import NDArray
+
+    FloatArray = NDArray[np.float64]
 
 UnitSystem = Literal["si", "us"]
 UNIT_SYSTEMS: tuple[UnitSystem, ...] = ("si", "us")
