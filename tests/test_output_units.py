@@ -575,3 +575,11 @@ def test_deploy_warnings_in_us_units(tmp_path: Any) -> None:
 
     messages = [w["message"] for w in json.loads(result.stdout)["warnings"]]
     assert any("at -40 degC" in m for m in messages)
+
+
+def test_app_refuses_a_bad_units_option_before_serving() -> None:
+    result = _run("app", str(PAPER_CONFIG), "--units", "metric")
+    assert result.exit_code == 2
+    assert result.output.strip() == (
+        "error: --units: 'metric' is not a unit system; expected 'si' or 'us'"
+    )
