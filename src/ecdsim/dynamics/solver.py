@@ -465,7 +465,7 @@ def _advance_cases(
     integrated = seg.engaged & problem.nonlinear
     closed_idx = np.flatnonzero(~integrated)
     if closed_idx.size:
-        _step_closed_form(c, s, seg, closed_idx, step, records)
+        _step_closed_form(s, seg, closed_idx, step, records)
     nl_idx = np.flatnonzero(integrated)
     if nl_idx.size:
         _step_integrated(c, s, seg, nl_idx, step, problem, records)
@@ -511,7 +511,6 @@ def _segments(
 
 
 def _step_closed_form(
-    c: _Cases,
     s: _State,
     seg: _Segment,
     idx: NDArray[np.intp],
