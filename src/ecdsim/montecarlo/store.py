@@ -232,7 +232,8 @@ class ChunkReader:
         Each column is filled chunk by chunk into one array, so that the peak memory is
         the columns plus one chunk (not the columns twice, as concatenating would).
         ``rows`` are the chunks' row counts if known (their tags hold them); a chunk in
-        ``kept`` (:func:`take_kept`) is taken from memory instead of its file.
+        ``kept`` (:func:`take_kept`) is taken from memory instead of its file (and removed
+        from ``kept`` when that is a dict).
         """
         pq = require("pyarrow.parquet")
         kept = kept or {}
@@ -242,7 +243,8 @@ class ChunkReader:
         found: dict[str, np.ndarray[Any, Any]] = {}
         start = 0
         for k, (path, count) in enumerate(zip(paths, rows, strict=True)):
-            columns = kept.get(k)
+            # Taken out of ``kept`` as it is copied, so that the columns are not held twice.
+            columns = kept.pop(k, None) if isinstance(kept, dict) else kept.get(k)
             if columns is None or any(len(columns.get(n, ())) != count for n in names):
                 table = pq.read_table(path, columns=list(names))
                 columns = {name: table.column(name).to_numpy() for name in names}
