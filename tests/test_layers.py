@@ -42,6 +42,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("system", ("ecdsim.deployment",)),
     ("config", ("ecdsim.config",)),
     ("plots", ("ecdsim.plotting",)),
+    ("dynamic plots", ("ecdsim.plotting_dynamic",)),
     ("studies", ("ecdsim.characterize", "ecdsim.sizing", "ecdsim.sweeps")),
     ("tolerances", ("ecdsim.montecarlo",)),
     ("report", ("ecdsim.report",)),

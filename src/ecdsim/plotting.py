@@ -186,14 +186,11 @@ def write_deployment_plots(
 ) -> list[Path]:
     """Write the standard plots of a prediction as PNG files into ``folder``, in ``units``.
 
-    With the dynamic method, also its angle and speed against time with the events
-    marked, and the damper's temperature when it heats (:mod:`ecdsim.plotting_dynamic`).
+    The dynamic method's own plots (events marked, damper temperature) are
+    :func:`ecdsim.plotting_dynamic.write_dynamic_plots`, a layer above this module.
     """
-    from ecdsim.plotting_dynamic import write_dynamic_plots
-
     out = Path(folder)
     return [
         save_figure(plot_deployment(prediction, units=units), out / "angle_vs_time.png"),
         save_figure(plot_torque_speed(prediction, units=units), out / "torque_vs_speed.png"),
-        *write_dynamic_plots(prediction, out, units),
     ]

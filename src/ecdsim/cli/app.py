@@ -97,9 +97,13 @@ def _render(
 
     if plot_dir is not None:
         from ecdsim.plotting import write_deployment_plots
+        from ecdsim.plotting_dynamic import write_dynamic_plots
 
         try:
             written = write_deployment_plots(prediction, plot_dir, units)
+            # With the dynamic method: angle and speed against time with the events
+            # marked, and the damper's temperature when it heats.
+            written += write_dynamic_plots(prediction, plot_dir, units)
         except OSError as exc:
             fail([f"--plot {plot_dir}: cannot write plots ({exc.strerror or exc})"])
     else:

@@ -541,7 +541,7 @@ def create_app(config_text: str | None = None, units: UnitSystem | None = None) 
         return await within_time_limit(compute)
 
     # The bench fit (drop test) has its own module: ecdsim.webapp.fitapi.
-    from ecdsim.webapp.fitapi import add_fit_routes
+    from ecdsim.webapp.fitapi import ServerHelpers, add_fit_routes
 
-    add_fit_routes(app, _LIMITED)
+    add_fit_routes(app, _LIMITED, ServerHelpers(_refuse, load_body, within_time_limit))
     return app
