@@ -86,7 +86,9 @@ def _flatten(problem: DynamicProblem) -> _Cases:
     points = problem.angles.shape[0]
 
     def flat(a: FloatArray) -> FloatArray:
-        return np.ascontiguousarray(np.broadcast_to(a, shape).reshape(n), dtype=float)
+        # The problem's fields already have the batch shape; broadcast only the others.
+        full = a if np.shape(a) == shape else np.broadcast_to(a, shape)
+        return np.ascontiguousarray(np.reshape(full, n), dtype=float)
 
     return _Cases(
         n=n,
@@ -150,7 +152,7 @@ def _piece(
     angles = c.angles
     last = angles.shape[0] - 2  # pieces 0 .. P - 2
     i = start.copy()
-    while True:
+    while last > 0:  # a linear spring (P = 2) has the one piece 0
         above = angles[np.minimum(i + 1, last), idx]
         below = angles[i, idx]
         up = (i < last) & np.where(forward, above <= phi, above < phi)
