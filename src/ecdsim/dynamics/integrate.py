@@ -250,6 +250,7 @@ def _advance_batched(
     out = integrate_batch(model, segments, control)
     stopped = (out.kind == linear.ZERO) | (out.kind == linear.REST)
     hottest = np.maximum(out.max_thermal_state, out.state[2])
+    temperature, max_temperature = model.temperature(np.stack([out.state[2], hottest]))
     return NonlinearAdvance(
         kind=out.kind,
         duration=out.duration,
@@ -257,8 +258,8 @@ def _advance_batched(
         v=np.where(stopped, 0.0, out.state[1]),
         damper_work=out.state[3],
         state=out.state[2],
-        temperature=model.temperature(out.state[2]),
-        max_temperature=model.temperature(hottest),
+        temperature=temperature,
+        max_temperature=max_temperature,
         max_speed=np.maximum(out.max_speed, segs.speed0),
         solutions=[
             None if sol is None else _InTemperature(sol, model, j)

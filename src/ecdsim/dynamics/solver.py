@@ -50,6 +50,10 @@ DISPLAY_TIME_CONSTANTS = 10.0
 
 _EV = {name: code for code, name in enumerate(EVENT_KINDS)}
 _ST = {name: code for code, name in enumerate(STATUSES)}
+# By status code: whether a run that ended so keeps its last speed (else it is at rest).
+_KEEPS_SPEED = np.isin(
+    np.arange(len(STATUSES)), [_ST[k] for k in ("latched", "stop_time", "event_limit", "horizon")]
+)
 
 
 @dataclass
@@ -299,9 +303,7 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
             _advance_cases(c, s, run, direction[run], problem, log, records)
 
     final_inertia = np.where(s.engaged, c.total_inertia, c.load_inertia)
-    keeps_speed = np.isin(
-        s.status, [_ST[k] for k in ("latched", "stop_time", "event_limit", "horizon")]
-    )
+    keeps_speed = _KEEPS_SPEED[s.status]
     final_speed = np.where(keeps_speed, s.w, 0.0)
     energy = EnergyBalance(
         spring_work=s.spring_work,
