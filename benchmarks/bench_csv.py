@@ -44,7 +44,13 @@ for key in sorted(table.values):
     digest.update(table.values[key].tobytes())
 for bad in table.bad_rows:
     digest.update(bad.message().encode())
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+# VmHWM: this process's own peak (ru_maxrss would also count the parent's resident
+# memory at fork, which Linux carries across exec).
+status = open("/proc/self/status").read().split("VmHWM:")
+if len(status) > 1:
+    peak = int(status[1].split()[0]) / 1024
+else:
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 print(elapsed, peak, digest.hexdigest())
 """
 
