@@ -106,6 +106,50 @@ class Command:
         return " ".join(self.argv)
 
 
+@dataclass(frozen=True)
+class ProcessRun:
+    """One whole process: wall time [s], its own peak resident memory [bytes], output."""
+
+    seconds: float
+    peak_bytes: int | None
+    stdout: str
+    stderr: str
+
+
+_GNU_TIME = Path("/usr/bin/time")
+
+
+def run_process(argv: Sequence[str], cwd: Path = ROOT) -> ProcessRun:
+    """Run ``argv``; its wall time and its OWN peak memory (RuntimeError if it fails).
+
+    Beware ``wait4``/``RUSAGE_CHILDREN``'s ``ru_maxrss`` for a child of a big process:
+    Linux starts the child's maximum at the parent's resident size at fork and keeps it
+    across exec, so a small command run from a driver holding 900 MB reports 900 MB.
+    Here the command is started by ``/usr/bin/time`` (a small process), whose report of
+    its own child is that child's alone; without it the peak is None. The wall time
+    includes the launcher's start (about a millisecond).
+    """
+    with tempfile.TemporaryDirectory() as folder:
+        report = Path(folder) / "peak"
+        launcher: list[str] = []
+        if _GNU_TIME.exists():
+            launcher = [str(_GNU_TIME), "-f", "%M", "-o", str(report)]
+        started = time.perf_counter()
+        completed = subprocess.run(
+            [*launcher, *argv], cwd=cwd, capture_output=True, text=True, check=False
+        )
+        elapsed = time.perf_counter() - started
+        peak = None
+        if launcher and report.exists():
+            lines = report.read_text().split()
+            peak = int(lines[-1]) * 1024 if lines and lines[-1].isdigit() else None
+    if completed.returncode != 0:
+        raise RuntimeError(
+            f"{' '.join(argv)} exited {completed.returncode}: {completed.stderr.strip()[-500:]}"
+        )
+    return ProcessRun(elapsed, peak, completed.stdout, completed.stderr)
+
+
 def venv_script(name: str) -> str:
     """The console script ``name`` beside this interpreter (``.venv/bin/ecdsim``)."""
     beside = Path(sys.executable).parent / name
