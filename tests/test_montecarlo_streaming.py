@@ -136,7 +136,7 @@ def test_an_in_process_summary_from_memory_equals_one_from_the_files(tmp_path: P
     plan = build_plan(load_config(EXAMPLE), 3000, "exact", chunk_size=1024)
     out = tmp_path / "study"
     run(plan, out)
-    assert sorted(store._KEPT[0].chunks) == [0, 1, 2]
+    assert sorted(store._KEPT[0].filled) == [0, 1, 2]
     from_memory = summarize(plan, out)
     assert not store._KEPT  # taken, and forgotten
     assert summarize(plan, out) == from_memory

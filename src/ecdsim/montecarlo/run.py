@@ -695,13 +695,13 @@ def run(
     pending: Future[Any] | None = None
     pending_result: ChunkResult | None = None
 
-    store.start_keeping(out, identity)
+    store.start_keeping(out, identity, plan.samples)
 
     def finished(result: ChunkResult) -> None:
         nonlocal computed, samples_done
         if result.columns:
             kept = {name: result.columns[name] for name in plan.summary_columns}
-            store.keep(out, identity, result.index, kept)
+            store.keep(out, identity, result.index, plan.bounds(result.index)[0], kept)
         computed += 1
         start, stop = plan.bounds(result.index)
         samples_done += stop - start

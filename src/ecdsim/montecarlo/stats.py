@@ -91,7 +91,8 @@ def percentiles(
 def describe(values: ArrayLike) -> dict[str, Any]:
     """Percentiles over all values (inf allowed), moments over all and over finite ones."""
     x = as_float(values).reshape(-1)
-    finite = x[np.isfinite(x)]
+    is_finite = np.isfinite(x)
+    finite = x if is_finite.all() else x[is_finite]  # no copy when every sample arrives
     arriving = finite.size
     all_finite = arriving == x.size
 
@@ -454,7 +455,7 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
                 "temperature_C": temperature,
                 "nominal": nominal_case,
                 "deployment_time_s": describe(times),
-                "end_speed_rad_s": describe(speeds[~stalled]),
+                "end_speed_rad_s": describe(speeds[~stalled] if stalled.any() else speeds),
                 "stall": stall(stalled),
                 "sensitivity": sensitivity_from_sums(keys, sums, bins),
                 "repeatability": repeatability.study(

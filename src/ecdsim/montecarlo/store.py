@@ -158,45 +158,61 @@ def chunk_is_valid(
 
 @dataclass
 class _Kept:
-    """The summary's columns of the chunks this process wrote for one study."""
+    """The summary's whole columns of one study, filled as this process writes its chunks."""
 
     out: Path
     identity_sha256: str
-    chunks: dict[int, dict[str, np.ndarray[Any, Any]]]
+    samples: int
+    columns: dict[str, np.ndarray[Any, Any]]
+    filled: dict[int, int]  # chunk index -> its first sample
 
 
 _KEPT: list[_Kept] = []  # at most one study's: the latest run in this process
 
 
-def start_keeping(out: Path, identity_sha256: str) -> None:
+def start_keeping(out: Path, identity_sha256: str, samples: int) -> None:
     """Drop what an earlier run kept; keep this study's columns from now on."""
     _KEPT.clear()
-    _KEPT.append(_Kept(Path(out).resolve(), identity_sha256, {}))
+    _KEPT.append(_Kept(Path(out).resolve(), identity_sha256, samples, {}, {}))
 
 
-def keep(out: Path, identity_sha256: str, index: int, columns: dict[str, Any]) -> None:
-    """Keep the summary's columns of chunk ``index``, just written by this process.
+def _kept_for(out: Path, identity_sha256: str) -> _Kept | None:
+    found = _KEPT[0] if _KEPT else None
+    if found and found.out == Path(out).resolve() and found.identity_sha256 == identity_sha256:
+        return found
+    return None
+
+
+def keep(
+    out: Path, identity_sha256: str, index: int, start: int, columns: Mapping[str, Any]
+) -> None:
+    """Copy the summary's columns of chunk ``index`` (first sample ``start``), just written
+    by this process, into the study's whole columns.
 
     So that the summary of an in-process run need not read them back from the files
-    (the values are the same: Parquet stores float64 and bool exactly).
+    (the values are the same: Parquet stores float64 and bool exactly). The whole columns
+    are allocated once, so that they are never held twice.
     """
-    if (
-        _KEPT
-        and _KEPT[0].out == Path(out).resolve()
-        and _KEPT[0].identity_sha256 == (identity_sha256)
-    ):
-        _KEPT[0].chunks[index] = columns
+    kept = _kept_for(out, identity_sha256)
+    if kept is None:
+        return
+    for name, values in columns.items():
+        whole = kept.columns.get(name)
+        if whole is None:
+            whole = kept.columns[name] = np.empty(kept.samples, dtype=np.asarray(values).dtype)
+        whole[start : start + len(values)] = values
+    kept.filled[index] = start
 
 
-def take_kept(out: Path, identity_sha256: str) -> dict[int, dict[str, np.ndarray[Any, Any]]]:
-    """The columns kept for this study (and forget them); empty if none."""
-    if (
-        _KEPT
-        and _KEPT[0].out == Path(out).resolve()
-        and _KEPT[0].identity_sha256 == (identity_sha256)
-    ):
-        return _KEPT.pop().chunks
-    return {}
+def take_kept(
+    out: Path, identity_sha256: str
+) -> tuple[dict[str, np.ndarray[Any, Any]], set[int]] | None:
+    """The whole columns kept for this study and the chunks filled in (and forget them)."""
+    kept = _kept_for(out, identity_sha256)
+    if kept is None:
+        return None
+    _KEPT.clear()
+    return kept.columns, set(kept.filled)
 
 
 @dataclass(frozen=True)
@@ -225,36 +241,35 @@ class ChunkReader:
         self,
         names: Sequence[str],
         rows: Sequence[int] | None = None,
-        kept: Mapping[int, Mapping[str, np.ndarray[Any, Any]]] | None = None,
+        kept: tuple[dict[str, np.ndarray[Any, Any]], set[int]] | None = None,
     ) -> dict[str, np.ndarray[Any, Any]]:
         """Several columns over all samples, each chunk file opened once.
 
         Each column is filled chunk by chunk into one array, so that the peak memory is
         the columns plus one chunk (not the columns twice, as concatenating would).
-        ``rows`` are the chunks' row counts if known (their tags hold them); a chunk in
-        ``kept`` (:func:`take_kept`) is taken from memory instead of its file (and removed
-        from ``kept`` when that is a dict).
+        ``rows`` are the chunks' row counts if known (their tags hold them). ``kept``
+        (:func:`take_kept`) are whole columns already filled for some chunks: only the
+        other chunks are read, into those arrays.
         """
         pq = require("pyarrow.parquet")
-        kept = kept or {}
         paths = [chunk_path(self.out, k) for k in range(self.chunks)]
         if rows is None:
             rows = [pq.read_metadata(path).num_rows for path in paths]
-        found: dict[str, np.ndarray[Any, Any]] = {}
+        total = sum(rows)
+        found, filled = kept if kept is not None else ({}, set())
+        if any(name not in found or found[name].shape != (total,) for name in names):
+            found, filled = {}, set()
         start = 0
         for k, (path, count) in enumerate(zip(paths, rows, strict=True)):
-            # Taken out of ``kept`` as it is copied, so that the columns are not held twice.
-            columns = kept.pop(k, None) if isinstance(kept, dict) else kept.get(k)
-            if columns is None or any(len(columns.get(n, ())) != count for n in names):
+            if k not in filled:
                 table = pq.read_table(path, columns=list(names))
-                columns = {name: table.column(name).to_numpy() for name in names}
-            for name in names:
-                part = columns[name]
-                if name not in found:
-                    found[name] = np.empty(sum(rows), dtype=part.dtype)
-                found[name][start : start + count] = part
+                for name in names:
+                    part = table.column(name).to_numpy()
+                    if name not in found:
+                        found[name] = np.empty(total, dtype=part.dtype)
+                    found[name][start : start + count] = part
             start += count
-        return found
+        return {name: found[name] for name in names}
 
     def chunk(self, index: int, names: Sequence[str]) -> dict[str, np.ndarray[Any, Any]]:
         """Columns of one chunk file."""
