@@ -694,6 +694,7 @@ def run(
     writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ecdsim-chunk-writer")
     pending: Future[Any] | None = None
     pending_result: ChunkResult | None = None
+    last_write: Future[Any] | None = None  # waited for on every way out, even mid-settle
 
     store.start_keeping(out, identity, plan.samples)
 
@@ -730,20 +731,20 @@ def run(
                 if result.written:
                     finished(result)
                 else:
-                    pending = writer.submit(write_result, plan, out, result)
+                    pending = last_write = writer.submit(write_result, plan, out, result)
                     pending_result = result
             settle()
     except KeyboardInterrupt:
-        if pending is not None:
-            wait([pending])  # a write under way finishes (atomically) or fails
+        if last_write is not None:
+            wait([last_write])  # a write under way finishes (atomically) or fails
         # ecdsim.atomic removes its temporary file when the write is interrupted, except
         # in the instant between creating it and entering its try block: sweep up.
         store.remove_partial_files(out)
         on_disk = sum(store.chunk_path(out, k).exists() for k in range(plan.chunks))
         raise RunInterrupted(out, on_disk, plan.chunks) from None
     except Exception:
-        if pending is not None:
-            wait([pending])
+        if last_write is not None:
+            wait([last_write])
         if created and computed == 0:
             # Nothing was computed (no scheduler, a missing package, a bad first chunk):
             # leave no half-started run behind, so that the same command can be repeated.
