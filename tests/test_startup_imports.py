@@ -29,7 +29,9 @@ with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.St
         main()
     except SystemExit as exit:
         code = exit.code or 0
-print(json.dumps({"code": code, "modules": sorted({m.split(".")[0] for m in sys.modules})}))
+own = sorted(m for m in sys.modules if m.startswith("ecdsim."))
+top = sorted({m.split(".")[0] for m in sys.modules})
+print(json.dumps({"code": code, "modules": top, "ecdsim": own}))
 """
 
 NEVER_FOR_THESE = ("jinja2", "matplotlib", "pandas", "dask", "pint")
@@ -42,8 +44,9 @@ CASES = [
 ]
 
 
-def loaded(arguments: list[str]) -> tuple[int, list[str]]:
-    """Exit code and top-level modules loaded by ``ecdsim *arguments`` run in process."""
+def loaded(arguments: list[str], own: bool = False) -> tuple[int, list[str]]:
+    """Exit code and top-level modules loaded by ``ecdsim *arguments`` run in process
+    (with ``own``: ecdsim's own modules instead)."""
     done = subprocess.run(
         [sys.executable, "-c", SCRIPT, *arguments],
         cwd=ROOT,
@@ -52,7 +55,7 @@ def loaded(arguments: list[str]) -> tuple[int, list[str]]:
         check=True,
     )
     result = json.loads(done.stdout.strip().splitlines()[-1])
-    return int(result["code"]), list(result["modules"])
+    return int(result["code"]), list(result["ecdsim" if own else "modules"])
 
 
 @pytest.mark.parametrize(("arguments", "absent"), CASES, ids=[" ".join(c[0]) for c in CASES])
@@ -69,3 +72,13 @@ def test_the_check_sees_what_a_command_uses() -> None:
     _, deploy_modules = loaded(["deploy", "examples/paper_cc16.toml"])
     assert "scipy" in fit_modules
     assert {"numpy", "pydantic", "ecdsim"} <= set(deploy_modules)
+
+
+def test_quasi_static_deploy_and_a_printed_fit_skip_what_they_do_not_run() -> None:
+    # The dynamic solver (lazy in ecdsim.methods) and the config schema (built by a fit
+    # only when it writes a parameter file) are ecdsim's own heaviest imports.
+    _, deploy_own = loaded(["deploy", "examples/paper_cc16.toml"], own=True)
+    _, fit_own = loaded(["fit", "drop-test", "examples/drop_test.csv"], own=True)
+    assert "ecdsim.dynamics.solver" not in deploy_own
+    assert "ecdsim.config.schema" not in fit_own
+    assert "ecdsim.characterize.droptest" in fit_own

@@ -35,7 +35,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import UnionType
-from typing import Annotated, Any, Union, get_args, get_origin
+from typing import TYPE_CHECKING, Annotated, Any, Union, get_args, get_origin
 
 import numpy as np
 from pydantic import BaseModel
@@ -46,9 +46,13 @@ from ecdsim.atomic import write_text
 from ecdsim.characterize.findings import FitWarning
 from ecdsim.characterize.stats import Estimate
 from ecdsim.characterize.templaws import TemperatureLaws
-from ecdsim.config import ConfigError, parse_config
-from ecdsim.config.schema import LoadSpec
+from ecdsim.config import ConfigError
 from ecdsim.config.units import Kind
+
+if TYPE_CHECKING:
+    # The schema (pydantic models of every section) is built only when a file is
+    # written: a fit that prints its table does not pay for it.
+    from ecdsim.config.schema import LoadSpec
 
 PLACEHOLDER_TRAVEL = math.pi / 2.0  # rad
 
@@ -610,6 +614,8 @@ def write_parameter_file(path: str | Path, text: str) -> Path:
     Raises :class:`ExportError` if the configuration reader rejects it (which would be
     a bug: the text is built from validated values).
     """
+    from ecdsim.config import parse_config
+
     try:
         parse_config(text, str(path))
     except ConfigError as exc:
