@@ -216,7 +216,7 @@ def write_plots(
     plan: Plan, out: Path, summary: Mapping[str, Any], units: UnitSystem = "si"
 ) -> list[Path]:
     """Write the study's plots as PNG files into ``out/plots``, temperatures in ``units``."""
-    from ecdsim.montecarlo.run import output_column
+    from ecdsim.montecarlo.columns import output_column
     from ecdsim.montecarlo.store import ChunkReader
     from ecdsim.plotting import save_figure
 

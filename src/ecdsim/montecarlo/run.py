@@ -31,6 +31,7 @@ import numpy as np
 
 from ecdsim._version import __version__
 from ecdsim.montecarlo import apply, sampling, store, streaming
+from ecdsim.montecarlo.columns import output_column
 from ecdsim.montecarlo.tolerances import ToleranceSet, resolve
 
 if TYPE_CHECKING:
@@ -56,11 +57,6 @@ OUTPUTS = {
 # With [requirements] in the config: the minimum torque margin over the travel
 # (ecdsim.sizing.margin, docs/sizing.md section 5), per sample and temperature.
 MARGIN = "min_torque_margin"
-
-
-def output_column(output: str, temperature: float) -> str:
-    """Column name of an output at a temperature [degC], e.g. ``deployment_time_s@-40.0C``."""
-    return f"{output}@{float(temperature)!r}C"
 
 
 class RunError(Exception):

@@ -43,6 +43,12 @@ import numpy as np
 from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim._version import __version__
 from ecdsim.montecarlo import repeatability, streaming
+
+# bin_count, bin_labels and MAX_BINS live in columns (shared with streaming) and are
+# re-exported here, where the estimators that use them are.
+from ecdsim.montecarlo.columns import MAX_BINS as MAX_BINS
+from ecdsim.montecarlo.columns import bin_count, output_column
+from ecdsim.montecarlo.columns import bin_labels as bin_labels
 from ecdsim.montecarlo.intervals import confidence_ranks, proportion_interval, rank_of
 from ecdsim.montecarlo.streaming import Sums
 
@@ -53,7 +59,6 @@ if TYPE_CHECKING:
     from ecdsim.montecarlo.store import ChunkReader
 
 PERCENTILES: dict[str, float] = {"P1": 0.01, "P5": 0.05, "P50": 0.50, "P95": 0.95, "P99": 0.99}
-MAX_BINS = 64
 REGRESSION_BLOCK = 1_000_000
 
 
@@ -199,23 +204,6 @@ def regression_from_sums(
     coefficients = np.linalg.lstsq(correlation, with_response, rcond=None)[0]
     r_squared = float(coefficients @ with_response)
     return as_float(coefficients), r_squared
-
-
-def bin_count(n: int) -> int:
-    """Equal-probability bins for the first-order estimator: n^(1/3), 2 to MAX_BINS."""
-    return int(min(MAX_BINS, max(2, round(n ** (1.0 / 3.0)))))
-
-
-def bin_labels(scores: FloatArray, bins: int) -> np.ndarray[Any, np.dtype[np.uint8]]:
-    """Equal-probability bin of each uniform score: ``floor(score * bins)``, shape kept.
-
-    ``scores`` are the inputs' uniform scores (their own distribution function of the
-    value), so every bin holds the same probability of the input.
-    """
-    if not 1 <= bins <= 255:
-        raise ValueError(f"bins must be 1 to 255, got {bins}")
-    labels = np.minimum(np.asarray(scores, dtype=float) * bins, bins - 1)
-    return np.asarray(labels, dtype=np.uint8)
 
 
 def first_order_indices(
@@ -427,7 +415,6 @@ def _merged_sums(
 
 def summarize(plan: Plan, out: Path) -> dict[str, Any]:
     """The study's statistics per temperature, read from its chunk files (JSON-ready)."""
-    from ecdsim.montecarlo.run import output_column
     from ecdsim.montecarlo.store import ChunkReader, take_kept
 
     reader = ChunkReader(out, plan.chunks)

@@ -24,14 +24,15 @@ from __future__ import annotations
 import base64
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from ecdsim._types import FloatArray
+from ecdsim.montecarlo.columns import bin_count, bin_labels, output_column
 
 if TYPE_CHECKING:
-    from ecdsim.montecarlo.run import Plan
+    from ecdsim.montecarlo.tolerances import ToleranceSet
 
 KEY = "sensitivity_sums"
 
@@ -196,8 +197,27 @@ def sums_of(
     )
 
 
+class Study(Protocol):
+    """What the sums need of a study (a :class:`ecdsim.montecarlo.run.Plan`)."""
+
+    @property
+    def tolerances(self) -> ToleranceSet:
+        """The resolved tolerances, in column order."""
+        ...
+
+    @property
+    def samples(self) -> int:
+        """N, the study's sample count (sets the bins)."""
+        ...
+
+    @property
+    def temperatures(self) -> tuple[float, ...]:
+        """The analysis temperatures [degC]."""
+        ...
+
+
 def chunk_sums(
-    plan: Plan, columns: Mapping[str, np.ndarray[Any, Any]], scores: FloatArray | None = None
+    plan: Study, columns: Mapping[str, np.ndarray[Any, Any]], scores: FloatArray | None = None
 ) -> list[Sums]:
     """One chunk's sums at each of the plan's temperatures, from its columns.
 
@@ -206,9 +226,6 @@ def chunk_sums(
     inputs' distribution functions at the values, the same numbers up to rounding (a
     sample within 1e-16 of a bin edge could change bin).
     """
-    from ecdsim.montecarlo.run import output_column
-    from ecdsim.montecarlo.stats import bin_count, bin_labels
-
     tolerances = plan.tolerances.tolerances
     bins = bin_count(plan.samples)
     values = np.stack([np.asarray(columns[t.key], dtype=float) for t in tolerances], axis=1)
