@@ -232,7 +232,9 @@ def test_help_and_version(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> No
     shown = json.loads(run_example(runner, app, deploy, tmp_path / "deploy", monkeypatch).stdout)
     assert [c["temperature_C"] for c in shown["cases"]] == [-40.0, 25.0, 100.0]
     demo = read_help(runner, app, ["demo"])
-    assert_options(demo, {"--out": None, "--wide": None, "--plain": None, "--help": None})
+    assert_options(
+        demo, {"--out": None, "--wide": None, "--plain": None, "--units": None, "--help": None}
+    )
     run_example(runner, app, demo, tmp_path / "demo", monkeypatch)
     assert (tmp_path / "demo" / "ecdsim-demo" / "angle_vs_time.png").is_file()
     version = runner.invoke(app, ["--version"])

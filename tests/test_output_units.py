@@ -304,6 +304,18 @@ def test_deploy_table_in_us_units(tmp_path: Any) -> None:
     assert _row(result.stdout, "212")[0] == "212"
 
 
+def test_demo_in_us_units(tmp_path: Any) -> None:
+    # The demo prints results too: the paper example (degC config) shown in US units.
+    # 25 degC = 77 degF; BECD = 23.65272 N*m*s/rad -> 209.3 in*lbf*s/rad (as above).
+    result = _run("demo", "--out", str(tmp_path / "demo"), "--units", "us", "--wide")
+    assert result.exit_code == 0, result.output
+    assert "[degF]" in result.stdout
+    assert "209.3" in _row(result.stdout, "77")
+    bad = _run("demo", "--out", str(tmp_path / "demo"), "--units", "metric")
+    assert bad.exit_code == 2
+    assert "--units" in bad.output
+
+
 def test_deploy_units_from_config_and_option_wins(tmp_path: Any) -> None:
     path = _us_config(tmp_path, output="us")
     result = _run("deploy", str(path))

@@ -195,6 +195,7 @@ def demo(
     ] = Path("ecdsim-demo"),
     wide: WideOpt = False,
     plain: PlainOpt = False,
+    units: UnitsOpt = None,
 ) -> None:
     """Run the paper's Cc-16 example (section 6) and write its plots."""
     display.configure(wide=wide, plain=plain)
@@ -206,6 +207,7 @@ def demo(
     with as_file(resource) as path:
         loaded = load_run(path, None, None)
         text = path.read_text(encoding="utf-8")
+    system = units_option(units, loaded)
     # The example ships inside the package, wherever ecdsim is installed: copy it beside
     # the plots so that the path printed exists, to edit and run with `ecdsim deploy`.
     try:
@@ -214,7 +216,7 @@ def demo(
         fail([f"--out {out}: cannot write ({exc.strerror or exc})"])
     # Two lines, so that they fit 80 columns with the default folder (issue 14 item 2).
     typer.echo(f"{loaded.system.name}\nconfig: {config}\nedit it, then: ecdsim deploy {config}")
-    _render(predict_run(loaded), False, out)
+    _render(predict_run(loaded), False, out, system)
 
 
 # Registered after deploy and demo so that --help lists the commands in the order users
