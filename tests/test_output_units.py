@@ -127,6 +127,22 @@ def test_api_deploy_carries_display_units() -> None:
     assert [format_value(t * scale + offset) for t in temps] == ["-40", "77", "212"]
 
 
+def test_api_warnings_carry_a_message_in_the_display_units() -> None:
+    # A spring of 1.2 N*m cannot start at -40 degC (friction 0.587024 + 0.756 = 1.343024
+    # N*m by hand). The message stays SI; display_message is the same sentence in US
+    # units: 1.2 N*m = 10.62 lbf*in, 1.343024 N*m = 11.89 lbf*in (4 digits), -40 degF.
+    config = tomllib.loads(PAPER_CONFIG.read_text(encoding="utf-8"))
+    config["load"]["start_torque"] = "1.2 N*m"
+    body = {"config": config, "units": "us", "time_points": 2, "sweep_points": 0}
+    warnings = client.post("/api/deploy", json=body).json()["prediction"]["warnings"]
+    stall = next(w for w in warnings if w["code"] == "stall")
+    assert "drive torque 1.2 N*m < friction 1.343 N*m at -40 degC" in stall["message"]
+    assert (
+        "drive torque 10.62 lbf*in < friction 11.89 lbf*in at -40 degF"
+        in (stall["display_message"])
+    )
+
+
 def test_api_units_default_to_the_config_then_si() -> None:
     config = _degf_config()
     small = {"time_points": 2, "sweep_points": 0}

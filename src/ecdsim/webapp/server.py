@@ -33,7 +33,7 @@ from ecdsim.config import Config, ConfigError, parse_config
 from ecdsim.config.loader import MAX_NESTING, nesting_depth
 from ecdsim.deployment import ModelDomainError, Prediction, predict
 from ecdsim.report.builder import predict_config, render_html
-from ecdsim.units_display import UnitSystem, check_system, describe, key_units
+from ecdsim.units_display import UnitSystem, check_system, convert_text, describe, key_units
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
 
 _LOG = logging.getLogger(__name__)
@@ -478,6 +478,9 @@ def create_app(config_text: str | None = None, units: UnitSystem | None = None) 
             elapsed = 1000.0 * (time.perf_counter() - began)
             system = display_system(config, body.units, units)
             document["display_units"] = system
+            for warning in document["warnings"]:
+                # The message stays SI (stable JSON); the page shows this one.
+                warning["display_message"] = convert_text(warning["message"], system)
             payload = {
                 "prediction": document,
                 **extra,

@@ -386,7 +386,7 @@ function render() {
   warnings.innerHTML = "";
   for (const w of doc.warnings) {
     const div = document.createElement("div");
-    div.textContent = (w.method ? `[${w.method}] ` : "") + w.message;
+    div.textContent = (w.method ? `[${w.method}] ` : "") + (w.display_message ?? w.message);
     warnings.appendChild(div);
   }
   document.getElementById("timing").textContent = `Last computation ${sig(body.compute_ms, 3)} ms on the server.`;
