@@ -198,6 +198,9 @@ class DamperSpec(_Section):
     max_linear_torque: PositiveTorque | None = None
     rotor_inertia: NonNegativeInertia = 0.0  # at the high-speed shaft
     static_friction_factor: StaticFactor = 1.0
+    # Stribeck speed of the sliding friction at the input (slow) shaft (dynamic method,
+    # docs/model.md); None = kinetic friction independent of speed.
+    stribeck_speed: PositiveSpeed | None = None
     rolloff: RolloffSpec | None = None
     thermal: ThermalSpec | None = None
 
@@ -443,6 +446,7 @@ class ConfigSpec(_Section):
             gearbox_inertia=self.gearbox.inertia,
             static_friction_factor=damper.static_friction_factor,
             system_static_friction_factor=self.load.static_friction_factor,
+            stribeck_speed=damper.stribeck_speed,
             restitution=self.load.restitution,
             initial_angle=self.initial.angle,
             initial_speed=self.initial.speed,

@@ -57,8 +57,8 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 _jit = cast("Callable[[_F], _F]", numba.njit(cache=True, nogil=True, error_model="numpy"))
 
 # Columns of the per-segment parameter table handed to the kernels.
-_J, _K, _DRIVE, _N, _BG, _C, _R, _FA, _COEF, _LAW_A, _LAW_B, _FIXED = range(12)
-_COLUMNS = 12
+_J, _K, _DRIVE, _N, _BG, _C, _R, _FA, _COEF, _LAW_A, _LAW_B, _FIXED, _DF, _WS = range(14)
+_COLUMNS = 14
 LINEAR_LAW, KLOSS_LAW = 0, 1
 _REACH, _ZERO, _CAP, _REST = linear.REACH, linear.ZERO, linear.CAP, linear.REST
 
@@ -115,6 +115,14 @@ def _factor(par: FloatArray, heating: bool, s: float) -> float:
 
 
 @_jit
+def _stribeck(par: FloatArray, u: float) -> tuple[float, float]:
+    """The Stribeck friction above Coulomb and its slope (equations.stribeck_excess)."""
+    ratio = u / par[_WS]
+    g = par[_DF] * math.exp(-ratio * ratio)
+    return g, -2.0 * ratio / par[_WS] * g
+
+
+@_jit
 def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArray) -> None:
     """``dy/dt`` of :meth:`Model.rhs` for one segment."""
     u = y[1]
@@ -124,6 +132,9 @@ def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArr
     eddy, _, _, power, _, _ = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)
     torque = par[_N] * (eddy + par[_BG] * shaft)
     out[0] = u
+    if par[_DF] > 0.0:
+        # The Stribeck excess is a speed-dependent torque like the damping (Model.rhs).
+        torque = torque + _stribeck(par, u)[0]
     out[1] = ((par[_DRIVE] - par[_K] * y[0]) - torque) / par[_J]
     if heating:
         r = par[_R]
@@ -147,6 +158,10 @@ def _jacobian(par: FloatArray, kind: int, heating: bool, y: FloatArray) -> tuple
     torque = n * (eddy + par[_BG] * shaft)
     d_torque_du = n * n * (d_speed + par[_BG])
     d_torque_ds = n * d_factor * (c * f)
+    if par[_DF] > 0.0:
+        g, slope = _stribeck(par, u)
+        torque = torque + g
+        d_torque_du = d_torque_du + slope
     j21 = 0.0
     j22 = 0.0
     if heating:
@@ -508,6 +523,9 @@ def _parameters(model: Model) -> tuple[FloatArray, int]:
     table[:, _FA] = model.factor(np.zeros(n))
     table[:, _COEF] = np.broadcast_to(eddy.coefficient, (n,))
     table[:, _FIXED] = np.nan  # set by _segment from the start state
+    # No Stribeck friction: excess 0 (the kernels skip the term), w_St 1 (unused).
+    table[:, _DF] = 0.0 if model.stribeck_excess is None else model.stribeck_excess
+    table[:, _WS] = 1.0 if model.stribeck_speed is None else model.stribeck_speed
     if isinstance(eddy, LinearEddy):
         table[:, _LAW_A] = np.broadcast_to(np.asarray(eddy.damping_rate, float), (n,))
         table[:, _LAW_B] = 0.0

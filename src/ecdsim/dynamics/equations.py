@@ -25,6 +25,17 @@ approach to T_zero is the smooth growth of s. The invariant holds by constructio
 the answer does not depend on the tolerance. (Only the eddy-current power heats the
 damper's conductor; gearbox damping and friction losses heat other parts.)
 
+Stribeck friction (optional): with a Stribeck speed ``w_St`` the sliding friction is
+
+    F(u) = F_C + (F_brk - F_C) exp(-(u / w_St)^2)        (u >= 0, forward frame)
+
+(the Stribeck curve with a Gaussian exponent, Armstrong-Helouvry, Dupont and Canudas de
+Wit, Automatica 30(7), 1994; no viscous term here: the damper's is the eddy law and BG).
+The Coulomb part ``F_C`` stays folded into the drive ``a``; the excess ``F_brk - F_C``
+decays with speed, so ``J u' = a - k x - M_d - g(u)`` and ``E' = (M_d + g(u)) u`` with
+``g = (F_brk - F_C) exp(-(u / w_St)^2)`` (:func:`stribeck_excess`): E then counts the
+Stribeck excess's dissipation with the damper's.
+
 Both integrators of :mod:`ecdsim.dynamics.integrate` use this one :class:`Model`.
 """
 
@@ -38,6 +49,37 @@ from numpy.typing import NDArray
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.damping import EddyLaw
 from ecdsim.physics import thermal
+
+
+def stribeck_excess(
+    speed: FloatArray, excess: FloatArray, stribeck_speed: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """The Stribeck part of the sliding friction above Coulomb, and its slope in speed.
+
+    ``g(u) = (F_brk - F_C) exp(-(u / w_St)^2)``: the Stribeck curve with a Gaussian
+    exponent of Armstrong-Helouvry, Dupont and Canudas de Wit, "A survey of models,
+    analysis tools and compensation methods for the control of machines with friction",
+    Automatica 30(7), 1994. w_St is used as given, without the sqrt(2 e) scaling of
+    Simscape's Rotational Friction block, and the breakaway is at rest (u = 0).
+
+    Parameters
+    ----------
+    speed : u, sliding speed at the input shaft [rad/s]
+    excess : F_brk - F_C, breakaway over Coulomb friction [N*m], >= 0
+    stribeck_speed : w_St [rad/s], > 0
+
+    Returns
+    -------
+    g : the friction above Coulomb at u [N*m]
+    slope : dg/du [N*m*s/rad]
+
+    >>> g, slope = stribeck_excess(np.array([0.0, 2.0]), np.array([1.0, 1.0]), 2.0)
+    >>> [round(float(v), 12) for v in g], [round(float(v), 12) for v in slope]
+    ([1.0, 0.367879441171], [-0.0, -0.367879441171])
+    """
+    ratio = speed / stribeck_speed
+    g = excess * np.exp(-ratio * ratio)
+    return g, -2.0 * ratio / stribeck_speed * g
 
 
 @dataclass(frozen=True)
@@ -57,6 +99,8 @@ class Model:
     eddy : the eddy-current law, one case per segment
     heating : whether the damper temperature evolves
     ambient_factor : f_a, the law's temperature factor at ambient [-]; computed when None
+    stribeck_excess : F_brk - F_C [N*m] of each segment, or None for no Stribeck friction
+    stribeck_speed : w_St [rad/s] of each segment (with ``stribeck_excess``)
     """
 
     inertia: FloatArray
@@ -70,6 +114,8 @@ class Model:
     eddy: EddyLaw
     heating: bool
     ambient_factor: FloatArray | None = None
+    stribeck_excess: FloatArray | None = None
+    stribeck_speed: FloatArray | None = None
 
     def __post_init__(self) -> None:
         if self.ambient_factor is None:
@@ -100,7 +146,14 @@ class Model:
             eddy=self.eddy.take(index),
             heating=self.heating,
             ambient_factor=self._factor_at_ambient[index],
+            stribeck_excess=None if self.stribeck_excess is None else self.stribeck_excess[index],
+            stribeck_speed=None if self.stribeck_speed is None else self.stribeck_speed[index],
         )
+
+    def _stribeck(self, u: FloatArray) -> tuple[FloatArray, FloatArray] | None:
+        if self.stribeck_excess is None or self.stribeck_speed is None:
+            return None
+        return stribeck_excess(u, self.stribeck_excess, self.stribeck_speed)
 
     def factor(self, state: FloatArray) -> FloatArray:
         """The damping law's temperature factor ``f = f_a exp(c s)`` [-]."""
@@ -134,6 +187,9 @@ class Model:
         np.multiply(self.stiffness, x, out=accel)
         np.subtract(self.drive, accel, out=accel)
         accel -= torque
+        stribeck = self._stribeck(u)
+        if stribeck is not None:
+            accel -= stribeck[0]
         accel /= self.inertia
         if self.heating:
             dy[2] = thermal.factor_log_rate(
@@ -145,7 +201,10 @@ class Model:
             )
         else:
             dy[2] = 0.0
-        np.multiply(torque, u, out=dy[3])
+        if stribeck is not None:
+            np.multiply(torque + stribeck[0], u, out=dy[3])
+        else:
+            np.multiply(torque, u, out=dy[3])
         dy[0] = u
         return dy
 
@@ -174,6 +233,11 @@ class Model:
         else:
             j21 = np.zeros_like(u)
             j22 = np.zeros_like(u)
+        stribeck = self._stribeck(u)
+        if stribeck is not None:
+            torque = torque + stribeck[0]
+            d_torque_du = d_torque_du + stribeck[1]
+            j11 = -d_torque_du / self.inertia
         j31 = torque + d_torque_du * u
         j32 = d_torque_ds * u
         return j10, j11, j12, j21, j22, j31, j32

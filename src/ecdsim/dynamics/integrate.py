@@ -59,6 +59,8 @@ class NonlinearSegments:
     eddy : the eddy-current law, flattened over the whole batch
     case : index of each segment's case in the batch (into ``eddy``)
     thermal : whether the damper temperature evolves
+    stribeck_excess : F_brk - F_C of the Stribeck friction [N*m], or None for none
+    stribeck_speed : w_St [rad/s] (with ``stribeck_excess``)
     """
 
     inertia: FloatArray
@@ -77,6 +79,8 @@ class NonlinearSegments:
     eddy: EddyLaw
     case: NDArray[np.intp]
     thermal: bool
+    stribeck_excess: FloatArray | None = None
+    stribeck_speed: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -170,8 +174,11 @@ def _scales(segs: NonlinearSegments, rtol: float) -> _Scales:
             rtol * 1e-3 * energy,
         ]
     )
+    # At rest the friction is the breakaway one: with Stribeck friction the motion can
+    # only come to rest asymptotically where the drive equals it.
+    rest_drive = segs.drive if segs.stribeck_excess is None else segs.drive - segs.stribeck_excess
     with np.errstate(divide="ignore", invalid="ignore"):
-        equilibrium = np.where(segs.stiffness > 0.0, segs.drive / segs.stiffness, np.inf)
+        equilibrium = np.where(segs.stiffness > 0.0, rest_drive / segs.stiffness, np.inf)
     creeps = (equilibrium > 0.0) & (equilibrium <= segs.length)
     first = 1e-3 * np.minimum(segs.inertia / damping0, length / speed)
     return _Scales(atol, first, CREEP_FRACTION * speed, creeps)
@@ -189,6 +196,8 @@ def _model(segs: NonlinearSegments) -> Model:
         ambient=segs.ambient,
         eddy=segs.eddy.take(segs.case),
         heating=segs.thermal,
+        stribeck_excess=segs.stribeck_excess,
+        stribeck_speed=segs.stribeck_speed,
     )
 
 

@@ -107,6 +107,7 @@ class DynamicParameters:
     integrator: str = "RODAS4"
     max_events: int = 10_000
     system_static_friction_factor: Param | None = None
+    stribeck_speed: Param | None = None
 
     def __post_init__(self) -> None:
         system_factor = (
@@ -117,6 +118,10 @@ class DynamicParameters:
             (
                 np.asarray(system_factor, dtype=float) >= 1.0,
                 "system_static_friction_factor must be >= 1",
+            ),
+            (
+                np.asarray(math.inf if self.stribeck_speed is None else self.stribeck_speed) > 0.0,
+                "stribeck_speed must be > 0",
             ),
             (np.asarray(self.load_inertia, dtype=float) > 0.0, "load_inertia must be > 0"),
             (np.asarray(self.rotor_inertia, dtype=float) >= 0.0, "rotor_inertia must be >= 0"),
@@ -152,5 +157,7 @@ class DynamicParameters:
 
     @property
     def nonlinear(self) -> bool:
-        """True when engaged segments need numerical integration (roll-off or heating)."""
-        return self.rolloff is not None or self.thermal is not None
+        """True when segments need numerical integration (roll-off, heating, Stribeck)."""
+        return (
+            self.rolloff is not None or self.thermal is not None or self.stribeck_speed is not None
+        )

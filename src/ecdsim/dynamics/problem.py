@@ -11,7 +11,7 @@ physics functions as the quasi-static path.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -39,6 +39,7 @@ _CASE_FIELDS = (
     "gearbox_damping_rate",
     "heat_capacity",
     "thermal_resistance",
+    "stribeck_speed",
 )
 
 
@@ -77,6 +78,8 @@ class DynamicProblem(QuasiStaticProblem):
     gearbox_damping_rate : BG at the high-speed shaft [N*m*s/rad]
     heat_capacity : damper heat capacity [J/K]; inf when self-heating is not modelled
     thermal_resistance : damper to ambient [K/W]; inf for adiabatic
+    stribeck_speed : w_St, Stribeck speed at the input shaft [rad/s]; inf (the default)
+        for none (kinetic friction independent of speed, as before)
     eddy : the damper's eddy-current law (linear Eq. 1 or roll-off)
     thermal : True when self-heating is modelled
     stop_time : end of the simulated interval [s]
@@ -101,6 +104,7 @@ class DynamicProblem(QuasiStaticProblem):
     heat_capacity: FloatArray
     thermal_resistance: FloatArray
     eddy: EddyLaw
+    stribeck_speed: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
     thermal: bool = False
     stop_time: float = math.inf
     rtol: float = 1e-8
@@ -133,6 +137,11 @@ class DynamicProblem(QuasiStaticProblem):
     def nonlinear(self) -> bool:
         """True when engaged segments need numerical integration."""
         return self.thermal or self.eddy.name != "linear"
+
+    @property
+    def stribeck(self) -> bool:
+        """True when some case's sliding friction depends on speed (a Stribeck speed)."""
+        return bool(np.any(np.isfinite(self.stribeck_speed)))
 
     @property
     def total_inertia(self) -> FloatArray:
@@ -241,6 +250,9 @@ def dynamic_problem(
             math.inf if thermal is None else thermal.thermal_resistance, dtype=float
         ),
         eddy=eddy,
+        stribeck_speed=np.asarray(
+            math.inf if params.stribeck_speed is None else params.stribeck_speed, dtype=float
+        ),
         thermal=thermal is not None,
         stop_time=params.stop_time,
         rtol=params.rtol,

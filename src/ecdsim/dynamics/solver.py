@@ -81,6 +81,7 @@ class _Cases:
     gearbox_damping: FloatArray
     heat_capacity: FloatArray
     thermal_resistance: FloatArray
+    stribeck_speed: FloatArray
     eddy: EddyLaw
 
 
@@ -116,6 +117,7 @@ def _flatten(problem: DynamicProblem) -> _Cases:
         gearbox_damping=flat(problem.gearbox_damping_rate),
         heat_capacity=flat(problem.heat_capacity),
         thermal_resistance=flat(problem.thermal_resistance),
+        stribeck_speed=flat(problem.stribeck_speed),
         eddy=problem.eddy.flattened(shape),
     )
 
@@ -415,6 +417,7 @@ class _Segment:
     inertia: FloatArray  # J [kg*m^2]
     damping: FloatArray  # B [N*m*s/rad] (linear law at ambient)
     kinetic: FloatArray  # kinetic friction [N*m]
+    stribeck_excess: FloatArray  # breakaway minus kinetic friction where w_St is given [N*m]
     drive: FloatArray  # a, spring torque minus friction, forward frame [N*m]
     speed0: FloatArray  # forward-frame speed at the start [rad/s]
     cap: FloatArray  # time left before the stop time [s]
@@ -466,7 +469,8 @@ def _advance_cases(
     """
     seg = _segments(c, s, run, direction, problem.stop_time)
     step = _Step.empty(s.temp[run])
-    integrated = seg.engaged & problem.nonlinear
+    # Stribeck friction makes any sliding segment nonlinear, free play included.
+    integrated = (seg.engaged & problem.nonlinear) | (seg.stribeck_excess > 0.0)
     closed_idx = np.flatnonzero(~integrated)
     if closed_idx.size:
         _step_closed_form(s, seg, closed_idx, step, records)
@@ -497,6 +501,13 @@ def _segments(
     )
     reach_kind = np.where(forward, np.where(gap_first, _EV["engage"], up_kind), down_kind)
     kinetic = np.where(eng, c.ecd_friction[run] + c.system_friction[run], c.system_friction[run])
+    # Stribeck friction falls from the breakaway (the stiction limit of _stick_or_break) to
+    # the kinetic friction with speed; its excess over the kinetic one, where w_St is given.
+    system_excess = c.system_friction[run] * (c.system_factor[run] - 1.0)
+    excess = np.where(
+        eng, c.ecd_friction[run] * (c.factor[run] - 1.0) + system_excess, system_excess
+    )
+    excess = np.where(np.isfinite(c.stribeck_speed[run]), np.maximum(excess, 0.0), 0.0)
     return _Segment(
         run=run,
         direction=direction,
@@ -508,6 +519,7 @@ def _segments(
         inertia=np.where(eng, c.total_inertia[run], c.load_inertia[run]),
         damping=np.where(eng, c.damping[run], 0.0),
         kinetic=kinetic,
+        stribeck_excess=excess,
         drive=np.where(forward, piece.torque - kinetic, -(piece.torque + kinetic)),
         speed0=direction * s.w[run],
         cap=np.maximum(stop_time - s.t[run], 0.0),
@@ -566,6 +578,11 @@ def _step_integrated(
 ) -> None:
     """Nonlinear segments ``idx`` (roll-off, heating) by :mod:`ecdsim.dynamics.integrate`."""
     cases = seg.run[idx]
+    engaged = seg.engaged[idx]
+    # Free play (lost motion not yet closed) is integrated only for its Stribeck friction:
+    # the damper side is at rest, so no damping torque and no heating (ratio 0).
+    ratio = np.where(engaged, c.ratio[cases], 0.0)
+    stribeck = problem.stribeck
     out = integrate.advance_nonlinear(
         integrate.NonlinearSegments(
             inertia=seg.inertia[idx],
@@ -576,14 +593,16 @@ def _step_integrated(
             cap=seg.cap[idx],
             state0=s.heat[cases],
             ambient=c.ambient[cases],
-            ratio=c.ratio[cases],
-            gearbox_damping=c.gearbox_damping[cases],
+            ratio=ratio,
+            gearbox_damping=np.where(engaged, c.gearbox_damping[cases], 0.0),
             heat_capacity=c.heat_capacity[cases],
             thermal_resistance=c.thermal_resistance[cases],
             linear_damping=c.damping[cases],
             eddy=c.eddy,
             case=cases,
             thermal=problem.thermal,
+            stribeck_excess=seg.stribeck_excess[idx] if stribeck else None,
+            stribeck_speed=c.stribeck_speed[cases] if stribeck else None,
         ),
         rtol=problem.rtol,
         method=problem.integrator,
