@@ -244,6 +244,8 @@ def test_results_do_not_depend_on_the_worker_count(tmp_path: Path) -> None:
     config = write_config(tmp_path, QUANTITIES, SETTINGS)
     readers = {
         "in process": run_with(InProcess(), config, tmp_path / "a"),
+        "2 threads": run_with(InProcess(threads=2), config, tmp_path / "t"),
+        "3 threads": run_with(InProcess(threads=3), config, tmp_path / "u"),
         "1 worker": run_with(DaskExecutor(1, processes=False), config, tmp_path / "b"),
         "2 workers": run_with(DaskExecutor(2, processes=False, window=3), config, tmp_path / "c"),
     }
@@ -252,6 +254,52 @@ def test_results_do_not_depend_on_the_worker_count(tmp_path: Path) -> None:
         reference = readers["in process"].column(name)
         for label, reader in readers.items():
             np.testing.assert_array_equal(reader.column(name), reference, err_msg=label)
+
+
+def test_threaded_chunks_are_bit_identical_and_in_order(tmp_path: Path) -> None:
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    plan = build_plan(load_config(config), 3_000, chunk_size=256)
+    order = [5, 0, 11, 2, 7, 1]  # any order a resume may ask for
+    sequential = list(InProcess().results(plan, order, tmp_path))
+    threaded = list(InProcess(threads=2).results(plan, order, tmp_path))
+    assert [r.index for r in threaded] == order
+    for one, two in zip(sequential, threaded, strict=True):
+        assert one.sensitivity_sums == two.sensitivity_sums
+        assert one.warnings == two.warnings
+        assert list(one.columns) == list(two.columns)
+        for name, column in one.columns.items():
+            np.testing.assert_array_equal(two.columns[name], column, err_msg=name)
+    # Through run(), which writes each chunk on its own thread meanwhile: the same files.
+    run(plan, tmp_path / "one", InProcess())
+    run(plan, tmp_path / "two", InProcess(threads=2))
+    names = [p.name for p in chunk_files(tmp_path / "one")]
+    assert names == [p.name for p in chunk_files(tmp_path / "two")]
+    assert len(names) == plan.chunks
+    for name in names:
+        one_table = pq.read_table(tmp_path / "one" / "chunks" / name)
+        assert one_table.equals(pq.read_table(tmp_path / "two" / "chunks" / name)), name
+
+
+def test_summary_on_threads_is_the_one_thread_summary(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from ecdsim.montecarlo import stats
+
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    plan = build_plan(load_config(config), 3_000, chunk_size=256)
+    run(plan, tmp_path / "out", InProcess())
+    summaries = []
+    for threads in (1, 2):
+        monkeypatch.setattr(stats, "SUMMARY_THREADS", threads)
+        summaries.append(json.dumps(stats.summarize(plan, tmp_path / "out")))
+    assert summaries[0] == summaries[1]
+
+
+def test_in_process_uses_at_most_two_threads() -> None:
+    threads = choose_executor(10, 0, None)
+    assert isinstance(threads, InProcess)
+    assert threads.threads == min(2, os.cpu_count() or 1)
+    assert "2 threads" in InProcess(threads=2).describe()
 
 
 def test_cli_workers_and_scheduler_give_the_in_process_numbers(tmp_path: Path) -> None:

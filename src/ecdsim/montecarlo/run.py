@@ -19,7 +19,7 @@ import datetime
 import logging
 import os
 import time
-from collections import Counter
+from collections import Counter, deque
 from collections.abc import Callable, Generator, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
@@ -48,6 +48,10 @@ if TYPE_CHECKING:
 # in-process speed, about even; --workers 0 keeps a run in process.
 LARGE_RUN_SAMPLES = 2_000_000
 LARGE_RUN_CPUS = 2
+# Chunks computed at once by the in-process path (--workers 0, or small runs), capped at
+# the CPU count: two threads took a 10-million-sample run's chunk loop from ~1x to ~0.6x
+# its one-thread time on this project's 2-CPU machine (benchmarks/README.md).
+IN_PROCESS_THREADS = 2
 
 OUTPUTS = {
     "deployment_time_s": "deployment_time",
@@ -410,17 +414,57 @@ class Executor(Protocol):
 
 @dataclass(frozen=True)
 class InProcess:
-    """Evaluate the chunks one after another in this process (vectorised within a chunk)."""
+    """Evaluate the chunks in this process (vectorised within a chunk), on 1 or more threads.
+
+    With ``threads`` > 1, that many chunks are computed at once on a thread pool: the
+    compiled exact kernel, the random generator's shuffles and draws, the normal
+    quantiles and NumPy's large operations release the GIL, so two threads use two
+    cores for most of a chunk. Each chunk is still a pure function of (plan, index), and
+    the results are yielded in index order, so the run is bit for bit the same as on one
+    thread (tested). At most ``threads`` chunks are in flight, which bounds the memory.
+    The first chunk is computed alone, so that lazy imports and the compiled kernel's
+    loading happen on one thread.
+
+    Attributes
+    ----------
+    threads : chunks computed at once (1: one after another on the calling thread)
+    """
+
+    threads: int = 1
 
     def results(
         self, plan: Plan, indices: Sequence[int], out: Path
     ) -> Generator[ChunkResult, None, None]:
-        """Evaluate each chunk in turn (:func:`run` writes them)."""
-        for index in indices:
-            yield evaluate_chunk(plan, index)
+        """Evaluate each chunk (:func:`run` writes them), yielded in the order given."""
+        pending = iter(indices)
+        first = next(pending, None)
+        if first is None:
+            return
+        yield evaluate_chunk(plan, first)
+        if self.threads <= 1:
+            for index in pending:
+                yield evaluate_chunk(plan, index)
+            return
+        pool = ThreadPoolExecutor(max_workers=self.threads, thread_name_prefix="ecdsim-chunk")
+        window: deque[Future[ChunkResult]] = deque(
+            pool.submit(evaluate_chunk, plan, k) for k in islice(pending, self.threads)
+        )
+        try:
+            while window:
+                result = window.popleft().result()
+                following = next(pending, None)
+                if following is not None:
+                    window.append(pool.submit(evaluate_chunk, plan, following))
+                yield result
+        finally:
+            for future in window:
+                future.cancel()
+            pool.shutdown(wait=True)  # a chunk under way finishes (at most ~0.1 s)
 
     def describe(self) -> str:
         """One line for the console."""
+        if self.threads > 1:
+            return f"in process, {self.threads} threads"
         return "in process"
 
 
@@ -566,15 +610,20 @@ def choose_executor(samples: int, workers: int | None, scheduler: str | None) ->
     if workers is not None:
         if workers < 0:
             raise RunError([f"--workers: {workers} must be >= 0 (0: in this process)"])
-        return InProcess() if workers == 0 else DaskExecutor(workers=workers)
+        return in_process() if workers == 0 else DaskExecutor(workers=workers)
     cpus = os.cpu_count() or 1
     if samples >= LARGE_RUN_SAMPLES and cpus >= LARGE_RUN_CPUS:
         try:
             store.require("distributed")
         except store.MissingDependency:
-            return InProcess()
+            return in_process()
         return DaskExecutor(workers=cpus)
-    return InProcess()
+    return in_process()
+
+
+def in_process() -> InProcess:
+    """The in-process executor on min(IN_PROCESS_THREADS, CPUs) threads."""
+    return InProcess(threads=max(1, min(IN_PROCESS_THREADS, os.cpu_count() or 1)))
 
 
 @dataclass(frozen=True)
