@@ -188,3 +188,61 @@ def test_rolloff_heating_spin_down_against_scipy(
     assert result.final_speed[0] == pytest.approx(speed, rel=1e-7)
     assert result.final_temperature[0] == pytest.approx(temp, rel=1e-9)
     assert_energy_closes(result)
+
+
+@pytest.mark.parametrize(("law", "heating"), [("linear", False), ("kloss", True)])
+def test_compiled_kernel_matches_the_numpy_integrator_with_stribeck_friction(
+    law: str, heating: bool
+) -> None:
+    # The same random segments with a Stribeck excess F_brk - F_C and speed w_St on
+    # their scale (speeds up to ~0.3 rad/s), half of them without (excess 0).
+    base, segments = _segments(law, heating)
+    n = base.inertia.size
+    rng = np.random.default_rng(29)
+    model = replace(
+        base,
+        stribeck_excess=np.where(np.arange(n) % 2 == 0, rng.uniform(0.05, 0.5, n), 0.0),
+        stribeck_speed=rng.uniform(0.02, 0.2, n),
+    )
+    control = rosenbrock.Control(rtol=1e-9, horizon=1e9, horizon_kind=4, record=False)
+    ref = rosenbrock.integrate_batch(model, segments, control)
+    out = compiled.integrate_batch(model, segments, control)
+    assert np.array_equal(out.kind, ref.kind)
+    # As in the test above: the same steps, or both within rtol 1e-9 of the truth.
+    assert np.allclose(out.duration, ref.duration, rtol=1e-9, atol=0.0)
+    assert np.allclose(out.state, ref.state, rtol=1e-9, atol=1e-12)
+    assert np.allclose(out.max_speed, ref.max_speed, rtol=1e-9, atol=0.0)
+    # The friction matters: the Stribeck segments end otherwise than without it.
+    plain = rosenbrock.integrate_batch(base, segments, control)
+    assert not np.allclose(plain.duration[::2], ref.duration[::2], rtol=1e-6)
+    # The segments without an excess are those of the plain model, bit for bit.
+    assert np.array_equal(ref.duration[1::2], plain.duration[1::2])
+    assert np.array_equal(
+        out.duration[1::2], compiled.integrate_batch(base, segments, control).duration[1::2]
+    )
+
+
+@pytest.mark.parametrize("heating", [False, True])
+def test_paper_example_with_stribeck_friction_same_on_both_paths(
+    heating: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The paper's damper with stiction 1.5 and w_St = 0.02 rad/s (its speeds are 0.01 to
+    # 0.06 rad/s), with or without self-heating, at three temperatures.
+    temps = np.array([-40.0, 25.0, 100.0])
+    params = DynamicParameters(
+        load_inertia=5.0,
+        rotor_inertia=2e-7,
+        static_friction_factor=1.5,
+        stribeck_speed=0.02,
+        thermal=Thermal(0.5, 50.0) if heating else None,
+        rtol=1e-9,
+    )
+    fast = _dynamic(paper_system(), temps, params, True, monkeypatch)
+    slow = _dynamic(paper_system(), temps, params, False, monkeypatch)
+    assert fast.status_names() == slow.status_names()
+    # As above: the same steps, or both within rtol 1e-9 of the truth.
+    for name in ("deployment_time", "arrival_speed", "max_speed", "final_angle"):
+        assert np.allclose(getattr(fast, name), getattr(slow, name), rtol=1e-8, atol=0.0), name
+    assert_energy_closes(fast)
+    assert_energy_closes(slow)
+    assert np.array_equal(fast.events.kind, slow.events.kind)
