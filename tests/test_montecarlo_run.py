@@ -567,3 +567,21 @@ def test_samples_read_back_as_a_dataframe(study: tuple[Path, Path]) -> None:
     np.testing.assert_array_equal(
         frame["deployment_time_s@25.0C"].to_numpy(), reader.floats("deployment_time_s@25.0C")
     )
+
+
+@pytest.mark.parametrize(
+    "column",
+    [
+        np.linspace(-1.0, 2.0, 13),
+        np.arange(1_000, 1_011, dtype=np.int64),
+        np.array([True, False, True, True, False, False, True, True, True, False, True]),
+        np.arange(40.0).reshape(8, 5)[:, 2],  # a strided view, as a column of a 2-D block
+        np.array([], dtype=float),
+    ],
+)
+def test_chunk_columns_become_the_arrow_arrays_pa_array_builds(column: np.ndarray) -> None:
+    from ecdsim.montecarlo.store import _arrow_array
+
+    built = _arrow_array(pa, column)
+    assert built.equals(pa.array(column))  # pyarrow's own conversion is the reference
+    assert built.to_pylist() == column.tolist()
