@@ -271,3 +271,22 @@ def test_a_bad_stribeck_speed_is_refused_naming_the_key(value: str, tmp_path: Pa
 def test_the_parameters_refuse_a_non_positive_speed() -> None:
     with pytest.raises(ValueError, match="stribeck_speed must be > 0"):
         DynamicParameters(load_inertia=1.0, stribeck_speed=0.0)
+
+
+def test_the_time_series_friction_torque_follows_the_stribeck_curve() -> None:
+    system = toy_system(B, FS, START, END, TRAVEL, ecd_friction=FECD)
+    params = DynamicParameters(
+        load_inertia=J, static_friction_factor=FACTOR, stribeck_speed=W_ST, rtol=1e-10
+    )
+    result = predict(system, [25.0], ["dynamic"], dynamics=params).solutions["dynamic"]
+    series = result.result.sample(n_points=51)  # type: ignore[attr-defined]
+    speed = series.speed[:, 0]
+    moving = speed > 0.0
+    assert moving.sum() > 40
+    # F(w) = F_C + (F_brk - F_C) exp(-(w/w_St)^2) = 0.5 + 0.3 exp(-(w/0.05)^2), opposing;
+    # the same formula evaluated here (rounding only).
+    expected = -(0.5 + 0.3 * np.exp(-((speed[moving] / W_ST) ** 2)))
+    assert np.allclose(series.friction_torque[moving, 0], expected, rtol=1e-14, atol=0.0)
+    # At release (at rest) the friction holds up to the breakaway F_brk = 0.8 N*m, which
+    # the spring's 1.2 N*m beats: the holding torque shown there is -F_brk.
+    assert series.friction_torque[0, 0] == pytest.approx(-0.8, rel=1e-14)

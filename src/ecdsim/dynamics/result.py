@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from ecdsim._types import BoolArray, FloatArray
 from ecdsim.dynamics.damping import EddyLaw
+from ecdsim.dynamics.equations import stribeck_excess
 from ecdsim.dynamics.records import ClosedFormRecord, IntegratedRecord, sample
 from ecdsim.physics import mechanics
 
@@ -182,6 +183,7 @@ class TrajectoryData:
     ratio: FloatArray
     gearbox_damping: FloatArray
     eddy: EddyLaw
+    stribeck_speed: FloatArray | None = None  # w_St per case [rad/s]; inf or None: none
 
 
 @dataclass(frozen=True)
@@ -196,7 +198,8 @@ class TimeSeries:
     damper_temperature : [degC]
     spring_torque : spring torque on the load [N*m]
     friction_torque : Coulomb friction torque on the moving parts, opposing the motion
-        (at rest: the holding torque) [N*m]
+        (with a Stribeck speed, Coulomb plus the Stribeck excess; at rest: the holding
+        torque) [N*m]
     damping_torque : ECD damping torque at the input shaft, opposing the motion [N*m]
     engaged : True where the damper is engaged (False during the lost motion)
     """
@@ -335,6 +338,15 @@ class DynamicResult:
             s.engaged, mechanics.static_friction(data.ecd_friction, data.factor), 0.0
         )
         holding = -np.clip(spring, -static, static)
+        if data.stribeck_speed is not None and np.any(np.isfinite(data.stribeck_speed)):
+            # Sliding friction falls from the breakaway to the kinetic value with speed
+            # (equations.stribeck_excess); where w_St is inf the excess is 0.
+            finite = np.isfinite(data.stribeck_speed)
+            excess = np.where(finite, np.maximum(static - kinetic, 0.0), 0.0)
+            kinetic = (
+                kinetic
+                + stribeck_excess(s.speed, excess, np.where(finite, data.stribeck_speed, 1.0))[0]
+            )
         friction = np.where(s.speed != 0.0, -np.sign(s.speed) * kinetic, holding)
         shaft = data.ratio * s.speed
         eddy = data.eddy.torque(shaft, s.damper_temperature)

@@ -335,6 +335,7 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
             ratio=c.ratio,
             gearbox_damping=c.gearbox_damping,
             eddy=c.eddy,
+            stribeck_speed=c.stribeck_speed,
         )
 
     def shaped(a: NDArray[Any]) -> NDArray[Any]:
