@@ -74,8 +74,11 @@ class EnergyBalance:
     spring_work : work done by the spring [J]
     initial_kinetic_energy : kinetic energy at release [J]
     damper_dissipation : energy dissipated by the ECD's damping (eddy currents and gearbox
-        damping) [J]
-    friction_dissipation : energy dissipated by Coulomb friction (FECD and FS) [J]
+        damping) [J]; with a Stribeck speed it also holds the dissipation of the friction
+        above Coulomb, ``(F_brk - F_C) exp(-(w/w_St)^2)``, integrated with the damping
+        power in the one dissipation state (:mod:`ecdsim.dynamics.equations`)
+    friction_dissipation : energy dissipated by Coulomb friction (FECD and FS), the
+        kinetic value times the path length [J]
     engagement_loss : kinetic energy lost when the lost motion closed [J]
     impact_loss : kinetic energy lost in impacts on the stops (rebounds, settling) [J]
     final_kinetic_energy : kinetic energy at the end of the run (absorbed by the latch
