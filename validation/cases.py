@@ -645,6 +645,90 @@ def resistive_table() -> CaseResult:
     )
 
 
+# Stribeck friction of validation case "stribeck" (issue 16 item 4): breakaway over
+# kinetic for both frictions, and the Stribeck speed at the input shaft, of the order of the
+# paper example's speeds (0.02 to 0.06 rad/s at +25 and +100 degC). ILLUSTRATIVE values.
+STRIBECK_FACTOR = 1.5
+STRIBECK_SPEED = 0.02  # [rad/s]
+
+
+def stribeck() -> CaseResult:
+    """Stribeck friction (issue 16 item 4) on the paper's example, by the dynamic method."""
+    source = EXAMPLES / "paper_cc16_dynamic.toml"
+    text = source.read_text().replace(
+        "static_friction_factor = 1.0",
+        f'static_friction_factor = {STRIBECK_FACTOR}\nstribeck_speed = "{STRIBECK_SPEED} rad/s"',
+        1,
+    )
+    config = parse_config(text, str(source) + " + stribeck_speed")
+    dynamics = config.spec.dynamics()
+    assert dynamics is not None
+    assert dynamics.stribeck_speed == STRIBECK_SPEED
+    # At -40 degC the spring's 1.58 N*m end torque is below the breakaway there: the
+    # motion creeps to rest short of the latch (no arrival to compare), so +25 and +100.
+    temps = [25.0, 100.0]
+    result = _dynamic_result(predict(config.system, temps, ["dynamic"], dynamics=dynamics))
+    inertia = 5.0 + 2e-7 * 380.0**2  # as in paper_example_methods
+    system = PaperSystem()
+    checks: list[Check] = []
+    for i, temp in enumerate(temps):
+        at = f"at {temp:+g} degC"
+        time, speed, dissipation = system.stribeck_time(
+            temp, inertia, STRIBECK_FACTOR, STRIBECK_SPEED
+        )
+        label = "scipy Radau rtol 1e-12"
+        for quantity, unit, reference, value in (
+            ("deployment time", "s", time, result.deployment_time[i]),
+            ("arrival speed", "rad/s", speed, result.arrival_speed[i]),
+            (
+                "damping + Stribeck dissipation",
+                "J",
+                dissipation,
+                result.energy.damper_dissipation[i],
+            ),
+        ):
+            checks.append(
+                Check(
+                    f"{quantity} {at}",
+                    unit,
+                    reference,
+                    label,
+                    float(value),
+                    _relative(reference, INTEGRATED_RTOL),
+                    INTEGRATED_REASON,
+                )
+            )
+        checks.append(
+            Check(
+                f"energy balance error {at}",
+                "-",
+                0.0,
+                "energy conservation",
+                float(np.ravel(result.energy_balance_error)[i]),
+                1e-8,
+                "1e-8 of the spring work: each term is computed on its own, the dissipation "
+                "integrated at rtol 1e-8",
+            )
+        )
+    return CaseResult(
+        name="stribeck",
+        title="Stribeck friction on the paper's example (dynamic method)",
+        source=(
+            "the paper's constants typed in plain Python with the friction "
+            "F_C + (F_brk - F_C) exp(-(w/w_St)^2) of Armstrong-Helouvry, Dupont and Canudas "
+            "de Wit (Automatica 30(7), 1994), integrated with scipy "
+            "(`validation/scipy_reference.py`, PaperSystem.stribeck_time)"
+        ),
+        mapping=(
+            "`examples/paper_cc16_dynamic.toml` with `[damper] static_friction_factor = "
+            f'{STRIBECK_FACTOR}` (both frictions) and `stribeck_speed = "{STRIBECK_SPEED} '
+            'rad/s"` (ILLUSTRATIVE values): the friction is 1.5 F_C at rest and falls to F_C '
+            "over the speeds the deployment runs at."
+        ),
+        checks=tuple(checks),
+    )
+
+
 CASES: tuple[Callable[[], CaseResult], ...] = (
     msl_eddy_current_brake,
     msl_damper,
@@ -653,6 +737,7 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     paper_example_methods,
     paper_heating_limit,
     resistive_table,
+    stribeck,
 )
 
 

@@ -10,6 +10,7 @@ agree with them too, to their own solver's tolerance).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -199,6 +200,28 @@ class PaperSystem:
             ]
 
         time, state = _arrival(rhs, [0.0, 0.0, temperature], self.travel, "Radau")
+        return time, float(state[1]), float(state[2])
+
+    def stribeck_time(
+        self, temperature: float, inertia: float, static_factor: float, stribeck_speed: float
+    ) -> tuple[float, float, float]:
+        """Time [s], arrival speed [rad/s] and speed-dependent dissipation [J] with Stribeck
+        friction, from rest.
+
+        ``J w' = T(phi) - F - (f - 1) F exp(-(w / w_St)^2) - B w``: the friction falls from
+        the breakaway f F at rest to the kinetic F = FECD_T + FS_T (Armstrong-Helouvry et
+        al. 1994, Gaussian exponent), one factor f for both frictions. The dissipation is
+        that of B and of the excess over F, ``int (B w + (f - 1) F exp(...)) w dt``.
+        """
+        b, f = self.becd(temperature), self.friction(temperature)
+        excess = (static_factor - 1.0) * f
+
+        def rhs(_t: float, y: FloatArray) -> list[float]:
+            phi, w, _ = y
+            extra = excess * math.exp(-((w / stribeck_speed) ** 2))
+            return [w, (self.spring(phi) - f - extra - b * w) / inertia, (b * w + extra) * w]
+
+        time, state = _arrival(rhs, [0.0, 0.0, 0.0], self.travel, "Radau")
         return time, float(state[1]), float(state[2])
 
 
