@@ -140,3 +140,13 @@ def test_an_in_process_summary_from_memory_equals_one_from_the_files(tmp_path: P
     from_memory = summarize(plan, out)
     assert not store._KEPT  # taken, and forgotten
     assert summarize(plan, out) == from_memory
+
+
+def test_bin_labels_floor_the_scaled_score_and_cap_the_top() -> None:
+    scores = np.array([[0.0, 0.05], [0.0999, 0.1], [0.95, np.nextafter(1.0, 0.0)], [1.0, 0.5]])
+    # floor(10 * score) by hand, capped at bins - 1 = 9 (a score of 1, or one that rounds
+    # up to 10 when scaled, belongs to the top bin).
+    expected = np.array([[0, 0], [0, 1], [9, 9], [9, 5]], dtype=np.uint8)
+    labels = bin_labels(scores, 10)
+    assert labels.dtype == np.uint8
+    np.testing.assert_array_equal(labels, expected)

@@ -67,14 +67,15 @@ def _random(seed: int, dimension: int, chunk_size: int, index: int, count: int) 
 def _lhs(seed: int, dimension: int, chunk_size: int, index: int, count: int) -> FloatArray:
     # scipy.stats.qmc.LatinHypercube(d, rng=...).random(count) (scramble, strength 1),
     # drawn the same way from the same stream, so bit for bit the same design (tested):
-    # jitter u ~ U(0, 1) of shape (count, d), then one random permutation of 1..count per
+    # jitter u ~ U(0, 1) of shape (count, d) (Generator.random: the same doubles as the
+    # engine's uniform(size=...), 40 % faster), then one random permutation of 1..count per
     # quantity, in order; sample (i, j) is (perm_j[i] - u[i, j]) / count. Without the
     # engine's set-up, and Generator.permutation shuffles a fresh contiguous array, which
     # is 2x faster than shuffling the rows of a tiled one; the random numbers consumed
     # are the same (Fisher-Yates over count elements). The engine draws from the first
     # child spawned from the Generator's seed sequence, built here from its spawn key.
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(CHUNK_STREAM, index, 0)))
-    jitter = rng.uniform(size=(count, dimension))
+    jitter = rng.random((count, dimension))  # = uniform(0, 1): 0 + 1 * x, bit for bit
     strata = np.empty((dimension, count))
     for j in range(dimension):
         strata[j] = rng.permutation(count)
