@@ -59,8 +59,9 @@ def stribeck_excess(
     ``g(u) = (F_brk - F_C) exp(-(u / w_St)^2)``: the Stribeck curve with a Gaussian
     exponent of Armstrong-Helouvry, Dupont and Canudas de Wit, "A survey of models,
     analysis tools and compensation methods for the control of machines with friction",
-    Automatica 30(7), 1994. w_St is used as given, without the sqrt(2 e) scaling of
-    Simscape's Rotational Friction block, and the breakaway is at rest (u = 0).
+    Automatica 30(7), 1994. The breakaway is at rest (u = 0) and w_St is used as given
+    (Simscape's Rotational Friction instead peaks at T_brk at a breakaway speed w_brk,
+    with w_St = sqrt(2) w_brk and a sqrt(2 e) scale; docs/model.md).
 
     Parameters
     ----------
