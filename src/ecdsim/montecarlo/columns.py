@@ -39,5 +39,7 @@ def bin_labels(scores: FloatArray, bins: int) -> np.ndarray[Any, np.dtype[np.uin
     # Truncated to uint8 first, then capped (a score within 2**-53 of 1 times bins may
     # round up to bins): the same labels as min(score * bins, bins - 1) truncated, for
     # scores in [0, 1], with the cap done on bytes instead of on a float copy (2x faster).
-    labels = np.multiply(np.asarray(scores, dtype=float), bins).astype(np.uint8)
-    return np.minimum(labels, np.uint8(bins - 1), out=labels)
+    scaled: FloatArray = np.multiply(np.asarray(scores, dtype=float), bins)
+    labels = scaled.astype(np.uint8)
+    np.minimum(labels, np.uint8(bins - 1), out=labels)
+    return labels
