@@ -290,3 +290,35 @@ def test_the_time_series_friction_torque_follows_the_stribeck_curve() -> None:
     # At release (at rest) the friction holds up to the breakaway F_brk = 0.8 N*m, which
     # the spring's 1.2 N*m beats: the holding torque shown there is -F_brk.
     assert series.friction_torque[0, 0] == pytest.approx(-0.8, rel=1e-14)
+
+
+def test_a_batch_of_sampled_stribeck_speeds_equals_the_cases_one_by_one() -> None:
+    # Monte Carlo puts n samples of damper.stribeck_speed into one DynamicParameters
+    # (TOLERABLE's model path); each case of the batch is then the scalar run's, since
+    # every case is integrated on its own (compiled kernel, or NumPy with per-case steps).
+    from ecdsim.montecarlo import apply
+
+    config = load_config(DYNAMIC_CONFIG)
+    base = config.spec.dynamics()
+    assert base is not None
+    parameters = apply.Parameters(config.system, replace(base, static_friction_factor=1.5))
+    with pytest.raises(apply.NotTolerable, match="not set in this config's \\[damper\\]"):
+        apply.nominal(parameters, "damper.stribeck_speed")
+    parameters = apply.Parameters(
+        config.system, replace(base, static_friction_factor=1.5, stribeck_speed=0.02)
+    )
+    assert apply.nominal(parameters, "damper.stribeck_speed") == 0.02
+    speeds = np.array([0.01, 0.02, 0.04])
+    varied = apply.apply(parameters, {"damper.stribeck_speed": speeds})
+    assert varied.dynamics is not None
+    batch = predict(varied.system, [25.0], ["dynamic"], dynamics=varied.dynamics)
+    times = np.ravel(batch.solutions["dynamic"].deployment_time)
+    for speed, time in zip(speeds, times, strict=True):
+        one = replace(varied.dynamics, stribeck_speed=float(speed))
+        alone = predict(config.system, [25.0], ["dynamic"], dynamics=one)
+        # Per-case step control: the same steps, so the same numbers to rounding.
+        assert time == pytest.approx(
+            float(np.ravel(alone.solutions["dynamic"].deployment_time)[0]), rel=1e-12
+        )
+    # A larger w_St keeps the friction above F_C over more of the speeds: slower.
+    assert times[0] < times[1] < times[2]

@@ -37,6 +37,7 @@ from ecdsim.config.units import (
     NUMBER,
     NUMBER_PATTERN,
     PER_KELVIN,
+    SPEED,
     TORQUE,
     TORQUE_PER_KELVIN,
     Kind,
@@ -161,6 +162,13 @@ TOLERABLE: dict[str, TolerableQuantity] = {
             NUMBER,
             "dynamics.static_friction_factor",
             lower_bound=1.0,
+        ),
+        _q(
+            "damper.stribeck_speed",
+            SPEED,
+            "dynamics.stribeck_speed",
+            lower_bound=0.0,
+            strict=True,
         ),
     )
 }
