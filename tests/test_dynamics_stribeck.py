@@ -322,3 +322,22 @@ def test_a_batch_of_sampled_stribeck_speeds_equals_the_cases_one_by_one() -> Non
         )
     # A larger w_St keeps the friction above F_C over more of the speeds: slower.
     assert times[0] < times[1] < times[2]
+
+
+@pytest.mark.parametrize("integrator", ["Radau", "BDF", "LSODA"])
+def test_the_scipy_integrators_carry_the_stribeck_term(integrator: str) -> None:
+    # The solve_ivp path (Model.rhs and its Jacobian) on the deployment above.
+    system = toy_system(B, FS, START, END, TRAVEL, ecd_friction=FECD)
+    params = DynamicParameters(
+        load_inertia=J,
+        static_friction_factor=FACTOR,
+        stribeck_speed=W_ST,
+        rtol=1e-10,
+        integrator=integrator,
+    )
+    result = predict(system, [25.0], ["dynamic"], dynamics=params).solutions["dynamic"]
+    time, _, _, _ = _reference(START, END, W_ST)
+    # Each integrator at rtol 1e-10 against Radau at 1e-10; measured within 1e-9
+    # (LSODA, the loosest); 1e-8 leaves a margin of 10.
+    assert result.result.deployment_time[0] == pytest.approx(time, rel=1e-8)  # type: ignore[attr-defined]
+    assert_energy_closes(result.result)  # type: ignore[attr-defined]
