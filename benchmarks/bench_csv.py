@@ -12,7 +12,11 @@ the time is that of the ``read_table`` call, measured inside the process):
 
 Agreement: both give the same table (a digest of rows, values and bad-row report). A
 second case times ``ecdsim fit drop-test FILE`` end to end as a whole process (no
-baseline). ``python benchmarks/bench_csv.py [--quick]`` runs these cases alone.
+baseline). A third times ``ecdsim fit drop-test FILE --json`` (every point listed; issue
+12's goal: under 10 s and 500 MB at 1,000,000 rows) against what it did before: the same
+fit's ``to_dict()`` (one dict per point) through ``json.dumps(indent=2)``; agreement: the
+same number of points, and the peak memory of each process.
+``python benchmarks/bench_csv.py [--quick]`` runs these cases alone.
 """
 
 from __future__ import annotations
@@ -26,7 +30,18 @@ from typing import Any
 
 import numpy as np
 
-from harness import Case, Command, Notes, Timed, measure, same, scratch, table, venv_script
+from harness import (
+    Case,
+    Command,
+    Notes,
+    Timed,
+    measure,
+    run_process,
+    same,
+    scratch,
+    table,
+    venv_script,
+)
 
 HERE = Path(__file__).resolve().parent
 EXAMPLE = HERE.parent / "examples" / "drop_test.csv"
@@ -76,6 +91,19 @@ def read_once(path: Path) -> tuple[float, float, str]:
     return float(out[0]), float(out[1]), out[2]
 
 
+# The --json document as ecdsim wrote it before the points were streamed (issue 12).
+JSON_BEFORE = """
+import json, sys
+from ecdsim.characterize.droptest import fit_drop_test
+result = fit_drop_test(sys.argv[1], 25.0)
+document = result.to_dict()
+document["warnings"] = [w.to_dict() for w in result.warnings]
+document["parameter_file"] = None
+document["plots"] = []
+sys.stdout.write(json.dumps(document, indent=2, sort_keys=True, allow_nan=False) + "\\n")
+"""
+
+
 def cases(quick: bool) -> list[Case[Any]]:
     """Reading a large log both ways, and the fit end to end on it (quick: 100,000 rows)."""
     rows = 100_000 if quick else 1_000_000
@@ -101,6 +129,32 @@ def cases(quick: bool) -> list[Case[Any]]:
         )
 
     fit = Command((venv_script("ecdsim"), "fit", "drop-test", str(plain)))
+    json_peaks: dict[str, list[float]] = {"ecdsim": [], "before": []}
+
+    def json_run(argv: tuple[str, ...], key: str) -> Callable[[], Timed[int]]:
+        def run() -> Timed[int]:
+            done = run_process(argv)
+            if done.peak_bytes is not None:
+                json_peaks[key].append(done.peak_bytes / 2**20)
+            # Each point holds one "row" key, in either layout.
+            return Timed(done.seconds, done.stdout.count('"row": '))
+
+        return run
+
+    def json_memory() -> Notes:
+        if not json_peaks["ecdsim"] or not json_peaks["before"]:
+            return Notes(lines=("peak memory not measured (no /usr/bin/time)",))
+        now, before = max(json_peaks["ecdsim"]), max(json_peaks["before"])
+        return Notes(
+            lines=(
+                f"fit --json peak memory: {now:.0f} MB (goal < 500 MB), before {before:.0f} MB",
+            ),
+            data={"peak_mb_json": now, "peak_mb_json_before": before},
+            ok=True,
+        )
+
+    fit_json = json_run((venv_script("ecdsim"), "fit", "drop-test", str(plain), "--json"), "ecdsim")
+    before = json_run((sys.executable, "-c", JSON_BEFORE, str(plain)), "before")
     return [
         Case(
             name=f"read_table {rows:,} rows",
@@ -117,6 +171,18 @@ def cases(quick: bool) -> list[Case[Any]]:
             ecdsim=fit,
             repeats=5,
             description="ecdsim fit drop-test FILE end to end as a whole process (no baseline)",
+        ),
+        Case(
+            name=f"fit --json {rows:,} rows",
+            ecdsim=fit_json,
+            baseline=before,
+            baseline_name="the same fit's to_dict() through json.dumps(indent=2), as "
+            "fit --json wrote it before the points were streamed",
+            agree=same,
+            repeats=5,
+            goal_s=10.0 if not quick else None,
+            notes=json_memory,
+            description="ecdsim fit drop-test FILE --json end to end as a whole process",
         ),
     ]
 
