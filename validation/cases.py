@@ -715,8 +715,8 @@ def stribeck() -> CaseResult:
         title="Stribeck friction on the paper's example (dynamic method)",
         source=(
             "the paper's constants typed in plain Python with the friction "
-            "F_C + (F_brk - F_C) exp(-(w/w_St)^2) of Armstrong-Helouvry, Dupont and Canudas "
-            "de Wit (Automatica 30(7), 1994), integrated with scipy "
+            "F_C + (F_brk - F_C) exp(-(w/w_St)^2) (the LuGre model's Stribeck curve, Canudas "
+            "de Wit et al., IEEE TAC 40(3), 1995), integrated with scipy "
             "(`validation/scipy_reference.py`, PaperSystem.stribeck_time)"
         ),
         mapping=(

@@ -209,9 +209,10 @@ class PaperSystem:
         friction, from rest.
 
         ``J w' = T(phi) - F - (f - 1) F exp(-(w / w_St)^2) - B w``: the friction falls from
-        the breakaway f F at rest to the kinetic F = FECD_T + FS_T (Armstrong-Helouvry et
-        al. 1994, Gaussian exponent), one factor f for both frictions. The dissipation is
-        that of B and of the excess over F, ``int (B w + (f - 1) F exp(...)) w dt``.
+        the breakaway f F at rest to the kinetic F = FECD_T + FS_T (the LuGre model's
+        Stribeck curve, Canudas de Wit et al. 1995), one factor f for both frictions. The
+        dissipation is that of B and of the excess over F,
+        ``int (B w + (f - 1) F exp(...)) w dt``.
         """
         b, f = self.becd(temperature), self.friction(temperature)
         excess = (static_factor - 1.0) * f

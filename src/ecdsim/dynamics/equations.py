@@ -29,8 +29,8 @@ Stribeck friction (optional): with a Stribeck speed ``w_St`` the sliding frictio
 
     F(u) = F_C + (F_brk - F_C) exp(-(u / w_St)^2)        (u >= 0, forward frame)
 
-(the Stribeck curve with a Gaussian exponent, Armstrong-Helouvry, Dupont and Canudas de
-Wit, Automatica 30(7), 1994; no viscous term here: the damper's is the eddy law and BG).
+(the Gaussian Stribeck curve of the LuGre model, Canudas de Wit et al., IEEE TAC 40(3),
+1995; no viscous term here: the damper's is the eddy law and BG).
 The Coulomb part ``F_C`` stays folded into the drive ``a``; the excess ``F_brk - F_C``
 decays with speed, so ``J u' = a - k x - M_d - g(u)`` and ``E' = (M_d + g(u)) u`` with
 ``g = (F_brk - F_C) exp(-(u / w_St)^2)`` (:func:`stribeck_excess`): E then counts the
@@ -56,12 +56,14 @@ def stribeck_excess(
 ) -> tuple[FloatArray, FloatArray]:
     """The Stribeck part of the sliding friction above Coulomb, and its slope in speed.
 
-    ``g(u) = (F_brk - F_C) exp(-(u / w_St)^2)``: the Stribeck curve with a Gaussian
-    exponent of Armstrong-Helouvry, Dupont and Canudas de Wit, "A survey of models,
-    analysis tools and compensation methods for the control of machines with friction",
-    Automatica 30(7), 1994. The breakaway is at rest (u = 0) and w_St is used as given
-    (Simscape's Rotational Friction instead peaks at T_brk at a breakaway speed w_brk,
-    with w_St = sqrt(2) w_brk and a sqrt(2 e) scale; docs/model.md).
+    ``g(u) = (F_brk - F_C) exp(-(u / w_St)^2)``: the steady-state Stribeck curve
+    ``g(v) = F_C + (F_s - F_C) exp(-(v / v_s)^2)`` of the LuGre model (Canudas de Wit,
+    Olsson, Astrom and Lischinsky, "A new model for control of systems with friction",
+    IEEE Trans. Automatic Control 40(3), 419-425, 1995), one of the forms reviewed by
+    Armstrong-Helouvry, Dupont and Canudas de Wit, Automatica 30(7), 1994. The breakaway
+    is at rest (u = 0) and w_St is used as given (Simscape's Rotational Friction instead
+    peaks near T_brk at a breakaway speed w_brk, with w_St = sqrt(2) w_brk and a sqrt(2 e)
+    scale; docs/model.md).
 
     Parameters
     ----------
