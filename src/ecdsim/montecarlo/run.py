@@ -51,8 +51,9 @@ if TYPE_CHECKING:
 LARGE_RUN_SAMPLES = 2_000_000
 LARGE_RUN_CPUS = 2
 # Chunks computed at once by the in-process path (--workers 0, or small runs), capped at
-# the CPU count: two threads took a 10-million-sample run's chunk loop from ~1x to ~0.6x
-# its one-thread time on this project's 2-CPU machine (benchmarks/README.md).
+# the CPU count. On this project's shared 2-CPU machine (load average ~2 from other
+# sessions), run() of 40 chunks took 2.7 to 3.4 s on two threads against 3.3 to 4.0 s on
+# one (three alternating pairs); on a quiet machine the gain is larger.
 IN_PROCESS_THREADS = 2
 
 OUTPUTS = {
@@ -629,8 +630,9 @@ def _steady_heap() -> None:
 
     glibc gives each thread its own arena; by default it maps every large block afresh
     (its adaptive mmap threshold) and trims the heaps as soon as 128 KiB are free, so a
-    chunk's 0.5 MB arrays were page-faulted in anew on every use: two threads took 4x
-    the page faults and 2x the system time of one. A fixed mmap threshold and trim
+    chunk's 0.5 MB arrays were page-faulted in anew: in a 30-chunk test two threads took
+    70,000 to 140,000 page faults against about 10,000 for one; the fixed thresholds
+    halve them. A fixed mmap threshold and trim
     threshold of 128 MiB (as the LocalCluster workers get, DaskExecutor) keep the
     arrays on the heap; the chunks bound the memory anyway. Process-wide, once.
     """

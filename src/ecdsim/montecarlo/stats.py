@@ -457,9 +457,9 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
         return case
 
     # The temperatures are independent, and their order statistics (np.partition) and
-    # reductions release the GIL: on SUMMARY_THREADS threads they take ~0.6x the time of
-    # one on this project's 2-CPU machine. Each case is a pure function of its columns,
-    # collected in temperature order: the same summary on any number of threads.
+    # reductions release the GIL, so SUMMARY_THREADS threads share them. Each case is a
+    # pure function of its columns, collected in temperature order: the same summary on
+    # any number of threads (tested).
     threads = max(1, min(SUMMARY_THREADS, os.cpu_count() or 1, len(plan.temperatures)))
     if threads == 1:
         cases = [case_of(t, sums) for t, sums in zip(plan.temperatures, merged, strict=True)]
