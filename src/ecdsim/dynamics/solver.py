@@ -82,6 +82,7 @@ class _Cases:
     heat_capacity: FloatArray
     thermal_resistance: FloatArray
     stribeck_speed: FloatArray
+    stribeck: bool  # some case has a Stribeck speed
     eddy: EddyLaw
 
 
@@ -118,6 +119,7 @@ def _flatten(problem: DynamicProblem) -> _Cases:
         heat_capacity=flat(problem.heat_capacity),
         thermal_resistance=flat(problem.thermal_resistance),
         stribeck_speed=flat(problem.stribeck_speed),
+        stribeck=problem.stribeck,
         eddy=problem.eddy.flattened(shape),
     )
 
@@ -418,7 +420,8 @@ class _Segment:
     inertia: FloatArray  # J [kg*m^2]
     damping: FloatArray  # B [N*m*s/rad] (linear law at ambient)
     kinetic: FloatArray  # kinetic friction [N*m]
-    stribeck_excess: FloatArray  # breakaway minus kinetic friction where w_St is given [N*m]
+    # Breakaway minus kinetic friction where w_St is given [N*m]; None: no Stribeck speed.
+    stribeck_excess: FloatArray | None
     drive: FloatArray  # a, spring torque minus friction, forward frame [N*m]
     speed0: FloatArray  # forward-frame speed at the start [rad/s]
     cap: FloatArray  # time left before the stop time [s]
@@ -470,8 +473,10 @@ def _advance_cases(
     """
     seg = _segments(c, s, run, direction, problem.stop_time)
     step = _Step.empty(s.temp[run])
-    # Stribeck friction makes any sliding segment nonlinear, free play included.
-    integrated = (seg.engaged & problem.nonlinear) | (seg.stribeck_excess > 0.0)
+    integrated = seg.engaged & problem.nonlinear
+    if seg.stribeck_excess is not None:
+        # Stribeck friction makes any sliding segment nonlinear, free play included.
+        integrated = integrated | (seg.stribeck_excess > 0.0)
     closed_idx = np.flatnonzero(~integrated)
     if closed_idx.size:
         _step_closed_form(s, seg, closed_idx, step, records)
@@ -502,13 +507,16 @@ def _segments(
     )
     reach_kind = np.where(forward, np.where(gap_first, _EV["engage"], up_kind), down_kind)
     kinetic = np.where(eng, c.ecd_friction[run] + c.system_friction[run], c.system_friction[run])
-    # Stribeck friction falls from the breakaway (the stiction limit of _stick_or_break) to
-    # the kinetic friction with speed; its excess over the kinetic one, where w_St is given.
-    system_excess = c.system_friction[run] * (c.system_factor[run] - 1.0)
-    excess = np.where(
-        eng, c.ecd_friction[run] * (c.factor[run] - 1.0) + system_excess, system_excess
-    )
-    excess = np.where(np.isfinite(c.stribeck_speed[run]), np.maximum(excess, 0.0), 0.0)
+    excess = None
+    if c.stribeck:
+        # Stribeck friction falls from the breakaway (the stiction limit of _stick_or_break)
+        # to the kinetic friction with speed; its excess over the kinetic one, where w_St is
+        # given.
+        system_excess = c.system_friction[run] * (c.system_factor[run] - 1.0)
+        excess = np.where(
+            eng, c.ecd_friction[run] * (c.factor[run] - 1.0) + system_excess, system_excess
+        )
+        excess = np.where(np.isfinite(c.stribeck_speed[run]), np.maximum(excess, 0.0), 0.0)
     return _Segment(
         run=run,
         direction=direction,
@@ -583,7 +591,7 @@ def _step_integrated(
     # Free play (lost motion not yet closed) is integrated only for its Stribeck friction:
     # the damper side is at rest, so no damping torque and no heating (ratio 0).
     ratio = np.where(engaged, c.ratio[cases], 0.0)
-    stribeck = problem.stribeck
+    excess = seg.stribeck_excess
     out = integrate.advance_nonlinear(
         integrate.NonlinearSegments(
             inertia=seg.inertia[idx],
@@ -602,8 +610,8 @@ def _step_integrated(
             eddy=c.eddy,
             case=cases,
             thermal=problem.thermal,
-            stribeck_excess=seg.stribeck_excess[idx] if stribeck else None,
-            stribeck_speed=c.stribeck_speed[cases] if stribeck else None,
+            stribeck_excess=None if excess is None else excess[idx],
+            stribeck_speed=None if excess is None else c.stribeck_speed[cases],
         ),
         rtol=problem.rtol,
         method=problem.integrator,
