@@ -13,6 +13,7 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
+from ecdsim.model import LinearTemperatureLaw
 from ecdsim.units_display import (
     check_system,
     convert,
@@ -237,6 +238,7 @@ def test_friction_law_reference_forms_agree_exactly() -> None:
     ]
     laws = [parse_config(_with_laws(f)).system.load.system_friction for f in forms]
     for law in laws:
+        assert isinstance(law, LinearTemperatureLaw)
         assert law.slope == -0.0044
         assert law.at_0c == pytest.approx(0.58, abs=1e-15)
 
@@ -280,6 +282,21 @@ def _us_config(tmp_path: Any, output: str | None = None) -> Any:
     path = tmp_path / "us.toml"
     path.write_text(text, encoding="utf-8")
     return path
+
+
+def _legend_texts(ax: Any) -> list[str]:
+    """The legend entries of a matplotlib axes (it must have a legend)."""
+    legend = ax.get_legend()
+    assert legend is not None
+    return [t.get_text() for t in legend.get_texts()]
+
+
+def _ydata(line: Any) -> list[float]:
+    return [float(v) for v in line.get_ydata()]
+
+
+def _xdata(line: Any) -> list[float]:
+    return [float(v) for v in line.get_xdata()]
 
 
 def _run(*args: str) -> Any:
@@ -379,13 +396,13 @@ def test_us_plots_are_labelled_in_us_units(tmp_path: Any) -> None:
     fig = plot_torque_speed(prediction, units="us")
     ax = fig.axes[0]
     assert ax.get_ylabel() == "ECD reaction torque [lbf*in]"
-    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    labels = _legend_texts(ax)
     assert labels[1].startswith("77 degF: BECD 209 in*lbf*s/rad, FECD 4.73 lbf*in")
     # The 77 degF line starts at FECD_25 = N * FT_T = 380 * 1.407e-3 = 0.53466 N*m (paper
     # section 6), 0.53466 / 0.11298483 = 4.7322 lbf*in; rel 1e-4 covers that rounding.
-    assert ax.get_lines()[2].get_ydata()[0] == pytest.approx(4.7322, rel=1e-4)
+    assert _ydata(ax.get_lines()[2])[0] == pytest.approx(4.7322, rel=1e-4)
     fig = plot_deployment(prediction, units="us")
-    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    labels = _legend_texts(fig.axes[0])
     assert labels == [
         "-40 degF, exact quasi-static",
         "77 degF, exact quasi-static",
@@ -550,7 +567,7 @@ def test_fit_plots_in_us_units() -> None:
     si, us = plot_torque_speed(result, "si").axes[0], plot_torque_speed(result, "us").axes[0]
     assert us.get_ylabel() == "drive torque [lbf*in]"
     # Same points, torque divided by 0.1129848290276167 N*m per lbf*in (rounding only).
-    np_si, np_us = si.get_lines()[0].get_ydata(), us.get_lines()[0].get_ydata()
+    np_si, np_us = _ydata(si.get_lines()[0]), _ydata(us.get_lines()[0])
     assert list(np_us) == pytest.approx([y / LBF_IN_NM for y in np_si], rel=1e-12)
     fits = result.fits
     fig = plot_parameters(
@@ -563,7 +580,7 @@ def test_fit_plots_in_us_units() -> None:
     assert fig.axes[1].get_xlabel() == "temperature [degF]"
     assert fig.axes[0].get_ylabel() == "BECD [in*lbf*s/rad]"
     # The per-temperature points sit at -40, 77, 212 degF (the CSV's -40, 25, 100 degC).
-    points = [line.get_xdata() for line in fig.axes[1].get_lines() if len(line.get_xdata()) == 3]
+    points = [_xdata(line) for line in fig.axes[1].get_lines() if len(_xdata(line)) == 3]
     assert points  # the error bars (and their caps) at the fitted temperatures
     assert sorted(points[0]) == pytest.approx([-40.0, 77.0, 212.0], abs=1e-9)
 
@@ -575,16 +592,9 @@ def test_montecarlo_plot_legends_in_us_units() -> None:
 
     # Two temperatures, -40 and 100 degC: -40 and 212 degF in the legends.
     samples = {-40.0: np.array([1.0, 2.0, 3.0]), 100.0: np.array([2.0, 3.0, np.inf])}
-    labels = [
-        t.get_text()
-        for t in plot_histogram(samples, "deployment time [s]", "t", units="us")
-        .axes[0]
-        .get_legend()
-        .get_texts()
-    ]
-    assert labels == ["-40 degF", "212 degF (33 % stall)"]
-    legend = plot_cdf(samples, "deployment time [s]", "t", "us").axes[0].get_legend()
-    labels = [t.get_text() for t in legend.get_texts()]
+    histogram = plot_histogram(samples, "deployment time [s]", "t", units="us")
+    assert _legend_texts(histogram.axes[0]) == ["-40 degF", "212 degF (33 % stall)"]
+    labels = _legend_texts(plot_cdf(samples, "deployment time [s]", "t", "us").axes[0])
     assert labels == ["-40 degF", "212 degF"]
 
 

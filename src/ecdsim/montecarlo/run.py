@@ -33,7 +33,7 @@ import numpy as np
 
 from ecdsim._version import __version__
 from ecdsim.montecarlo import apply, sampling, store, streaming
-from ecdsim.montecarlo.columns import output_column
+from ecdsim.montecarlo.columns import output_column as output_column  # re-exported
 from ecdsim.montecarlo.tolerances import ToleranceSet, resolve
 
 if TYPE_CHECKING:

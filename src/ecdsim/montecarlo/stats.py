@@ -49,8 +49,9 @@ from ecdsim.montecarlo import repeatability, streaming
 # bin_count, bin_labels and MAX_BINS live in columns (shared with streaming) and are
 # re-exported here, where the estimators that use them are.
 from ecdsim.montecarlo.columns import MAX_BINS as MAX_BINS
-from ecdsim.montecarlo.columns import bin_count, output_column
+from ecdsim.montecarlo.columns import bin_count as bin_count
 from ecdsim.montecarlo.columns import bin_labels as bin_labels
+from ecdsim.montecarlo.columns import output_column
 from ecdsim.montecarlo.intervals import confidence_ranks, proportion_interval, rank_of
 from ecdsim.montecarlo.streaming import Sums
 
