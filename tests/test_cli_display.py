@@ -435,6 +435,8 @@ def test_help_has_no_type_noise() -> None:
         assert result.exit_code == 0, (args, result.output)
         assert "<bool>" not in result.stdout, args
         assert "list[" not in result.stdout, args
+        # nor a Python type beside a named argument or option (CONFIG <path>, PORT <int>)
+        assert not re.search(r"<(path|str|int|float)>", result.stdout), args
         assert "Example: ecdsim" in result.stdout, args  # one example on every screen
     deploy = runner.invoke(app, ["deploy", "--help"], env={"COLUMNS": "250"}).stdout
     assert re.search(r"--temperature\s+-T\s+TEMP\s", deploy)

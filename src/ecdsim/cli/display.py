@@ -223,13 +223,20 @@ def note(console: Console, text: str) -> None:
     console.print(escape(text), style="" if _DISPLAY.plain else "dim")
 
 
+def _no_type(ctx: _click.Context) -> str | None:
+    return None
+
+
 def _quiet_flags(params: list[_click.Parameter]) -> None:
-    from typer.core import TyperOption
+    from typer.core import TyperArgument, TyperOption
 
     for param in params:
         # A flag takes no value: show no "<bool>" type after it in --help.
         if isinstance(param, TyperOption) and param.is_flag and param.metavar is None:
             param.metavar = ""
+        # An argument named by its metavar (CONFIG, CSV) needs no "<path>" beside it.
+        if isinstance(param, TyperArgument) and param.metavar is not None:
+            param.display_type_rich = _no_type  # type: ignore[method-assign]
 
 
 class HelpCommand(TyperCommand):
