@@ -70,21 +70,29 @@ def _python_values(values: np.ndarray[Any, Any]) -> list[Any]:
     return listed
 
 
-def _cell_texts(values: np.ndarray[Any, Any], name: str) -> list[str]:
+def _cell_texts(values: np.ndarray[Any, Any], name: str, look: bool = True) -> list[str]:
     """The JSON text of each value of one column block, by the C encoder.
 
     A column that repeats a few values (a constant inertia, the set of masses, the
     outlier flags) has each distinct value formatted once. Distinct means distinct bits,
-    so that -0.0 keeps its sign as ``json.dumps`` would write it.
+    so that -0.0 keeps its sign as ``json.dumps`` would write it. ``look=False`` skips
+    that search (a column whose first block had no repeats to speak of).
     """
     if values.size == 0:
         return []
-    bits = values.view(np.uint64) if values.dtype == np.float64 else values
-    distinct, inverse = np.unique(bits, return_inverse=True)
-    if 4 * distinct.size <= values.size:
-        once = _texts(distinct.view(values.dtype) if bits is not values else distinct, name)
-        return [once[i] for i in inverse.ravel().tolist()]
+    if look:
+        bits = values.view(np.uint64) if values.dtype == np.float64 else values
+        distinct, inverse = np.unique(bits, return_inverse=True)
+        if 4 * distinct.size <= values.size:
+            once = _texts(distinct.view(values.dtype) if bits is not values else distinct, name)
+            return [once[i] for i in inverse.ravel().tolist()]
     return _texts(values, name)
+
+
+def _repeats(values: np.ndarray[Any, Any]) -> bool:
+    """True where a column block repeats its values enough to format each only once."""
+    bits = values.view(np.uint64) if values.dtype == np.float64 else values
+    return values.size > 0 and 4 * np.unique(bits).size <= values.size
 
 
 def _texts(values: np.ndarray[Any, Any], name: str) -> list[str]:
@@ -112,8 +120,11 @@ def _table_chunks(table: RowTable, indent: str) -> Iterator[str]:
     template = "{" + ", ".join(json.dumps(k).replace("%", "%%") + ": %s" for k in names) + "}"
     row_indent = indent + "  "
     yield "["
+    # Whether to look for repeats, decided on each column's first block (a million
+    # distinct speeds need no search for duplicates in every block).
+    look = {k: _repeats(arrays[k][:BLOCK_ROWS]) for k in names}
     for start in range(0, n, BLOCK_ROWS):
-        block = [_cell_texts(arrays[k][start : start + BLOCK_ROWS], k) for k in names]
+        block = [_cell_texts(arrays[k][start : start + BLOCK_ROWS], k, look[k]) for k in names]
         lines = [template % cells for cells in zip(*block, strict=True)]
         joiner = ",\n" + row_indent
         yield ("\n" if start == 0 else ",\n") + row_indent + joiner.join(lines)

@@ -217,9 +217,14 @@ def _write_outputs(
 def _emit_json(document: dict[str, Any]) -> None:
     # Points stay columns and are streamed: a million-row log writes in seconds, in
     # bounded memory (ecdsim.jsonrows).
+    import sys
+
     from ecdsim.jsonrows import write_json
 
-    write_json(document, lambda text: typer.echo(text, nl=False))
+    # Straight to the stream: typer.echo would scan every block for ANSI codes to strip
+    # when stdout is not a terminal (a regex over hundreds of MB for a large log).
+    write_json(document, sys.stdout.write)
+    sys.stdout.flush()
 
 
 def _finish(
