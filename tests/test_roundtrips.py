@@ -3,7 +3,6 @@ and the test extra's dependencies."""
 
 from __future__ import annotations
 
-import subprocess
 import tomllib
 from pathlib import Path
 
@@ -45,17 +44,16 @@ def test_report_says_when_it_creates_the_folder(tmp_path: Path) -> None:
     assert "note: created" not in again.stderr  # it exists now: nothing to say
 
 
-def test_no_unused_test_dependency() -> None:
+def test_the_test_extra_holds_what_the_tests_import_indirectly() -> None:
     extra = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     test_extra = extra["optional-dependencies"]["test"]
-    assert not any(dep.startswith("httpx2") for dep in test_extra)
+    # httpx2 is imported by no module of ours but by starlette's TestClient, which with
+    # plain httpx only warns that it is deprecated: an error under the tests' warning
+    # filters. Dropped once as "unused", it failed make test on a fresh clone.
+    assert any(dep.startswith("httpx2") for dep in test_extra)
+    import starlette.testclient
+
+    # what the TestClient took: httpx2 when installed
+    assert vars(starlette.testclient)["httpx"].__name__ == "httpx2"
     # tomlkit keeps the user's file in `fit -o`: a core dependency, importable.
     assert any(dep.startswith("tomlkit") for dep in extra["dependencies"])
-    found = subprocess.run(
-        ["git", "grep", "-l", "httpx2", "--", "src", "tests", "benchmarks", "validation"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    assert found.stdout.splitlines() in ([], ["tests/test_roundtrips.py"])
