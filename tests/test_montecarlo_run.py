@@ -9,7 +9,6 @@ seconds that worker processes take. One CLI test runs real worker processes.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
 import shlex
@@ -102,25 +101,29 @@ def study(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
 
 
 def start_cli(args: list[str], cwd: Path) -> subprocess.Popen[str]:
-    process = subprocess.Popen(
+    return subprocess.Popen(
         [sys.executable, "-m", "ecdsim", *args],
         cwd=cwd,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=as_under_a_terminal,
     )
-    yield_the_cpu(process)
-    return process
 
 
-def yield_the_cpu(process: subprocess.Popen[str]) -> None:
-    """Run the study at the lowest priority, so that this test, which watches its chunk
-    files to interrupt it, is never starved of the CPU: two compute threads on two cores
-    finish 200 small chunks in under a second, and a starved watcher once saw the run
-    end before it could send the signal. Its workers (Dask) inherit the priority."""
-    # An OSError: the process already ended, which the test then reports.
-    with contextlib.suppress(OSError):
-        os.setpriority(os.PRIO_PROCESS, process.pid, 19)
+def as_under_a_terminal() -> None:
+    """In the study's process before it starts: Ctrl-C as a terminal delivers it, and the
+    lowest CPU priority.
+
+    SIGINT is set to its default and unblocked: a test run started in the background
+    (``make test &``, a CI runner) inherits SIGINT ignored, and the study would then
+    finish as if never interrupted. The priority: two compute threads on two cores finish
+    200 small chunks in under a second, and the watcher that interrupts the run must not
+    be starved of the CPU meanwhile. Its workers (Dask) inherit both.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    os.nice(19)
 
 
 def interrupt_after(process: subprocess.Popen[str], out: Path, chunks: int, sig: int) -> str:
@@ -193,8 +196,8 @@ def test_ctrl_c_in_a_terminal_stops_a_dask_run_cleanly(
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,  # its own process group, as under a terminal
+        preexec_fn=as_under_a_terminal,
     )
-    yield_the_cpu(process)
     deadline = time.monotonic() + 120.0
     while len(chunk_files(out)) < 3:
         if process.poll() is not None:
