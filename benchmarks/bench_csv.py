@@ -21,7 +21,6 @@ same number of points, and the peak memory of each process.
 
 from __future__ import annotations
 
-import argparse
 import subprocess
 import sys
 from collections.abc import Callable, Sequence
@@ -30,16 +29,15 @@ from typing import Any
 
 import numpy as np
 
+import harness
 from harness import (
     Case,
     Command,
     Notes,
     Timed,
-    measure,
     run_process,
     same,
     scratch,
-    table,
     venv_script,
 )
 
@@ -188,14 +186,8 @@ def cases(quick: bool) -> list[Case[Any]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run these cases alone and print their table."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
-    parser.add_argument("--quick", action="store_true", help="100,000 rows instead of 1,000,000")
-    parser.add_argument("--repeats", type=int, default=None)
-    args = parser.parse_args(argv)
-    rows = [measure(case, args.repeats) for case in cases(args.quick)]
-    print("\n".join(table(rows)))
-    return 0 if all(row.ok for row in rows) else 1
+    """Run this file's cases alone and print their table (exit 1 if an agreement fails)."""
+    return harness.run_alone(cases, __doc__, argv, quick_help="100,000 rows instead of 1,000,000")
 
 
 if __name__ == "__main__":

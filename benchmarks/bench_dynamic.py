@@ -41,7 +41,6 @@ import os
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_variable] = "1"
 
-import argparse  # noqa: E402 - after the thread settings above, on purpose
 import dataclasses  # noqa: E402
 import math  # noqa: E402
 import statistics  # noqa: E402
@@ -55,6 +54,7 @@ import numpy as np  # noqa: E402
 from numpy.typing import NDArray  # noqa: E402
 from scipy.integrate import solve_ivp  # noqa: E402
 
+import harness  # noqa: E402
 from ecdsim.config import load_config  # noqa: E402
 from ecdsim.deployment import predict  # noqa: E402
 from ecdsim.dynamics import (  # noqa: E402
@@ -75,7 +75,7 @@ from ecdsim.model import (  # noqa: E402
     Load,
     TabulatedSpring,
 )
-from harness import Case, Notes, max_relative_difference, measure, table  # noqa: E402
+from harness import Case, Notes, max_relative_difference  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "paper_cc16.toml"
@@ -629,14 +629,8 @@ def cases(quick: bool) -> list[Case[Any]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run this file's cases alone and print their table; exit 1 if an agreement fails."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
-    parser.add_argument("--quick", action="store_true", help="smaller sizes")
-    parser.add_argument("--repeats", type=int, default=None, help="timed repeats per case")
-    args = parser.parse_args(argv)
-    rows = [measure(case, args.repeats) for case in cases(args.quick)]
-    print("\n".join(table(rows)))
-    return 0 if all(row.ok for row in rows) else 1
+    """Run this file's cases alone and print their table (exit 1 if an agreement fails)."""
+    return harness.run_alone(cases, __doc__, argv, quick_help="smaller sizes")
 
 
 if __name__ == "__main__":

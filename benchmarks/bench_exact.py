@@ -32,7 +32,6 @@ import os
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_variable] = "1"
 
-import argparse  # noqa: E402 - after the thread settings above, on purpose
 import sys  # noqa: E402
 import tracemalloc  # noqa: E402
 from collections.abc import Sequence  # noqa: E402
@@ -41,6 +40,7 @@ from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+import harness  # noqa: E402
 from ecdsim.config import load_config  # noqa: E402
 from ecdsim.deployment import build_problem, predict  # noqa: E402
 from ecdsim.model import (  # noqa: E402
@@ -53,7 +53,7 @@ from ecdsim.model import (  # noqa: E402
     Load,
 )
 from ecdsim.solvers import EXACT, DeploymentSolution, QuasiStaticProblem  # noqa: E402
-from harness import Case, Notes, max_relative_difference, measure, table  # noqa: E402
+from harness import Case, Notes, max_relative_difference  # noqa: E402
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "paper_cc16.toml"
 SEED = 20240611
@@ -251,14 +251,8 @@ def cases(quick: bool) -> list[Case[Any]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run these cases alone and print their table."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
-    parser.add_argument("--quick", action="store_true", help="100,000 sets, not 1,000,000")
-    parser.add_argument("--repeats", type=int, default=None)
-    args = parser.parse_args(argv)
-    rows = [measure(case, args.repeats) for case in cases(args.quick)]
-    print("\n".join(table(rows)))
-    return 0 if all(row.ok for row in rows) else 1
+    """Run this file's cases alone and print their table (exit 1 if an agreement fails)."""
+    return harness.run_alone(cases, __doc__, argv, quick_help="100,000 sets, not 1,000,000")
 
 
 if __name__ == "__main__":

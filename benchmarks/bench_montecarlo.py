@@ -24,7 +24,6 @@ issue's goal: ecdsim within 3x of the baseline, a ratio of at least 0.33 (1/3).
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import re
@@ -35,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 import harness
-from harness import Case, Notes, Timed, measure, scratch, table, venv_script
+from harness import Case, Notes, Timed, scratch, venv_script
 
 HERE = Path(__file__).resolve().parent
 EXAMPLE = HERE.parent / "examples" / "paper_cc16_tolerances.toml"
@@ -144,14 +143,8 @@ def cases(quick: bool) -> list[Case[Any]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run this case alone and print its table."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
-    parser.add_argument("--quick", action="store_true", help="1,000,000 samples, not 10,000,000")
-    parser.add_argument("--repeats", type=int, default=None)
-    args = parser.parse_args(argv)
-    rows = [measure(case, args.repeats) for case in cases(args.quick)]
-    print("\n".join(table(rows)))
-    return 0 if all(row.ok for row in rows) else 1
+    """Run this file's cases alone and print their table (exit 1 if an agreement fails)."""
+    return harness.run_alone(cases, __doc__, argv, quick_help="1,000,000 samples, not 10,000,000")
 
 
 if __name__ == "__main__":

@@ -19,7 +19,6 @@ these cases only.
 
 from __future__ import annotations
 
-import argparse
 import compileall
 import importlib.util
 import json
@@ -31,7 +30,8 @@ from collections.abc import Callable, Sequence
 from functools import partial
 from typing import Any
 
-from harness import ROOT, Case, Command, Notes, measure, table, venv_script
+import harness
+from harness import ROOT, Case, Command, Notes, venv_script
 
 MARKER = "ECDSIM-BENCH-MODULES="
 HEAVY = ("numpy", "scipy", "matplotlib", "pint", "pydantic", "pandas", "jinja2")
@@ -186,14 +186,8 @@ def cases(quick: bool) -> list[Case[Any]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run these cases alone and print their table."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--repeats", type=int, default=None)
-    args = parser.parse_args(argv)
-    rows = [measure(case, args.repeats) for case in cases(args.quick)]
-    print("\n".join(table(rows)))
-    return 0 if all(row.ok for row in rows) else 1
+    """Run this file's cases alone and print their table (exit 1 if an agreement fails)."""
+    return harness.run_alone(cases, __doc__, argv, quick_help="smaller sizes")
 
 
 if __name__ == "__main__":

@@ -14,13 +14,13 @@ between the numbers of the two prediction documents. Goal (issue 7): a request u
 
 from __future__ import annotations
 
-import argparse
 import tomllib
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from harness import ROOT, Case, max_relative_difference, measure, table
+import harness
+from harness import ROOT, Case, max_relative_difference
 
 GOAL_S = 0.1
 
@@ -102,14 +102,8 @@ def cases(quick: bool) -> list[Case[Any]]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run these cases alone and print their table."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--repeats", type=int, default=None)
-    args = parser.parse_args(argv)
-    rows = [measure(c, args.repeats) for c in cases(args.quick)]
-    print("\n".join(table(rows)))
-    return 0 if all(row.ok for row in rows) else 1
+    """Run this file's cases alone and print their table (exit 1 if an agreement fails)."""
+    return harness.run_alone(cases, __doc__, argv, quick_help="smaller sizes")
 
 
 if __name__ == "__main__":

@@ -48,6 +48,7 @@ after timing, returning lines to print under the table and a dict for results.js
 
 from __future__ import annotations
 
+import argparse
 import atexit
 import gc
 import math
@@ -486,3 +487,23 @@ def _rate(value: float) -> str:
         if value >= scale:
             return f"{value / scale:.2f} {suffix}"
     return f"{value:.1f}"
+
+
+def run_alone(
+    cases: Callable[[bool], Sequence[Case[Any]]],
+    doc: str | None,
+    argv: Sequence[str] | None = None,
+    quick_help: str = "smaller sizes",
+) -> int:
+    """A bench file's own ``main``: run its cases alone and print their table.
+
+    Options ``--quick`` (``quick_help``) and ``--repeats``; exit status 1 if an agreement
+    fails, as ``run.py``'s.
+    """
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0] if doc else None)
+    parser.add_argument("--quick", action="store_true", help=quick_help)
+    parser.add_argument("--repeats", type=int, default=None, help="timed repeats per case")
+    args = parser.parse_args(argv)
+    rows = [measure(case, args.repeats) for case in cases(args.quick)]
+    print("\n".join(table(rows)))
+    return 0 if all(row.ok for row in rows) else 1
