@@ -4,6 +4,8 @@
 # Debian's npm (root or password-less sudo), else stop at once with one line saying what to
 # install, so the test is never skipped.
 set -euo pipefail
+# This script's folder, without dirname (its test runs it with bash alone on the PATH).
+case "${BASH_SOURCE[0]}" in */*) HERE=${BASH_SOURCE[0]%/*} ;; *) HERE=. ;; esac
 VERSION=4.14.1
 PREFIX=${ECDSIM_AXE_PREFIX:-.venv/axe}
 AXE="$PREFIX/node_modules/axe-core/axe.min.js"
@@ -14,22 +16,7 @@ fi
 NPM=${ECDSIM_NPM:-npm}
 if ! command -v "$NPM" >/dev/null 2>&1; then
     # As for chromium: install Debian's npm where we may (root or password-less sudo).
-    if ! command -v apt-get >/dev/null 2>&1; then
-        echo "error: axe-core is missing and npm is not available (nor apt-get): install Debian's 'npm' package, then rerun make test" >&2
-        exit 2
-    fi
-    SUDO=""
-    if [ "$(id -u)" -ne 0 ]; then
-        if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
-            SUDO="sudo -n"
-        else
-            echo "error: axe-core is missing and installing npm needs root: run 'sudo apt-get install -y npm', then rerun make test" >&2
-            exit 2
-        fi
-    fi
-    echo "installing Debian's npm for the browser tests' axe-core (apt-get)..."
-    $SUDO apt-get update -qq
-    $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq npm >/dev/null
+    bash "$HERE/apt-install.sh" "axe-core's installer npm" npm
     if ! command -v "$NPM" >/dev/null 2>&1; then
         echo "error: apt-get installed 'npm' but $NPM is still missing" >&2
         exit 2
