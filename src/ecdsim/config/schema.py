@@ -40,6 +40,7 @@ from ecdsim.config.units import (
     HEAT_CAPACITY,
     NUMBER,
     THERMAL_RESISTANCE,
+    TORSIONAL_STIFFNESS,
     Kind,
     quoted,
 )
@@ -61,6 +62,7 @@ from ecdsim.model import (
 
 # Dynamics (docs/dynamics.md).
 PositiveHeatCapacity = Annotated[float, quantity(HEAT_CAPACITY, positive), HEAT_CAPACITY]
+PositiveStiffness = Annotated[float, quantity(TORSIONAL_STIFFNESS, positive), TORSIONAL_STIFFNESS]
 PositiveThermalResistance = Annotated[
     float, quantity(THERMAL_RESISTANCE, positive), THERMAL_RESISTANCE
 ]
@@ -230,6 +232,10 @@ class GearboxSpec(_Section):
     coulomb_friction: NonNegativeTorque
     lost_motion: NonNegativeAngle = 0.0
     inertia: NonNegativeInertia = 0.0  # referred to the high-speed shaft, like BG and FG
+    # Compliant backlash (dynamic method): the mesh's torsional stiffness and damping in
+    # series with the lost motion, at the input shaft; omitted = a rigid mesh.
+    stiffness: PositiveStiffness | None = None
+    mesh_damping: NonNegativeDamping | None = None
 
     @model_validator(mode="after")
     def _one_damping(self) -> GearboxSpec:
@@ -237,6 +243,11 @@ class GearboxSpec(_Section):
             raise ValueError(
                 "give exactly one of damping_fraction (BG/BD, e.g. 0.26) and damping_rate "
                 "(BG in N*m*s/rad)"
+            )
+        if self.mesh_damping is not None and self.stiffness is None:
+            raise ValueError(
+                "mesh_damping needs stiffness (the mesh's torsional stiffness in N*m/rad): "
+                "it damps a compliant mesh only"
             )
         return self
 
@@ -457,6 +468,8 @@ class ConfigSpec(_Section):
             ),
             rtol=self.analysis.rtol,
             integrator=self.analysis.integrator,
+            gear_stiffness=self.gearbox.stiffness,
+            gear_mesh_damping=self.gearbox.mesh_damping or 0.0,
         )
 
 

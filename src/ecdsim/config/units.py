@@ -332,6 +332,7 @@ KINEMATIC_VISCOSITY = Kind("kinematic viscosity", "m^2/s", "10000 mm^2/s")
 # Dynamics quantities (docs/dynamics.md); INERTIA and TIME above serve them too.
 HEAT_CAPACITY = Kind("heat capacity", "J/K", "90 J/K")
 THERMAL_RESISTANCE = Kind("thermal resistance", "K/W", "2 K/W")
+TORSIONAL_STIFFNESS = Kind("torsional stiffness", "N*m/rad", "2e4 N*m/rad")
 
 
 def temperature_problem(celsius: float) -> str | None:

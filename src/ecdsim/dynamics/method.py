@@ -115,7 +115,9 @@ class DynamicMethod:
         dynamic = _require_dynamic(problem)
         size = int(np.prod(dynamic.batch_shape))
         # Closed-form records are small; integrated ones hold every step of every case.
-        record = not (dynamic.nonlinear or dynamic.stribeck) or size <= RECORD_LIMIT
+        record = (
+            not (dynamic.nonlinear or dynamic.stribeck or dynamic.compliant) or size <= RECORD_LIMIT
+        )
         return solution_from_result(self.name, dynamic, solve_dynamic(dynamic, record=record))
 
     def trajectory(self, problem: QuasiStaticProblem, times: ArrayLike) -> Trajectory:

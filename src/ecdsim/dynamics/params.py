@@ -91,6 +91,11 @@ class DynamicParameters:
     system_static_friction_factor : breakaway over kinetic system friction FS_T (hinge,
         harness) [-], >= 1; None (the default) = ``static_friction_factor``, one factor
         for both frictions as before the two were separated
+    gear_stiffness : torsional stiffness of the gear mesh in series with the lost motion,
+        at the input shaft [N*m/rad], > 0; None (the default) = a rigid mesh (today's
+        plastic engagement). Compliant backlash: :mod:`ecdsim.dynamics.backlash`
+    gear_mesh_damping : damping of the gear mesh in contact, at the input shaft
+        [N*m*s/rad], >= 0 (only with ``gear_stiffness``)
     """
 
     load_inertia: Param
@@ -108,6 +113,8 @@ class DynamicParameters:
     max_events: int = 10_000
     system_static_friction_factor: Param | None = None
     stribeck_speed: Param | None = None
+    gear_stiffness: Param | None = None
+    gear_mesh_damping: Param = 0.0
 
     def __post_init__(self) -> None:
         system_factor = (
@@ -124,6 +131,15 @@ class DynamicParameters:
                 "stribeck_speed must be > 0",
             ),
             (np.asarray(self.load_inertia, dtype=float) > 0.0, "load_inertia must be > 0"),
+            (
+                np.asarray(math.inf if self.gear_stiffness is None else self.gear_stiffness) > 0.0,
+                "gear_stiffness must be > 0",
+            ),
+            (
+                np.isfinite(np.asarray(self.gear_mesh_damping, dtype=float))
+                & (np.asarray(self.gear_mesh_damping, dtype=float) >= 0.0),
+                "gear_mesh_damping must be >= 0",
+            ),
             (np.asarray(self.rotor_inertia, dtype=float) >= 0.0, "rotor_inertia must be >= 0"),
             (
                 np.asarray(self.gearbox_inertia, dtype=float) >= 0.0,

@@ -40,6 +40,8 @@ _CASE_FIELDS = (
     "heat_capacity",
     "thermal_resistance",
     "stribeck_speed",
+    "gear_stiffness",
+    "gear_mesh_damping",
 )
 
 
@@ -80,6 +82,9 @@ class DynamicProblem(QuasiStaticProblem):
     thermal_resistance : damper to ambient [K/W]; inf for adiabatic
     stribeck_speed : w_St, Stribeck speed at the input shaft [rad/s]; inf (the default)
         for none (kinetic friction independent of speed, as before)
+    gear_stiffness : c, torsional stiffness of the gear mesh at the input shaft
+        [N*m/rad]; inf (the default) for a rigid mesh (plastic engagement)
+    gear_mesh_damping : d, damping of the mesh in contact at the input shaft [N*m*s/rad]
     eddy : the damper's eddy-current law (linear Eq. 1 or roll-off)
     thermal : True when self-heating is modelled
     stop_time : end of the simulated interval [s]
@@ -105,6 +110,8 @@ class DynamicProblem(QuasiStaticProblem):
     thermal_resistance: FloatArray
     eddy: EddyLaw
     stribeck_speed: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
+    gear_stiffness: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
+    gear_mesh_damping: FloatArray = field(default_factory=lambda: np.asarray(0.0))
     thermal: bool = False
     stop_time: float = math.inf
     rtol: float = 1e-8
@@ -142,6 +149,11 @@ class DynamicProblem(QuasiStaticProblem):
     def stribeck(self) -> bool:
         """True when some case's sliding friction depends on speed (a Stribeck speed)."""
         return bool(np.any(np.isfinite(self.stribeck_speed)))
+
+    @property
+    def compliant(self) -> bool:
+        """True when some case has a compliant gear mesh (compliant backlash)."""
+        return bool(np.any(np.isfinite(self.gear_stiffness)))
 
     @property
     def total_inertia(self) -> FloatArray:
@@ -220,6 +232,8 @@ def dynamic_problem(
             f"{float(np.max(start)):.6g} rad",
         )
     thermal = params.thermal
+    if params.gear_stiffness is not None:
+        _check_compliant(params, reflected)
     return DynamicProblem(
         angles=base.angles,
         torques=base.torques,
@@ -253,9 +267,35 @@ def dynamic_problem(
         stribeck_speed=np.asarray(
             math.inf if params.stribeck_speed is None else params.stribeck_speed, dtype=float
         ),
+        gear_stiffness=np.asarray(
+            math.inf if params.gear_stiffness is None else params.gear_stiffness, dtype=float
+        ),
+        gear_mesh_damping=np.asarray(params.gear_mesh_damping, dtype=float),
         thermal=thermal is not None,
         stop_time=params.stop_time,
         rtol=params.rtol,
         integrator=params.integrator,
         max_events=params.max_events,
     )
+
+
+def _check_compliant(params: DynamicParameters, damper_inertia: FloatArray) -> None:
+    """What the compliant backlash (two degrees of freedom) does not model yet."""
+    if params.thermal is not None:
+        raise DynamicDomainError(
+            "gearbox.stiffness",
+            "cannot be combined with [damper.thermal] yet (self-heating is modelled for "
+            "the rigid mesh only)",
+        )
+    if params.stribeck_speed is not None:
+        raise DynamicDomainError(
+            "gearbox.stiffness",
+            "cannot be combined with [damper] stribeck_speed yet (Stribeck friction is "
+            "modelled for the rigid mesh only)",
+        )
+    if np.any(np.asarray(damper_inertia) <= 0.0):
+        raise DynamicDomainError(
+            "gearbox.stiffness",
+            "needs a damper-side inertia: give [damper] rotor_inertia or [gearbox] inertia "
+            "> 0 kg*m^2 (a massless damper side behind a compliant mesh has no dynamics)",
+        )

@@ -42,6 +42,8 @@ EVENT_KINDS = (
     "creep",  # asymptotic approach to the static equilibrium (time = inf)
     "event_limit",  # too many events: the run was cut short
     "horizon",  # the integrator reached its time horizon without an event
+    "separate",  # compliant backlash: the mesh's flanks part (contact lost)
+    "contact",  # compliant backlash: the flanks meet again (contact regained)
 )
 STATUSES = (
     "running",
@@ -83,6 +85,10 @@ class EnergyBalance:
     impact_loss : kinetic energy lost in impacts on the stops (rebounds, settling) [J]
     final_kinetic_energy : kinetic energy at the end of the run (absorbed by the latch
         when the run ends latched) [J]
+    mesh_dissipation : compliant backlash only: energy dissipated in the gear mesh (its
+        damping, and the stored energy lost when the flanks part faster than the mesh
+        relaxes) [J]; None for a rigid mesh
+    elastic_energy : compliant backlash only: energy stored in the mesh at the end [J]
     """
 
     spring_work: FloatArray
@@ -92,11 +98,18 @@ class EnergyBalance:
     engagement_loss: FloatArray
     impact_loss: FloatArray
     final_kinetic_energy: FloatArray
+    # Compliant backlash only (None otherwise, so the rigid account is unchanged).
+    mesh_dissipation: FloatArray | None = None
+    elastic_energy: FloatArray | None = None
 
     def reshaped(self, shape: tuple[int, ...]) -> EnergyBalance:
         """The same balance with arrays of the given shape."""
+
+        def shaped(value: FloatArray | None) -> FloatArray | None:
+            return None if value is None else np.asarray(value).reshape(shape)
+
         return EnergyBalance(
-            **{f.name: np.asarray(getattr(self, f.name)).reshape(shape) for f in fields(self)}
+            **{f.name: shaped(getattr(self, f.name)) for f in fields(self)}  # type: ignore[arg-type]
         )
 
     @property
@@ -113,6 +126,8 @@ class EnergyBalance:
             + self.engagement_loss
             + self.impact_loss
             + self.final_kinetic_energy
+            + (0.0 if self.mesh_dissipation is None else self.mesh_dissipation)
+            + (0.0 if self.elastic_energy is None else self.elastic_energy)
         )
 
     @property
@@ -402,6 +417,14 @@ class DynamicResult:
                 "engagement_loss": at(e.engagement_loss),
                 "impact_loss": at(e.impact_loss),
                 "final_kinetic": at(e.final_kinetic_energy),
+                **(
+                    {}
+                    if e.mesh_dissipation is None or e.elastic_energy is None
+                    else {
+                        "mesh_dissipation": at(e.mesh_dissipation),
+                        "final_elastic": at(e.elastic_energy),
+                    }
+                ),
             },
             "energy_balance_error": at(e.error),
         }

@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from ecdsim._types import BoolArray, FloatArray
 from ecdsim.dynamics import integrate, linear
+from ecdsim.dynamics.backlash import solve_compliant
 from ecdsim.dynamics.damping import EddyLaw
 from ecdsim.dynamics.problem import DynamicProblem
 from ecdsim.dynamics.records import ClosedFormRecord, IntegratedRecord
@@ -280,7 +281,13 @@ class _State:
 
 
 def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult:
-    """Solve every case of ``problem``; ``record`` keeps the segments for time series."""
+    """Solve every case of ``problem``; ``record`` keeps the segments for time series.
+
+    A compliant gear mesh (``gear_stiffness`` finite) makes the load and the damper side
+    two bodies: :func:`ecdsim.dynamics.backlash.solve_compliant` solves those problems.
+    """
+    if problem.compliant:
+        return solve_compliant(problem, record=record)
     c = _flatten(problem)
     s = _State.initial(c)
     ke0 = mechanics.kinetic_energy(np.where(s.engaged, c.total_inertia, c.load_inertia), s.w)

@@ -1,0 +1,414 @@
+"""Compliant backlash (issue 16 item 3): the load and the damper side coupled by an elastic
+mesh with lost motion (Modelica's ElastoBacklash), against hand solutions, a tight scipy
+Radau integration of the same equations written here, and the rigid limit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from ecdsim.config import load_config
+from ecdsim.config.errors import ConfigError
+from ecdsim.deployment import ModelDomainError, predict
+from ecdsim.dynamics import DynamicParameters, Thermal
+from ecdsim.dynamics.result import DynamicResult
+from ecdsim.physics.mechanics import elasto_backlash_torque
+from tests.dynamics_reference import assert_energy_closes, toy_system
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "paper_cc16_dynamic.toml"
+
+
+def _solve(system_kwargs: dict[str, float], **params: object) -> DynamicResult:
+    system = toy_system(**system_kwargs)  # type: ignore[arg-type]
+    prediction = predict(system, 25.0, ["dynamic"], dynamics=DynamicParameters(**params))  # type: ignore[arg-type]
+    result = prediction.solutions["dynamic"].result  # type: ignore[attr-defined]
+    assert isinstance(result, DynamicResult)
+    return result
+
+
+def _times(result: DynamicResult, kind: str) -> list[float]:
+    return [
+        float(t)
+        for t, k in zip(result.events.time, result.events.names(), strict=True)
+        if k == kind
+    ]
+
+
+def _speeds(result: DynamicResult, kind: str) -> list[float]:
+    return [
+        float(w)
+        for w, k in zip(result.events.speed, result.events.names(), strict=True)
+        if k == kind
+    ]
+
+
+def test_contact_torque_by_hand() -> None:
+    # c = 100, d = 2, b = 0.02 (flanks at +-0.01): inside the gap nothing; past the forward
+    # flank c (0.03 - 0.01) + d w; the damping cannot make it pull (limited at 0).
+    tau = elasto_backlash_torque(
+        [0.005, 0.03, 0.03, -0.03, -0.03], [5.0, 0.5, -5.0, 5.0, -0.5], 0.02, 100.0, 2.0
+    )
+    assert tau.tolist() == pytest.approx([0.0, 3.0, 0.0, 0.0, -3.0], abs=1e-15)
+
+
+def test_elastic_impacts_through_the_backlash_by_hand() -> None:
+    """A free load (no spring, no friction, no damping) crosses the gap and hits the
+    resting damper side through an undamped mesh. Each contact lasts half a period of the
+    two-inertia mode, pi / sqrt(c (1/J_L + 1/J_D)), and is an elastic collision; the
+    damper side then runs ahead across the gap at the same relative speed and strikes the
+    load's other flank (the load is overrun), which gives the speeds back."""
+    jl, jd, c, w0, gap = 2.0, 0.5, 1e3, 0.2, 0.1
+    result = _solve(
+        {
+            "damping": 0.0,
+            "system_friction": 0.0,
+            "start_torque": 0.0,
+            "end_torque": 0.0,
+            "travel": 1.0,
+            "lost_motion": gap,
+        },
+        load_inertia=jl,
+        rotor_inertia=jd,
+        initial_speed=w0,
+        gear_stiffness=c,
+    )
+    omega = math.sqrt(c * (1.0 / jl + 1.0 / jd))  # 50 rad/s
+    half_period = math.pi / omega
+    engage = _times(result, "engage")
+    contacts = _times(result, "contact")
+    parts = _times(result, "separate")
+    assert engage == pytest.approx([gap / w0], rel=1e-12)  # free flight over the gap
+    starts = engage + contacts
+    assert len(starts) >= 2
+    assert len(parts) >= 2
+    # Event times are located to 1e-13 of a step, the state to rtol 1e-8.
+    for begin, end in zip(starts, parts, strict=False):
+        assert end - begin == pytest.approx(half_period, rel=1e-8)
+    # The relative speed is reversed, not reduced: the gap is crossed in b / w0.
+    assert starts[1] - parts[0] == pytest.approx(gap / w0, rel=1e-8)
+    w_load = (jl - jd) / (jl + jd) * w0  # elastic collision with the resting damper side
+    assert _speeds(result, "separate")[:2] == pytest.approx([w_load, w0], rel=1e-7)
+    e = result.energy
+    assert float(e.mesh_dissipation) == pytest.approx(0.0, abs=1e-12)  # type: ignore[arg-type]
+    assert float(e.spring_work) == 0.0
+    # Nothing dissipates: the kinetic energy at the latch plus the mesh's stored energy is
+    # the initial kinetic energy J_L w0^2 / 2 = 0.04 J.
+    stored = float(e.elastic_energy)  # type: ignore[arg-type]
+    assert float(result.arrival_kinetic_energy) + stored == pytest.approx(0.04, rel=1e-8)
+    assert_energy_closes(result)
+
+
+# A small deployment where the damper side bounces off the load several times before the
+# contact closes for good: J_D / B = 15 ms against the mesh's period of 11 ms.
+_SYSTEM = {
+    "damping": 2.0,
+    "system_friction": 0.3,
+    "start_torque": 4.0,
+    "end_torque": 2.0,
+    "travel": 1.5,
+    "lost_motion": 0.05,
+}
+_JL, _JD, _C, _D = 5.0, 0.03, 1e4, 0.3
+
+
+@dataclass(frozen=True)
+class _Reference:
+    time: float
+    speed: float
+    engage: float
+    contacts: int
+    parts: int
+    mesh_loss: float
+    damper_loss: float
+
+
+def _radau_reference() -> _Reference:
+    """The two-inertia equations of docs/dynamics.md typed here, integrated by Radau at
+    rtol 1e-12 from mode to mode (gap, pressing, released), with terminal events."""
+    ts, te, travel, fs, b = 4.0, 2.0, 1.5, 0.3, 0.025  # b: half the lost motion
+    slope = (te - ts) / travel
+
+    def raw(y: np.ndarray) -> float:
+        return float(_C * (y[2] - b) + _D * (y[1] - y[3]))
+
+    def rhs_of(mode: str):  # type: ignore[no-untyped-def]
+        def rhs(_t: float, y: np.ndarray) -> np.ndarray:
+            w_rel = y[1] - y[3]
+            tau = max(raw(y), 0.0) if mode == "press" else 0.0
+            mesh = 0.0
+            if mode == "press":
+                mesh = _D * w_rel * w_rel
+            elif mode == "released":
+                mesh = -_C * (y[2] - b) * w_rel
+            return np.array(
+                [
+                    y[1],
+                    (ts + slope * y[0] - fs - tau) / _JL,
+                    w_rel,
+                    (tau - 2.0 * y[3]) / _JD,
+                    2.0 * y[3] * y[3],
+                    mesh,
+                ]
+            )
+
+        return rhs
+
+    def event(func, direction: float):  # type: ignore[no-untyped-def]
+        func.terminal = True
+        func.direction = direction
+        return func
+
+    arrive = event(lambda _t, y: y[0] - travel, 1.0)
+    y = np.array([0.0, 0.0, -b, 0.0, 0.0, 0.0])
+    t, mode = 0.0, "gap"
+    engage, contacts, parts = math.nan, 0, 0
+    while True:
+        if mode == "gap":
+            events = [
+                arrive,
+                event(lambda _t, y: y[2] - b, 1.0),
+                event(lambda _t, y: y[2] + b, -1.0),
+            ]
+        elif mode == "press":
+            events = [arrive, event(lambda _t, y: raw(y), -1.0)]
+        else:
+            events = [arrive, event(lambda _t, y: raw(y), 1.0), event(lambda _t, y: y[2] - b, -1.0)]
+        sol = solve_ivp(
+            rhs_of(mode), (t, t + 100.0), y, method="Radau", rtol=1e-12, atol=1e-15, events=events
+        )
+        assert sol.status == 1
+        hit = next(i for i, te_ in enumerate(sol.t_events) if len(te_))
+        t, y = float(sol.t_events[hit][0]), sol.y_events[hit][0].copy()
+        assert y[1] > 0.0
+        assert y[3] >= 0.0
+        if hit == 0:
+            return _Reference(t, float(y[1]), engage, contacts, parts, float(y[5]), float(y[4]))
+        if mode == "gap":
+            assert hit == 1, "the damper side reached the backward flank"
+            if math.isnan(engage):
+                engage = t
+            else:
+                contacts += 1
+            mode = "press"
+        elif mode == "press":
+            parts += 1
+            mode = "released" if y[2] > b else "gap"
+        else:
+            if hit == 1:
+                contacts += 1
+            mode = "press" if hit == 1 else "gap"
+
+
+@pytest.fixture(scope="module")
+def bouncing() -> DynamicResult:
+    return _solve(
+        _SYSTEM,
+        load_inertia=_JL,
+        rotor_inertia=_JD,
+        gear_stiffness=_C,
+        gear_mesh_damping=_D,
+        rtol=1e-10,
+    )
+
+
+def test_contact_lost_and_regained_against_radau(bouncing: DynamicResult) -> None:
+    ref = _radau_reference()
+    result = bouncing
+    assert ref.parts >= 2  # the case does bounce: the contact is lost and regained
+    assert len(_times(result, "separate")) == ref.parts
+    assert len(_times(result, "contact")) == ref.contacts
+    # Both integrations at rtol 1e-10 and 1e-12; the event times are those of the state.
+    assert _times(result, "engage") == pytest.approx([ref.engage], rel=1e-9)
+    assert float(result.deployment_time) == pytest.approx(ref.time, rel=1e-8)
+    assert float(result.arrival_speed) == pytest.approx(ref.speed, rel=1e-7)
+    e = result.energy
+    assert float(e.damper_dissipation) == pytest.approx(ref.damper_loss, rel=1e-7)
+    # The mesh loss is 1e-5 of the energy moved: compared to 1e-5 of itself.
+    assert float(e.mesh_dissipation) == pytest.approx(ref.mesh_loss, rel=1e-5)  # type: ignore[arg-type]
+
+
+def test_energy_balance_closes_with_the_mesh_terms(bouncing: DynamicResult) -> None:
+    e = bouncing.energy
+    assert e.mesh_dissipation is not None
+    assert e.elastic_energy is not None
+    assert float(e.mesh_dissipation) > 0.0
+    assert float(e.elastic_energy) > 0.0
+    # Elastic energy at the latch: the mesh carries the load's drive minus its inertia
+    # torque; at least its order, (T / c)^2 c / 2 with T between 1 and 2 N*m.
+    assert 0.5 * 1.0**2 / _C < float(e.elastic_energy) < 0.5 * 2.0**2 / _C
+    assert_energy_closes(bouncing, 1e-8)  # the integrator's rtol 1e-10, summed
+
+
+def _rigid_and_compliant(stiffness: float) -> tuple[DynamicResult, DynamicResult]:
+    system = dict(_SYSTEM, ecd_friction=0.1)
+    mu = _JL * _JD / (_JL + _JD)
+    rigid = _solve(system, load_inertia=_JL, rotor_inertia=_JD)
+    compliant = _solve(
+        system,
+        load_inertia=_JL,
+        rotor_inertia=_JD,
+        gear_stiffness=stiffness,
+        gear_mesh_damping=2.0 * math.sqrt(stiffness * mu),
+    )
+    return rigid, compliant
+
+
+def test_stiff_mesh_tends_to_the_rigid_engagement() -> None:
+    """A critically damped mesh of growing stiffness: the compliant deployment tends to
+    today's rigid one (plastic engagement), the error falling with the stiffness."""
+    errors = []
+    for c in (1e4, 1e6):
+        rigid, compliant = _rigid_and_compliant(c)
+        assert_energy_closes(compliant)
+        errors.append(abs(float(compliant.deployment_time / rigid.deployment_time) - 1.0))
+        # The mesh absorbs the engagement's loss J_L J_D w^2 / (2 (J_L + J_D)) (rigid:
+        # engagement_loss), to the compliance's order sqrt(mu / c) * w / gap.
+        loss = float(rigid.energy.engagement_loss)
+        assert float(compliant.energy.mesh_dissipation) == pytest.approx(loss, rel=0.05)  # type: ignore[arg-type]
+        assert float(compliant.arrival_speed) == pytest.approx(float(rigid.arrival_speed), rel=1e-3)
+    # Deployment time within 1e-4 at c = 1e6 N*m/rad (the contact transient lasts
+    # sqrt(mu/c) = 0.2 ms of a 12 s deployment) and converging.
+    assert errors[1] < 1e-4
+    assert errors[1] < errors[0]
+
+
+def test_config_keys_and_messages(tmp_path: Path) -> None:
+    text = EXAMPLE.read_text()
+    old = 'lost_motion = "0 deg"'
+    assert old in text
+    stiff = text.replace(
+        old, 'lost_motion = "0.25 deg"\nstiffness = "2 kN*m/rad"\nmesh_damping = "500 mN*m*s/rad"'
+    )
+    path = tmp_path / "compliant.toml"
+    path.write_text(stiff)
+    params = load_config(path).spec.dynamics()
+    assert params is not None
+    assert params.gear_stiffness == pytest.approx(2000.0)
+    assert params.gear_mesh_damping == pytest.approx(0.5)
+    plain = load_config(EXAMPLE).spec.dynamics()
+    assert plain is not None
+    assert plain.gear_stiffness is None
+    path.write_text(text.replace(old, old + '\nmesh_damping = "1 N*m*s/rad"'))
+    with pytest.raises(ConfigError, match="mesh_damping needs stiffness"):
+        load_config(path)
+    path.write_text(text.replace(old, old + '\nstiffness = "-1 N*m/rad"'))
+    with pytest.raises(ConfigError, match="stiffness"):
+        load_config(path)
+
+
+def test_unsupported_combinations_name_the_key() -> None:
+    system = toy_system(
+        damping=20.0, system_friction=0.3, start_torque=4.0, end_torque=2.0, travel=1.5
+    )
+    with pytest.raises(ModelDomainError, match="gearbox.stiffness"):
+        predict(
+            system,
+            25.0,
+            ["dynamic"],
+            dynamics=DynamicParameters(
+                load_inertia=5.0, rotor_inertia=0.03, gear_stiffness=1e4, thermal=Thermal(90.0)
+            ),
+        )
+    with pytest.raises(ModelDomainError, match="damper-side inertia"):
+        predict(
+            system,
+            25.0,
+            ["dynamic"],
+            dynamics=DynamicParameters(load_inertia=5.0, gear_stiffness=1e4),
+        )
+
+
+def test_creep_to_the_static_equilibrium_by_hand() -> None:
+    """Spring 4 -> 0 N*m over 1.5 rad against FS + FECD = 1 N*m, overdamped: both bodies
+    creep to where the spring balances both frictions, T_s(phi*) = FS + FECD (the load
+    carries FS, the mesh carries FECD to the damper side), phi* = (4 - 1) / (4 / 1.5)."""
+    result = _solve(
+        {
+            "damping": 20.0,
+            "system_friction": 0.6,
+            "ecd_friction": 0.4,
+            "start_torque": 4.0,
+            "end_torque": 0.0,
+            "travel": 1.5,
+            "lost_motion": 0.05,
+        },
+        load_inertia=5.0,
+        rotor_inertia=0.03,
+        gear_stiffness=1e4,
+        gear_mesh_damping=1.0,
+    )
+    assert result.status_names() == ["creep"]
+    assert math.isinf(float(result.stuck_time))
+    # Declared at rest at 1e-9 of the speed scale: the angle is short by that speed times
+    # the slow time constant B / k (7.5 s), 1e-8 relative here.
+    assert float(result.stuck_angle) == pytest.approx(1.125, rel=1e-7)
+    # The mesh holds FECD: elastic energy FECD^2 / (2 c).
+    assert float(result.energy.elastic_energy) == pytest.approx(0.4**2 / 2e4, rel=1e-6)  # type: ignore[arg-type]
+    assert_energy_closes(result)
+
+
+def test_rebound_overruns_the_load_through_the_backlash() -> None:
+    """A rebounding end stop (e = 0.5): the load bounces back while the damper side goes
+    on; the gap is crossed and the flanks meet again, and the account still closes."""
+    system = {
+        "damping": 2.0,
+        "system_friction": 0.3,
+        "ecd_friction": 0.1,
+        "start_torque": 4.0,
+        "end_torque": 2.0,
+        "travel": 1.5,
+        "lost_motion": 0.05,
+    }
+    rigid = _solve(system, load_inertia=5.0, rotor_inertia=0.03, restitution=0.5)
+    result = _solve(
+        system,
+        load_inertia=5.0,
+        rotor_inertia=0.03,
+        gear_stiffness=1e4,
+        gear_mesh_damping=0.3,
+        restitution=0.5,
+    )
+    names = result.events.names()
+    first = names.index("arrive")
+    assert "contact" in names[first:]
+    assert "separate" in names[first:]
+    assert result.status_names() == ["settled"]
+    # The first rebound: -e times the arrival speed (Newton's law on the load alone).
+    assert float(result.rebound_speed) == pytest.approx(
+        -0.5 * float(result.arrival_speed), rel=1e-12
+    )
+    # The mesh's compliance changes the first arrival by the engagement's transient only
+    # (rigid: 2.52358 s); 1e-4 of it with c = 1e4 N*m/rad (measured 3.5e-5).
+    assert float(result.deployment_time) == pytest.approx(float(rigid.deployment_time), rel=1e-4)
+    assert_energy_closes(result)
+
+
+def test_stiction_at_release_as_the_rigid_mesh() -> None:
+    """With lost motion the load starts free: it stays only if FS's breakaway holds the
+    spring (2.9 N*m <= 1.2 * 3 N*m), compliant or rigid."""
+    system = {
+        "damping": 2.0,
+        "system_friction": 3.0,
+        "ecd_friction": 0.1,
+        "start_torque": 2.9,
+        "end_torque": 2.0,
+        "travel": 1.5,
+        "lost_motion": 0.05,
+    }
+    for stiffness in (None, 1e4):
+        result = _solve(
+            system,
+            load_inertia=5.0,
+            rotor_inertia=0.03,
+            gear_stiffness=stiffness,
+            static_friction_factor=1.2,
+        )
+        assert result.events.names() == ["release", "stick"]
+        assert float(result.stuck_angle) == 0.0
+        assert float(result.stuck_time) == 0.0
