@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -224,6 +225,77 @@ class PaperSystem:
 
         time, state = _arrival(rhs, [0.0, 0.0, 0.0], self.travel, "Radau")
         return time, float(state[1]), float(state[2])
+
+    def compliant_time(
+        self,
+        temperature: float,
+        load_inertia: float,
+        damper_inertia: float,
+        stiffness: float,
+        damping: float,
+        lost_motion: float,
+    ) -> tuple[float, float, float, float]:
+        """Engagement time [s], deployment time [s], arrival speed [rad/s] and the mesh's
+        dissipation [J] with a compliant mesh behind the lost motion, from rest.
+
+        Two bodies (the MSL's ElastoBacklash between them, docs/model.md): the load
+        ``J_L w_L' = T(phi_L) - FS_T - tau`` and the damper side
+        ``J_D w_D' = tau - FECD_T - BECD_T w_D``, ``tau = c (delta - b/2) + d delta'`` past
+        the flank, with ``delta = phi_L - phi_D``. Three phases for the paper's system: the
+        load alone across the gap; the mesh pressing while the damper side is held by its
+        friction (until ``tau`` reaches FECD_T); both moving to the end. Each phase's end is a
+        terminal event; the damper side stopping or the contact opening would stop the
+        reference (they do not occur here: its eddy damping is too strong to bounce).
+        """
+        fs = self.fs_slope * temperature + self.fs_at_0
+        fecd, becd = self.fecd(temperature), self.becd(temperature)
+        half = 0.5 * lost_motion
+        jl, jd, c, d = load_inertia, damper_inertia, stiffness, damping
+
+        def tau(y: FloatArray) -> float:
+            return float(c * (y[2] - half) + d * (y[1] - y[3]))
+
+        def rhs(phase: int) -> Rhs:
+            def f(_t: float, y: FloatArray) -> list[float]:
+                torque = tau(y) if phase > 0 else 0.0
+                load = (self.spring(float(y[0])) - fs - torque) / jl
+                damper = (torque - fecd - becd * y[3]) / jd if phase == 2 else 0.0
+                w_rel = float(y[1] - y[3])
+                return [float(y[1]), load, w_rel, damper, d * w_rel * w_rel if phase else 0.0]
+
+            return f
+
+        def event(func: Callable[[float, FloatArray], float], direction: float) -> Any:
+            func.terminal = True  # type: ignore[attr-defined]
+            func.direction = direction  # type: ignore[attr-defined]
+            return func
+
+        arrive = event(lambda _t, y: float(y[0] - self.travel), 1.0)
+        closing = event(lambda _t, y: float(y[2] - half), 1.0)
+        breakaway = event(lambda _t, y: tau(y) - fecd, 1.0)
+        stopping = event(lambda _t, y: float(y[3]), -1.0)
+        opening = event(lambda _t, y: tau(y), -1.0)
+        y = np.array([0.0, 0.0, -half, 0.0, 0.0])
+        t = 0.0
+        engage = math.nan
+        phases = (
+            (0, [arrive, closing]),
+            (1, [arrive, breakaway, opening]),
+            (2, [arrive, stopping, opening]),
+        )
+        for phase, events in phases:
+            sol = solve_ivp(
+                rhs(phase), (t, t + 1e4), y, method="Radau", events=events, rtol=RTOL, atol=ATOL
+            )
+            hit = [i for i, times in enumerate(sol.t_events) if len(times)]
+            assert sol.status == 1, "the reference did not reach an event"
+            assert hit[0] in (0, 1), "the damper side stopped or the contact opened"
+            t, y = float(sol.t_events[hit[0]][0]), np.asarray(sol.y_events[hit[0]][0], float)
+            if phase == 0:
+                engage = t
+            if hit[0] == 0:
+                return engage, t, float(y[1]), float(y[4])
+        raise AssertionError("the reference did not arrive")
 
 
 def _arrival(rhs: Rhs, y0: list[float], travel: float, method: str) -> tuple[float, FloatArray]:

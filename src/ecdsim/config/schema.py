@@ -469,7 +469,7 @@ class ConfigSpec(_Section):
             rtol=self.analysis.rtol,
             integrator=self.analysis.integrator,
             gear_stiffness=self.gearbox.stiffness,
-            gear_mesh_damping=self.gearbox.mesh_damping or 0.0,
+            gear_mesh_damping=self.gearbox.mesh_damping,
         )
 
 

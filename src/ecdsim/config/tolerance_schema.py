@@ -40,6 +40,7 @@ from ecdsim.config.units import (
     SPEED,
     TORQUE,
     TORQUE_PER_KELVIN,
+    TORSIONAL_STIFFNESS,
     Kind,
     QuantityError,
     magnitude_problem,
@@ -170,6 +171,14 @@ TOLERABLE: dict[str, TolerableQuantity] = {
             lower_bound=0.0,
             strict=True,
         ),
+        _q(
+            "gearbox.stiffness",
+            TORSIONAL_STIFFNESS,
+            "dynamics.gear_stiffness",
+            lower_bound=0.0,
+            strict=True,
+        ),
+        _q("gearbox.mesh_damping", DAMPING, "dynamics.gear_mesh_damping", lower_bound=0.0),
     )
 }
 

@@ -95,7 +95,7 @@ class DynamicParameters:
         at the input shaft [N*m/rad], > 0; None (the default) = a rigid mesh (today's
         plastic engagement). Compliant backlash: :mod:`ecdsim.dynamics.backlash`
     gear_mesh_damping : damping of the gear mesh in contact, at the input shaft
-        [N*m*s/rad], >= 0 (only with ``gear_stiffness``)
+        [N*m*s/rad], >= 0 (only with ``gear_stiffness``); None (the default) = 0
     """
 
     load_inertia: Param
@@ -114,13 +114,16 @@ class DynamicParameters:
     system_static_friction_factor: Param | None = None
     stribeck_speed: Param | None = None
     gear_stiffness: Param | None = None
-    gear_mesh_damping: Param = 0.0
+    gear_mesh_damping: Param | None = None
 
     def __post_init__(self) -> None:
         system_factor = (
             1.0 if self.system_static_friction_factor is None
             else self.system_static_friction_factor
         )  # fmt: skip
+        mesh_damping = np.asarray(
+            0.0 if self.gear_mesh_damping is None else self.gear_mesh_damping, dtype=float
+        )
         checks = [
             (
                 np.asarray(system_factor, dtype=float) >= 1.0,
@@ -136,8 +139,7 @@ class DynamicParameters:
                 "gear_stiffness must be > 0",
             ),
             (
-                np.isfinite(np.asarray(self.gear_mesh_damping, dtype=float))
-                & (np.asarray(self.gear_mesh_damping, dtype=float) >= 0.0),
+                np.isfinite(mesh_damping) & (mesh_damping >= 0.0),
                 "gear_mesh_damping must be >= 0",
             ),
             (np.asarray(self.rotor_inertia, dtype=float) >= 0.0, "rotor_inertia must be >= 0"),

@@ -270,7 +270,9 @@ def dynamic_problem(
         gear_stiffness=np.asarray(
             math.inf if params.gear_stiffness is None else params.gear_stiffness, dtype=float
         ),
-        gear_mesh_damping=np.asarray(params.gear_mesh_damping, dtype=float),
+        gear_mesh_damping=np.asarray(
+            0.0 if params.gear_mesh_damping is None else params.gear_mesh_damping, dtype=float
+        ),
         thermal=thermal is not None,
         stop_time=params.stop_time,
         rtol=params.rtol,
