@@ -176,7 +176,7 @@ def _rhs(case: _Case, mode: _Mode, y: FloatArray) -> FloatArray:
     dy[4] = damping * w_d
     if mode.mesh == PRESS and tau != 0.0:
         dy[5] = case.mesh_damping * w_rel * w_rel
-    elif mode.mesh != GAP:
+    elif mode.mesh != GAP and mode.side * (delta - mode.side * case.half) > 0.0:
         # The limited torque is zero: the mesh's elastic energy c (delta -+ b/2)^2 / 2
         # is lost as the flanks separate (power into the mesh 0 = dE_el/dt + loss).
         dy[5] = -case.stiffness * (delta - mode.side * case.half) * w_rel
@@ -210,7 +210,7 @@ def _jacobian(case: _Case, mode: _Mode, y: FloatArray) -> FloatArray:
         d = case.mesh_damping
         jac[5, 1] = 2.0 * d * w_rel
         jac[5, 3] = -2.0 * d * w_rel
-    elif mode.mesh != GAP:
+    elif mode.mesh != GAP and mode.side * (delta - mode.side * case.half) > 0.0:
         c, deflection = case.stiffness, delta - mode.side * case.half
         jac[5, 1] = -c * deflection
         jac[5, 3] = c * deflection
@@ -599,7 +599,10 @@ def _apply(case: _Case, mode: _Mode, y: FloatArray, code: int, run: _Run, hint: 
     step's end), whose torques give the direction of a breakaway from a zero-friction
     rest, where the torque at the event itself is still zero."""
     if code == _END:
+        before = float(y[1])
         _load_end(case, mode, y, run)
+        if run.status == "running" and float(y[1]) != before:
+            _resolve_mesh(case, mode, y, run)  # the load's speed jumped at a stop
     elif code == _LOAD_ZERO:
         run.log("zero_speed")
         _set_load_mode(case, mode, y, run)
@@ -620,6 +623,31 @@ def _apply(case: _Case, mode: _Mode, y: FloatArray, code: int, run: _Run, hint: 
         mode.damper = 1 if tau > 0.0 else -1
     else:
         _mesh_event(case, mode, y, code, run)
+
+
+def _resolve_mesh(case: _Case, mode: _Mode, y: FloatArray, run: _Run) -> None:
+    """The mesh's mode after a jump of the speeds (an impact on a stop, a settle).
+
+    A jump of w_rel changes the limited torque at once: a pressing mesh whose torque the
+    jump turns to zero is released (or back in the gap), a released one that it loads
+    presses again.
+    """
+    if mode.mesh == GAP:
+        return
+    side = mode.side
+    deflection = side * (float(y[2]) - side * case.half)
+    raw = side * (case.stiffness * (deflection * side) + case.mesh_damping * float(y[1] - y[3]))
+    if mode.mesh == PRESS and raw <= 0.0:
+        if deflection > 0.0 and case.mesh_damping > 0.0:
+            mode.mesh = RELEASED
+            run.log("separate")
+        else:
+            _enter_gap(case, mode, y, run)
+    elif mode.mesh == RELEASED and deflection <= 0.0:
+        _enter_gap(case, mode, y, run)
+    elif mode.mesh == RELEASED and raw > 0.0:
+        mode.mesh = PRESS
+        run.log("contact")
 
 
 def _recheck(case: _Case, mode: _Mode, y: FloatArray, run: _Run) -> None:
