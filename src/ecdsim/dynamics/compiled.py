@@ -27,6 +27,8 @@ lumped heat balance Eq. 5.2 in the log state of :mod:`ecdsim.physics.thermal`).
 from __future__ import annotations
 
 import math
+import os
+import threading
 from collections.abc import Callable
 from typing import Any, TypeVar, cast
 
@@ -537,6 +539,41 @@ def _parameters(model: Model) -> tuple[FloatArray, int]:
     raise TypeError(f"no compiled form of the eddy law {eddy.name!r}")
 
 
+# A batch of at least PARALLEL_MIN segments runs on THREADS threads (the kernels release
+# the GIL), each over a contiguous part of it; results are bit for bit those of one thread.
+THREADS = max(1, min(2, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1))
+PARALLEL_MIN = 256
+
+
+def _split(n: int, parts: int) -> list[tuple[int, int]]:
+    """``parts`` contiguous ranges covering 0 .. n (as equal as possible)."""
+    edges = [n * i // parts for i in range(parts + 1)]
+    return [(lo, hi) for lo, hi in zip(edges[:-1], edges[1:], strict=True) if hi > lo]
+
+
+def _in_threads(run: Callable[[int, int], None], parts: list[tuple[int, int]]) -> None:
+    """``run(lo, hi)`` for each part: the first in this thread, the others in new ones."""
+    errors: list[BaseException] = []
+
+    def guarded(lo: int, hi: int) -> None:
+        try:
+            run(lo, hi)
+        except BaseException as exc:  # re-raised in the calling thread
+            errors.append(exc)
+
+    workers = [threading.Thread(target=guarded, args=part) for part in parts[1:]]
+    for worker in workers:
+        worker.start()
+    try:
+        if parts:
+            run(*parts[0])
+    finally:
+        for worker in workers:
+            worker.join()
+    if errors:
+        raise errors[0]
+
+
 def integrate_batch(model: Model, segments: Segments, control: Control) -> Outcome:
     """:func:`ecdsim.dynamics.rosenbrock.integrate_batch`, one compiled segment at a time."""
     par, law = _parameters(model)
@@ -556,11 +593,20 @@ def integrate_batch(model: Model, segments: Segments, control: Control) -> Outco
     heating = bool(model.heating)
     trajectories: list[Trajectory | None] = [None] * n
     if not control.record:
-        _batch(
-            par, law, heating, y0, length, cap, creep, creeps, atol, first, control.rtol,
-            control.horizon, control.horizon_kind,
-            kinds, duration, final, max_speed, max_temp,
-        )  # fmt: skip
+        parts = _split(n, THREADS if n >= PARALLEL_MIN else 1)
+
+        def run(lo: int, hi: int) -> None:
+            # Each segment depends on its own row only: any split gives the same bits.
+            part_final = np.empty((4, hi - lo))
+            _batch(
+                par[lo:hi], law, heating, np.ascontiguousarray(y0[:, lo:hi]), length[lo:hi],
+                cap[lo:hi], creep[lo:hi], creeps[lo:hi], np.ascontiguousarray(atol[:, lo:hi]),
+                first[lo:hi], control.rtol, control.horizon, control.horizon_kind,
+                kinds[lo:hi], duration[lo:hi], part_final, max_speed[lo:hi], max_temp[lo:hi],
+            )  # fmt: skip
+            final[:, lo:hi] = part_final
+
+        _in_threads(run, parts)
         return Outcome(kinds, duration, final, max_speed, max_temp, trajectories)
     end = np.empty(4)
     for j in range(n):
