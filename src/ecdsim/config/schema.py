@@ -48,6 +48,7 @@ from ecdsim.methods import SOLVERS
 from ecdsim.model import (
     Ecd,
     Gearbox,
+    GearEfficiency,
     HighSpeedDamper,
     LinearSpring,
     LinearTemperatureLaw,
@@ -72,6 +73,10 @@ Restitution = Annotated[
 ]
 Tolerance = Annotated[
     float, quantity(NUMBER, lambda x: None if 0.0 < x <= 0.1 else "must be in (0, 0.1]"), NUMBER
+]
+# A mesh efficiency (issue 16 item 5): dimensionless, 0 excluded (no power passes).
+Efficiency = Annotated[
+    float, quantity(NUMBER, lambda x: None if 0.0 < x <= 1.0 else "must be in (0, 1]"), NUMBER
 ]
 
 
@@ -221,6 +226,22 @@ class DamperSpec(_Section):
         )
 
 
+class GearEfficiencySpec(_Section):
+    """``[gearbox] efficiency``: a lossy mesh (docs/model.md, lossy gear).
+
+    ``forward`` while the load drives the damper (every deployment), ``backward`` while
+    the damper side drives the load (an overrunning rotor); backward defaults to forward.
+    """
+
+    forward: Efficiency
+    backward: Efficiency | None = None
+
+    def to_model(self) -> GearEfficiency:
+        """The model object."""
+        backward = self.forward if self.backward is None else self.backward
+        return GearEfficiency(forward=self.forward, backward=backward)
+
+
 class GearboxSpec(_Section):
     """``[gearbox]``: the step-up gearbox (paper section 3)."""
 
@@ -230,6 +251,8 @@ class GearboxSpec(_Section):
     coulomb_friction: NonNegativeTorque
     lost_motion: NonNegativeAngle = 0.0
     inertia: NonNegativeInertia = 0.0  # referred to the high-speed shaft, like BG and FG
+    # Mesh efficiency, the load-dependent alternative to FG (issue 16 item 5).
+    efficiency: GearEfficiencySpec | None = None
 
     @model_validator(mode="after")
     def _one_damping(self) -> GearboxSpec:
@@ -237,6 +260,11 @@ class GearboxSpec(_Section):
             raise ValueError(
                 "give exactly one of damping_fraction (BG/BD, e.g. 0.26) and damping_rate "
                 "(BG in N*m*s/rad)"
+            )
+        if self.efficiency is not None and self.coulomb_friction != 0.0:
+            raise ValueError(
+                f"efficiency replaces the constant gearbox friction: give coulomb_friction = "
+                f"'0 N*m' with it (got {self.coulomb_friction:g} N*m; docs/model.md, lossy gear)"
             )
         return self
 
@@ -248,6 +276,7 @@ class GearboxSpec(_Section):
             damping_rate=self.damping_rate,
             damping_fraction=self.damping_fraction,
             lost_motion=self.lost_motion,
+            efficiency=self.efficiency.to_model() if self.efficiency else None,
         )
 
 
