@@ -288,14 +288,22 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
     records: _Records | None = _Records([], []) if record else None
     log.add(np.arange(c.n), s.t, "release", s.phi, s.w)
 
-    for iteration in range(problem.max_events + 1):
+    # Passes of each case that ended in an event other than a spring breakpoint: the
+    # event limit counts these, so that a table of any size can be crossed. Between two
+    # such events the motion is monotone and passes each breakpoint at most once, so the
+    # loop still ends after at most (max_events + 1) P passes.
+    passes = np.zeros(c.n, dtype=np.int64)
+    while True:
         active = np.flatnonzero(~s.done)
         if active.size == 0:
             break
-        if iteration == problem.max_events:
-            s.finish(active, "event_limit")
-            log.add(active, s.t[active], "event_limit", s.phi[active], s.w[active])
-            break
+        over = active[passes[active] >= problem.max_events]
+        if over.size:
+            s.finish(over, "event_limit")
+            log.add(over, s.t[over], "event_limit", s.phi[over], s.w[over])
+            active = active[passes[active] < problem.max_events]
+            if active.size == 0:
+                break
         direction = np.zeros(c.n)
         resting = active[s.w[active] == 0.0]
         if resting.size:
@@ -304,7 +312,9 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
         direction[moving] = np.sign(s.w[moving])
         run = np.flatnonzero(~s.done & (direction != 0.0))
         if run.size:
-            _advance_cases(c, s, run, direction[run], problem, log, records)
+            passing = _advance_cases(c, s, run, direction[run], problem, log, records)
+            passes[run] += 1
+            passes[passing] -= 1
 
     final_inertia = np.where(s.engaged, c.total_inertia, c.load_inertia)
     keeps_speed = _KEEPS_SPEED[s.status]
@@ -465,11 +475,12 @@ def _advance_cases(
     problem: DynamicProblem,
     log: _Log,
     records: _Records | None,
-) -> None:
+) -> NDArray[np.intp]:
     """Advance the cases ``run`` through one segment each and apply their events.
 
     Event finding (:func:`_segments`), stepping (:func:`_step_closed_form`,
     :func:`_step_integrated`) and bookkeeping (:func:`_account`, :func:`_apply_events`).
+    Returns the cases whose segment ended at a spring breakpoint.
     """
     seg = _segments(c, s, run, direction, problem.stop_time)
     step = _Step.empty(s.temp[run])
@@ -484,7 +495,7 @@ def _advance_cases(
     if nl_idx.size:
         _step_integrated(c, s, seg, nl_idx, step, problem, records)
     _account(s, seg, step)
-    _apply_events(c, s, seg, step, log)
+    return _apply_events(c, s, seg, step, log)
 
 
 def _segments(
@@ -672,8 +683,11 @@ def _account(s: _State, seg: _Segment, step: _Step) -> None:
     s.w[run] = direction * step.v
 
 
-def _apply_events(c: _Cases, s: _State, seg: _Segment, step: _Step, log: _Log) -> None:
-    """Log each case's event and apply it: stop, cap, creep, engagement, impacts."""
+def _apply_events(c: _Cases, s: _State, seg: _Segment, step: _Step, log: _Log) -> NDArray[np.intp]:
+    """Log each case's event and apply it: stop, cap, creep, engagement, impacts.
+
+    Returns the cases that passed a spring breakpoint.
+    """
     run, kind = seg.run, step.kind
     zero = run[kind == linear.ZERO]
     s.w[zero] = 0.0  # the next iteration decides stick or breakaway
@@ -707,12 +721,13 @@ def _apply_events(c: _Cases, s: _State, seg: _Segment, step: _Step, log: _Log) -
         s.engagement_loss[engaging] += loss
         s.engaged[engaging] = True
         s.engagement_time[engaging] = s.t[engaging]
-    passing = run[reached & (seg.reach_kind == _EV["breakpoint"])]
+    passing: NDArray[np.intp] = run[reached & (seg.reach_kind == _EV["breakpoint"])]
     log.add(passing, s.t[passing], "breakpoint", s.phi[passing], s.w[passing])
     for name in ("arrive", "start_stop"):
         hit = run[reached & (seg.reach_kind == _EV[name])]
         if hit.size:
             _impact(c, s, hit, name, log)
+    return passing
 
 
 def _impact(c: _Cases, s: _State, hit: NDArray[np.intp], name: str, log: _Log) -> None:
