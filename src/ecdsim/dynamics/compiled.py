@@ -522,19 +522,22 @@ def _parameters(model: Model) -> tuple[FloatArray, int]:
     table[:, _BG] = model.gearbox_damping
     table[:, _C] = model.heat_capacity
     table[:, _R] = model.thermal_resistance
-    table[:, _FA] = model.factor(np.zeros(n))
-    table[:, _COEF] = np.broadcast_to(eddy.coefficient, (n,))
+    # The factor at s = 0 is f_a exp(0) = f_a exactly: the model's ambient factor.
+    table[:, _FA] = (
+        model.factor(np.zeros(n)) if model.ambient_factor is None else model.ambient_factor
+    )
+    table[:, _COEF] = eddy.coefficient
     table[:, _FIXED] = np.nan  # set by _segment from the start state
     # No Stribeck friction: excess 0 (the kernels skip the term), w_St 1 (unused).
     table[:, _DF] = 0.0 if model.stribeck_excess is None else model.stribeck_excess
     table[:, _WS] = 1.0 if model.stribeck_speed is None else model.stribeck_speed
     if isinstance(eddy, LinearEddy):
-        table[:, _LAW_A] = np.broadcast_to(np.asarray(eddy.damping_rate, float), (n,))
+        table[:, _LAW_A] = eddy.damping_rate
         table[:, _LAW_B] = 0.0
         return table, LINEAR_LAW
     if isinstance(eddy, KlossEddy):
-        table[:, _LAW_A] = np.broadcast_to(np.asarray(eddy.peak_torque, float), (n,))
-        table[:, _LAW_B] = np.broadcast_to(np.asarray(eddy.reference_peak_speed, float), (n,))
+        table[:, _LAW_A] = eddy.peak_torque
+        table[:, _LAW_B] = eddy.reference_peak_speed
         return table, KLOSS_LAW
     raise TypeError(f"no compiled form of the eddy law {eddy.name!r}")
 
