@@ -179,16 +179,40 @@ class RolloffSpec(_Section):
 
 
 class ThermalSpec(_Section):
-    """``[damper.thermal]``: lumped heat capacity of the damper (docs/dynamics.md)."""
+    """``[damper.thermal]``: lumped heat capacity of the damper, or of its rotor and
+    housing (two nodes, with ``housing_heat_capacity``; docs/dynamics.md)."""
 
     heat_capacity: PositiveHeatCapacity
     thermal_resistance: PositiveThermalResistance | None = None
+    housing_heat_capacity: PositiveHeatCapacity | None = None
+    housing_thermal_resistance: PositiveThermalResistance | None = None
+
+    @model_validator(mode="after")
+    def _housing(self) -> ThermalSpec:
+        if self.housing_heat_capacity is None and self.housing_thermal_resistance is not None:
+            raise ValueError(
+                "housing_thermal_resistance needs housing_heat_capacity (J/K, the housing node)"
+            )
+        if self.housing_heat_capacity is not None and self.thermal_resistance is None:
+            raise ValueError(
+                "housing_heat_capacity needs thermal_resistance (K/W, rotor to housing)"
+            )
+        return self
 
     def to_model(self) -> Thermal:
         """The model object (SI); no thermal resistance means adiabatic."""
         if self.thermal_resistance is None:
             return Thermal(self.heat_capacity)
-        return Thermal(self.heat_capacity, self.thermal_resistance)
+        if self.housing_heat_capacity is None:
+            return Thermal(self.heat_capacity, self.thermal_resistance)
+        return Thermal(
+            self.heat_capacity,
+            self.thermal_resistance,
+            housing_heat_capacity=self.housing_heat_capacity,
+            housing_thermal_resistance=math.inf
+            if self.housing_thermal_resistance is None
+            else self.housing_thermal_resistance,
+        )
 
 
 class DamperSpec(_Section):

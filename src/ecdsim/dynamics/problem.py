@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
-from ecdsim.dynamics.params import DynamicParameters
+from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.model import DeploymentSystem, EcdState
 from ecdsim.physics import mechanics, rolloff
 from ecdsim.solvers.base import QuasiStaticProblem
@@ -40,6 +41,10 @@ _CASE_FIELDS = (
     "heat_capacity",
     "thermal_resistance",
     "stribeck_speed",
+    "housing_heat_capacity",
+    "housing_thermal_resistance",
+    "initial_rotor_rise",
+    "initial_housing_rise",
 )
 
 
@@ -80,8 +85,13 @@ class DynamicProblem(QuasiStaticProblem):
     thermal_resistance : damper to ambient [K/W]; inf for adiabatic
     stribeck_speed : w_St, Stribeck speed at the input shaft [rad/s]; inf (the default)
         for none (kinetic friction independent of speed, as before)
+    housing_heat_capacity : C_h of the two-node heating [J/K]; inf for one node
+    housing_thermal_resistance : R_he, housing to the environment [K/W]; inf adiabatic
+    initial_rotor_rise : damper (rotor) temperature above T at release [K]
+    initial_housing_rise : housing temperature above T at release [K]
     eddy : the damper's eddy-current law (linear Eq. 1 or roll-off)
     thermal : True when self-heating is modelled
+    two_node : True when the housing is a heat capacity of its own
     stop_time : end of the simulated interval [s]
     rtol : relative tolerance of the integrator for nonlinear segments [-]
     integrator : integrator for nonlinear segments ("RODAS4" batched, or a solve_ivp method)
@@ -105,7 +115,12 @@ class DynamicProblem(QuasiStaticProblem):
     thermal_resistance: FloatArray
     eddy: EddyLaw
     stribeck_speed: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
+    housing_heat_capacity: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
+    housing_thermal_resistance: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
+    initial_rotor_rise: FloatArray = field(default_factory=lambda: np.asarray(0.0))
+    initial_housing_rise: FloatArray = field(default_factory=lambda: np.asarray(0.0))
     thermal: bool = False
+    two_node: bool = False
     stop_time: float = math.inf
     rtol: float = 1e-8
     integrator: str = "RODAS4"
@@ -254,8 +269,27 @@ def dynamic_problem(
             math.inf if params.stribeck_speed is None else params.stribeck_speed, dtype=float
         ),
         thermal=thermal is not None,
+        **_two_node_fields(thermal),
         stop_time=params.stop_time,
         rtol=params.rtol,
         integrator=params.integrator,
         max_events=params.max_events,
     )
+
+
+def _two_node_fields(thermal: Thermal | None) -> dict[str, Any]:
+    """The housing node and the start temperatures of :class:`DynamicProblem`; none
+    (the one-node defaults) without ``Thermal.housing_heat_capacity``."""
+    if thermal is None:
+        return {}
+    fields: dict[str, Any] = {
+        "initial_rotor_rise": np.asarray(thermal.initial_rotor_rise, dtype=float),
+        "initial_housing_rise": np.asarray(thermal.initial_housing_rise, dtype=float),
+    }
+    if thermal.housing_heat_capacity is not None:
+        fields["housing_heat_capacity"] = np.asarray(thermal.housing_heat_capacity, float)
+        fields["housing_thermal_resistance"] = np.asarray(
+            thermal.housing_thermal_resistance, dtype=float
+        )
+        fields["two_node"] = True
+    return fields

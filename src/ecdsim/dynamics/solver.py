@@ -34,7 +34,7 @@ from ecdsim.dynamics.result import (
     EventLog,
     TrajectoryData,
 )
-from ecdsim.physics import mechanics
+from ecdsim.physics import mechanics, thermal
 
 # A breakaway needs the drive to exceed static friction by more than this relative margin;
 # at the boundary (a forward motion that stops where drive = kinetic friction = static
@@ -84,6 +84,13 @@ class _Cases:
     stribeck_speed: FloatArray
     stribeck: bool  # some case has a Stribeck speed
     eddy: EddyLaw
+    # Two-node heating and the start temperatures (issue 16 item 6); the defaults are
+    # the one-node model starting at the deployment temperature.
+    two_node: bool = False
+    housing_heat_capacity: FloatArray | None = None
+    housing_resistance: FloatArray | None = None
+    rotor_rise0: FloatArray | None = None
+    housing_rise0: FloatArray | None = None
 
 
 def _flatten(problem: DynamicProblem) -> _Cases:
@@ -121,6 +128,11 @@ def _flatten(problem: DynamicProblem) -> _Cases:
         stribeck_speed=flat(problem.stribeck_speed),
         stribeck=problem.stribeck,
         eddy=problem.eddy.flattened(shape),
+        two_node=problem.two_node,
+        housing_heat_capacity=flat(problem.housing_heat_capacity) if problem.two_node else None,
+        housing_resistance=flat(problem.housing_thermal_resistance) if problem.two_node else None,
+        rotor_rise0=flat(problem.initial_rotor_rise) if problem.thermal else None,
+        housing_rise0=flat(problem.initial_housing_rise) if problem.two_node else None,
     )
 
 
@@ -237,6 +249,7 @@ class _State:
     engagement_loss: FloatArray
     impact_loss: FloatArray
     piece: NDArray[np.intp]  # the spring piece each case was last on
+    housing: FloatArray | None = None  # two nodes: the housing's rise over ambient [K]
 
     @classmethod
     def initial(cls, c: _Cases) -> _State:
@@ -279,10 +292,30 @@ class _State:
         self.status[idx] = _ST[status]
 
 
+def _thermal_start(c: _Cases, s: _State) -> None:
+    """Start rotor (damper) and housing temperatures other than the deployment's.
+
+    The rotor's state is the damping law's log factor of its rise
+    (:func:`ecdsim.physics.thermal.factor_log_from_rise`); nothing changes (s = 0,
+    T_d = T) where no rise is given.
+    """
+    if c.two_node:
+        assert c.housing_rise0 is not None
+        s.housing = c.housing_rise0.copy()
+    rise = c.rotor_rise0
+    if rise is None or not np.any(rise != 0.0):
+        return
+    ambient_factor = np.maximum(c.eddy.factor(c.ambient), 0.0)
+    s.heat = thermal.factor_log_from_rise(rise, ambient_factor, c.eddy.coefficient)
+    s.temp = c.ambient + rise
+    s.max_temp = s.temp.copy()
+
+
 def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult:
     """Solve every case of ``problem``; ``record`` keeps the segments for time series."""
     c = _flatten(problem)
     s = _State.initial(c)
+    _thermal_start(c, s)
     ke0 = mechanics.kinetic_energy(np.where(s.engaged, c.total_inertia, c.load_inertia), s.w)
     log = _Log()
     records: _Records | None = _Records([], []) if record else None
@@ -368,6 +401,7 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
         stuck_time=shaped(s.stuck_time),
         max_speed=shaped(s.max_speed),
         max_damper_temperature=shaped(s.max_temp),
+        final_housing_temperature=None if s.housing is None else shaped(c.ambient + s.housing),
         engagement_time=shaped(s.engagement_time),
         rebound_speed=shaped(s.rebound_speed),
         impacts=shaped(s.impacts),
@@ -623,6 +657,7 @@ def _step_integrated(
             thermal=problem.thermal,
             stribeck_excess=None if excess is None else excess[idx],
             stribeck_speed=None if excess is None else c.stribeck_speed[cases],
+            **_housing_segments(c, s, cases),
         ),
         rtol=problem.rtol,
         method=problem.integrator,
@@ -637,6 +672,8 @@ def _step_integrated(
     step.temperature[idx] = out.temperature
     step.peak_temperature[idx] = out.max_temperature
     s.heat[cases] = out.state
+    if s.housing is not None and out.housing is not None:
+        s.housing[cases] = out.housing
     start = s.t[cases]
     step.display_end[idx] = start + out.duration
     if records is not None:
@@ -653,6 +690,17 @@ def _step_integrated(
                         solution=sol,
                     )
                 )
+
+
+def _housing_segments(c: _Cases, s: _State, cases: NDArray[np.intp]) -> dict[str, Any]:
+    """The housing node's arguments of :class:`~ecdsim.dynamics.integrate.NonlinearSegments`."""
+    if s.housing is None or c.housing_heat_capacity is None or c.housing_resistance is None:
+        return {}
+    return {
+        "housing_state0": s.housing[cases],
+        "housing_heat_capacity": c.housing_heat_capacity[cases],
+        "housing_resistance": c.housing_resistance[cases],
+    }
 
 
 def _account(s: _State, seg: _Segment, step: _Step) -> None:
