@@ -366,7 +366,8 @@ def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
     for output, array in outputs_of(plan, prediction).items():
         full = np.broadcast_to(array, shape)
         for i, temperature in enumerate(plan.temperatures):
-            columns[output_column(output, temperature)] = np.array(full[i])
+            # A view of the solution's row when it is solved contiguous (no copy).
+            columns[output_column(output, temperature)] = np.ascontiguousarray(full[i])
     counts: Counter[tuple[str, float | None, str | None]] = Counter()
     examples: dict[tuple[str, float | None, str | None], str] = {}
     for warning in prediction.warnings:
