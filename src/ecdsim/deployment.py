@@ -203,11 +203,15 @@ def build_problem(
     angles, torques = load.drive.breakpoints(load.travel, temperatures)
     fs = np.asarray(load.system_friction(temperatures), dtype=float)
     friction = np.asarray(ecd.ecd_friction + fs, dtype=float)
+    gravity = load.gravity
     problem = QuasiStaticProblem(
         angles=np.asarray(angles, dtype=float),
         torques=np.asarray(torques, dtype=float),
         friction=friction,
         damping_rate=np.asarray(ecd.ecd_damping_rate, dtype=float),
+        # A ground test's gravity torque (docs/model.md); None in flight, as before.
+        gravity_amplitude=None if gravity is None else gravity.amplitude,
+        gravity_angle=None if gravity is None else np.asarray(gravity.release_angle, float),
     )
     return problem, fs
 
@@ -237,6 +241,13 @@ def predict(
     _check_finite(ecd)
     _check_damping_positive(ecd)
     problem, fs = build_problem(system, ecd, temps)
+    if problem.has_gravity and (needing := [m for m in methods if SOLVERS[m].needs_dynamics]):
+        # The dynamic method's segments do not carry the gravity torque yet (docs/model.md).
+        raise ModelDomainError(
+            "load.gravity",
+            f"the {needing[0]} method does not take gravity yet; predict the ground test "
+            "with the paper and exact methods, or remove [load.gravity] for flight",
+        )
     if dynamics is not None:
         try:
             problem = dynamic_problem(system, ecd, temps, problem, fs, dynamics)

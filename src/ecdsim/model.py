@@ -14,7 +14,7 @@ from typing import Protocol, TypeAlias
 import numpy as np
 
 from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
-from ecdsim.physics import assembly, gearing, laws, load
+from ecdsim.physics import assembly, gearing, gravity, laws, load
 
 Param: TypeAlias = float | FloatArray
 
@@ -511,6 +511,44 @@ class ResistedSpring:
 
 
 @dataclass(frozen=True)
+class Gravity:
+    """Gravity on the deployed mass in a ground test (issue 16 item 2; docs/model.md).
+
+    The torque about the hinge, opposing deployment positive, is
+    ``m g r (1 - offload) sin(theta_0 + phi)`` (:mod:`ecdsim.physics.gravity`).
+
+    Attributes
+    ----------
+    mass : deployed mass m [kg]
+    cg_radius : centre of gravity's distance from the hinge axis r [m]
+    release_angle : theta_0, from the downward vertical to the hinge-to-CG line at
+        release, positive in the direction of deployment [rad]
+    offload : fraction of the weight carried by the ground-support equipment [-]
+    """
+
+    mass: Param
+    cg_radius: Param
+    release_angle: Param
+    offload: Param = 0.0
+
+    @property
+    def amplitude(self) -> FloatArray:
+        """W = m g r (1 - offload) [N*m]."""
+        return gravity.gravity_amplitude(self.mass, self.cg_radius, self.offload)
+
+    def torque_at(self, angle: ArrayLike) -> FloatArray:
+        """Gravity torque at deployed angle phi [N*m], opposing deployment positive."""
+        return gravity.gravity_torque(angle, self.amplitude, self.release_angle)
+
+    def describe(self) -> str:
+        """One-line description."""
+        return (
+            f"gravity on {np.max(self.mass):g} kg at {np.max(self.cg_radius):g} m, "
+            f"{np.max(self.offload) * 100:g} % offloaded"
+        )
+
+
+@dataclass(frozen=True)
 class Load:
     """The deployment load seen by the ECD's input shaft (paper section 5).
 
@@ -520,12 +558,15 @@ class Load:
     travel : deployment angle, delta_theta [rad]
     system_friction : FS_T, hinge and harness friction, a temperature law [N*m]
     resistance : resistive torque against angle (harness, blanket), None for none
+    gravity : gravity on the deployed mass in a ground test, None for flight (0 g)
     """
 
     spring: Spring
     travel: Param
     system_friction: TemperatureLaw = ZERO_LAW
     resistance: ResistiveTable | None = None
+    # Gravity in a ground test (issue 16 item 2); None = flight (0 g), today's model.
+    gravity: Gravity | None = None
 
     @property
     def drive(self) -> Spring:

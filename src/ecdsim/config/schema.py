@@ -31,6 +31,7 @@ from ecdsim.config.fields import (
     Temperature,
     Torque,
     TorquePerKelvin,
+    non_negative,
     positive,
     quantity,
 )
@@ -38,6 +39,8 @@ from ecdsim.config.sizing_schema import FluidDamperSpec, RequirementsSpec
 from ecdsim.config.tolerance_schema import TolerancesSpec
 from ecdsim.config.units import (
     HEAT_CAPACITY,
+    LENGTH,
+    MASS,
     NUMBER,
     THERMAL_RESISTANCE,
     Kind,
@@ -49,6 +52,7 @@ from ecdsim.model import (
     Ecd,
     Gearbox,
     GearEfficiency,
+    Gravity,
     HighSpeedDamper,
     LinearSpring,
     LinearTemperatureLaw,
@@ -304,6 +308,30 @@ class GearboxSpec(_Section):
         )
 
 
+# Gravity in a ground test (issue 16 item 2; docs/config.md, docs/model.md).
+NonNegativeMass = Annotated[float, quantity(MASS, non_negative), MASS]
+NonNegativeLength = Annotated[float, quantity(LENGTH, non_negative), LENGTH]
+Offload = Annotated[
+    float, quantity(NUMBER, lambda x: None if 0.0 <= x <= 1.0 else "must be in [0, 1]"), NUMBER
+]
+
+
+class GravitySpec(_Section):
+    """``[load.gravity]``: gravity on the deployed mass in a ground test (docs/model.md).
+
+    Omitted = flight (0 g), today's model; ``mass = 0`` or ``offload = 1`` give no torque.
+    """
+
+    mass: NonNegativeMass
+    cg_radius: NonNegativeLength
+    release_angle: Angle
+    offload: Offload = 0.0
+
+    def to_model(self) -> Gravity:
+        """The model object (SI)."""
+        return Gravity(self.mass, self.cg_radius, self.release_angle, self.offload)
+
+
 class LoadSpec(_Section):
     """``[load]``: spring torque over the travel and system friction (paper section 5)."""
 
@@ -323,6 +351,7 @@ class LoadSpec(_Section):
     restitution: Restitution = 0.0
     # Breakaway over kinetic FS_T (dynamic method); None = [damper] static_friction_factor.
     static_friction_factor: StaticFactor | None = None
+    gravity: GravitySpec | None = None
 
     @model_validator(mode="after")
     def _one_spring(self) -> LoadSpec:
@@ -379,6 +408,7 @@ class LoadSpec(_Section):
             system_friction=(
                 self.system_friction.to_law() if self.system_friction else LinearTemperatureLaw()
             ),
+            gravity=None if self.gravity is None else self.gravity.to_model(),
         )
 
 
