@@ -165,8 +165,11 @@ class Plan:
 
     @property
     def summary_columns(self) -> tuple[str, ...]:
-        """The columns the summary reads whole (for order statistics): sample, outputs."""
-        return ("sample", *self.output_columns)
+        """The columns the summary reads whole (for order statistics): the outputs.
+
+        (The sample index is checked chunk by chunk where a chunk is read from its file.)
+        """
+        return self.output_columns
 
     @property
     def columns(self) -> tuple[str, ...]:

@@ -266,6 +266,8 @@ class ChunkReader:
         names: Sequence[str],
         rows: Sequence[int] | None = None,
         kept: tuple[dict[str, np.ndarray[Any, Any]], set[int]] | None = None,
+        *,
+        check_samples: bool = False,
     ) -> dict[str, np.ndarray[Any, Any]]:
         """Several columns over all samples, each chunk file opened once.
 
@@ -273,7 +275,8 @@ class ChunkReader:
         the columns plus one chunk (not the columns twice, as concatenating would).
         ``rows`` are the chunks' row counts if known (their tags hold them). ``kept``
         (:func:`take_kept`) are whole columns already filled for some chunks: only the
-        other chunks are read, into those arrays.
+        other chunks are read, into those arrays. ``check_samples``: ValueError unless
+        each chunk read holds the next samples in order (its ``sample`` column).
         """
         pq = require("pyarrow.parquet")
         paths = [chunk_path(self.out, k) for k in range(self.chunks)]
@@ -286,7 +289,12 @@ class ChunkReader:
         start = 0
         for k, (path, count) in enumerate(zip(paths, rows, strict=True)):
             if k not in filled:
-                table = pq.read_table(path, columns=list(names))
+                wanted = [*names, "sample"] if check_samples else list(names)
+                table = pq.read_table(path, columns=wanted)
+                if check_samples and not np.array_equal(
+                    table.column("sample").to_numpy(), np.arange(start, start + count)
+                ):
+                    raise ValueError(f"{path}: does not hold samples {start}..{start + count - 1}")
                 for name in names:
                     part = table.column(name).to_numpy()
                     if name not in found:
