@@ -293,3 +293,43 @@ def test_the_dynamic_method_refuses_gravity_by_name(tmp_path: Path) -> None:
     assert result.exit_code == 2
     assert "load.gravity" in result.output
     assert "Traceback" not in result.output
+
+
+def test_deploy_shows_flight_and_ground_test_side_by_side(tmp_path: Path) -> None:
+    # The JSON's ground_test block: flight = the config without [load.gravity], test =
+    # the config as given, their difference; the table prints both at 80 columns.
+    import json
+
+    text = _gravity("1 kg", "0.25 m", "-60 deg", "0.9")
+    path = tmp_path / "ground.toml"
+    path.write_text(text)
+    runner = CliRunner()
+    result = runner.invoke(app, ["deploy", str(path), "--json"])
+    assert result.exit_code == 0, result.output
+    document = json.loads(result.stdout)
+    ground = document["ground_test"]
+    temps = np.array(parse_config(text).temperatures)
+    flight = predict(parse_config(TEXT).system, temps, ("paper", "exact"))
+    test = predict(parse_config(text).system, temps, ("paper", "exact"))
+    w = 1.0 * G * 0.25 * 0.1
+    # 1e-15: W sin(-60 deg) and W sin(-60 deg + 1.57 rad) typed here, rounding only
+    assert ground["torque_at_release_Nm"] == pytest.approx(w * math.sin(math.radians(-60)))
+    assert ground["torque_at_latch_Nm"] == pytest.approx(
+        w * math.sin(math.radians(-60) + 1.57), rel=1e-15
+    )
+    for i, case in enumerate(ground["cases"]):
+        for method in ("paper", "exact"):
+            t_flight = float(flight.solutions[method].deployment_time[i])
+            t_test = float(test.solutions[method].deployment_time[i])
+            block = case[method]
+            assert block["flight_deployment_time_s"] == t_flight
+            assert block["test_deployment_time_s"] == t_test
+            assert block["test_minus_flight_s"] == t_test - t_flight
+    wide = runner.invoke(app, ["deploy", str(path)], env={"COLUMNS": "80"})
+    assert wide.exit_code == 0
+    assert "Flight (0 g) against ground test (1 g, 90 % offloaded)" in wide.stdout
+    assert all(len(line) <= 80 for line in wide.stdout.splitlines())
+    plain = tmp_path / "flight.toml"
+    plain.write_text(TEXT)
+    flight_only = json.loads(runner.invoke(app, ["deploy", str(plain), "--json"]).stdout)
+    assert "ground_test" not in flight_only
