@@ -232,7 +232,20 @@ class _InTemperature:
         self, solution: Callable[[FloatArray], FloatArray], model: Model, index: int
     ) -> None:
         self.solution = solution
-        self.model = model.take(np.array([index]))
+        # The segment's own model is taken when the output is first evaluated: most
+        # recorded runs are never sampled, and a take builds a model and its law.
+        self._batch: Model | None = model
+        self._index = index
+        self._model: Model | None = None
+
+    @property
+    def model(self) -> Model:
+        """The model of this segment alone."""
+        if self._model is None:
+            assert self._batch is not None
+            self._model = self._batch.take(np.array([self._index]))
+            self._batch = None
+        return self._model
 
     def __call__(self, t: FloatArray) -> FloatArray:
         y = np.array(self.solution(t), dtype=float)
