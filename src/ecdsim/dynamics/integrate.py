@@ -291,7 +291,7 @@ def _advance_batched(
     control = rosenbrock.Control(
         rtol=rtol, horizon=HORIZON_TIME, horizon_kind=HORIZON, record=record
     )
-    kernel = compiled_kernel() if not model.two_node else None
+    kernel = compiled_kernel()
     integrate_batch = rosenbrock.integrate_batch if kernel is None else kernel.integrate_batch
     out = integrate_batch(model, segments, control)
     stopped = (out.kind == linear.ZERO) | (out.kind == linear.REST)
