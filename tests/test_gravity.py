@@ -333,3 +333,29 @@ def test_deploy_shows_flight_and_ground_test_side_by_side(tmp_path: Path) -> Non
     plain.write_text(TEXT)
     flight_only = json.loads(runner.invoke(app, ["deploy", str(plain), "--json"]).stdout)
     assert "ground_test" not in flight_only
+
+
+def test_the_report_and_the_explorer_api_carry_flight_and_test() -> None:
+    # The report's ground-test table and the explorer's /api/deploy JSON hold the same
+    # flight and test times as predict without and with the section.
+    from fastapi.testclient import TestClient
+
+    from ecdsim.report.builder import predict_config, render_html
+    from ecdsim.webapp.server import create_app
+
+    text = _gravity("1 kg", "0.25 m", "-60 deg", "0.9")
+    config = parse_config(text)
+    temps = np.array(config.temperatures)
+    flight = predict(parse_config(TEXT).system, temps, ("paper", "exact"))
+    html = render_html(config, predict_config(config), text)
+    assert 'id="ground-test"' in html
+    assert "Flight (0 g) against ground test (1 g, 90 % offloaded)" in html
+    plain_html = render_html(parse_config(TEXT), predict_config(parse_config(TEXT)), TEXT)
+    assert 'id="ground-test"' not in plain_html
+    client = TestClient(create_app(None))
+    raw = client.post("/api/config/parse", json={"toml": text}).json()["config"]
+    body = client.post("/api/deploy", json={"config": raw, "sweep_points": 0}).json()
+    ground = body["prediction"]["ground_test"]
+    for i, case in enumerate(ground["cases"]):
+        expected = float(flight.solutions["exact"].deployment_time[i])
+        assert case["exact"]["flight_deployment_time_s"] == expected
