@@ -359,3 +359,47 @@ def test_the_report_and_the_explorer_api_carry_flight_and_test() -> None:
     for i, case in enumerate(ground["cases"]):
         expected = float(flight.solutions["exact"].deployment_time[i])
         assert case["exact"]["flight_deployment_time_s"] == expected
+
+
+def test_monte_carlo_samples_the_gravity_inputs_case_by_case() -> None:
+    # A batch of sampled masses, radii and offloads solves as each scalar case does.
+    from ecdsim.montecarlo.apply import NotTolerable, Parameters, apply, nominal
+
+    config = parse_config(_gravity("1 kg", "0.25 m", "-60 deg", "0.9"))
+    base = Parameters(config.system)
+    assert nominal(base, "load.gravity.mass") == 1.0
+    assert nominal(base, "load.gravity.offload") == 0.9
+    with pytest.raises(NotTolerable, match=r"\[load.gravity\], which this config does not"):
+        nominal(Parameters(parse_config(TEXT).system), "load.gravity.mass")
+    values = {
+        "load.gravity.mass": np.array([0.5, 1.0, 2.0]),
+        "load.gravity.cg_radius": np.array([0.2, 0.25, 0.3]),
+        "load.gravity.offload": np.array([0.95, 0.9, 0.85]),
+    }
+    batch = apply(base, values).system
+    temps = np.array([[-40.0], [25.0]])
+    found = predict(batch, temps, ("exact",)).solutions["exact"].deployment_time
+    for j in range(3):
+        scalar = parse_config(
+            _gravity(
+                f"{values['load.gravity.mass'][j]} kg",
+                f"{values['load.gravity.cg_radius'][j]} m",
+                "-60 deg",
+                f"{values['load.gravity.offload'][j]}",
+            )
+        )
+        one = predict(scalar.system, temps[:, 0], ("exact",)).solutions["exact"].deployment_time
+        # 1e-12: the same quadrature, in a batch or alone (its tolerance is relative to
+        # each case's own integral)
+        np.testing.assert_allclose(found[:, j], one, rtol=1e-12)
+
+
+def test_an_offload_spread_beyond_one_is_refused() -> None:
+    from ecdsim.montecarlo.tolerances import resolve
+
+    text = _gravity("1 kg", "0.25 m", "-60 deg", "0.9") + (
+        '\n[tolerances.quantities]\n"load.gravity.offload" = '
+        '{ distribution = "uniform", plus_minus = "0.2" }\n'
+    )
+    with pytest.raises(ConfigError, match="must stay <= 1"):
+        resolve(parse_config(text))

@@ -265,6 +265,15 @@ def _resolve_one(
                 + (" or a bounded distribution" if spec.distribution == "normal" else "")
             )
             return None
+    if quantity.upper_bound is not None:
+        high = nominal + marginal.reach * scale
+        if high > quantity.upper_bound:
+            problems.append(
+                f"{where}.{name} = {spread.text!r}: the {spec.distribution} spread reaches "
+                f"{high:.4g} (nominal {nominal:.4g}), but the quantity must stay <= "
+                f"{quantity.upper_bound:g}; use a smaller spread"
+            )
+            return None
     return Tolerance(
         key=spec.key,
         distribution=spec.distribution,
