@@ -84,3 +84,31 @@ def test_quasi_static_deploy_and_a_printed_fit_skip_what_they_do_not_run() -> No
     assert "ecdsim.dynamics.solver" not in deploy_own
     assert "ecdsim.config.schema" not in fit_own
     assert "ecdsim.characterize.droptest" in fit_own
+
+
+def test_reading_a_config_does_not_scan_for_pydantic_plugins() -> None:
+    # pydantic's first validator build reads every installed distribution's entry points
+    # looking for plugins (~10 ms); the config schema is built with plugins off, and
+    # typer builds its option adapters so. Record any such scan during a deploy.
+    script = """
+import contextlib, importlib.metadata, io, sys
+scans = []
+real = importlib.metadata.entry_points
+def recording(**kwargs):
+    scans.append(kwargs)
+    return real(**kwargs)
+importlib.metadata.entry_points = recording
+from ecdsim.cli.app import main
+sys.argv = ["ecdsim", "deploy", "examples/paper_cc16.toml"]
+with contextlib.redirect_stdout(io.StringIO()):
+    try:
+        main()
+    except SystemExit:
+        pass
+print(len(scans), "PYDANTIC_DISABLE_PLUGINS" in __import__("os").environ)
+"""
+    done = subprocess.run(
+        [sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, check=True
+    )
+    # No scan, and the variable is not left set for the user's own models.
+    assert done.stdout.split() == ["0", "False"]
