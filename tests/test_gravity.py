@@ -403,3 +403,44 @@ def test_an_offload_spread_beyond_one_is_refused() -> None:
     )
     with pytest.raises(ConfigError, match="must stay <= 1"):
         resolve(parse_config(text))
+
+
+def test_the_torque_margin_counts_opposing_gravity_as_its_own_kind() -> None:
+    # Spring 3 N*m over [0, pi], F = 1 N*m, T_g = sin(phi) (W = 1, theta_0 = 0), factor
+    # 2 on gravity, no damping torque: TM = 3 / (1 + 2 sin(phi)) - 1, smallest at
+    # phi = pi/2 (a grid point: 64 of 128 steps): 3 / 3 - 1 = 0, by hand.
+    from ecdsim.sizing.margin import MarginSettings, margin_over_travel
+
+    settings = MarginSettings(factors={"gravity": 2.0})
+    terms = margin_over_travel(
+        np.array([0.0, math.pi]),
+        np.array([3.0, 3.0]),
+        ecd_friction=0.6,
+        system_friction=0.4,
+        damping_rate=10.0,
+        stalled=False,
+        stall_angle=math.nan,
+        settings=settings,
+        gravity_amplitude=1.0,
+        gravity_angle=0.0,
+    ).at_minimum()
+    # 1e-12: sin(pi/2) in floating point
+    assert float(terms.margin) == pytest.approx(0.0, abs=1e-12)
+    assert float(terms.angle) == pytest.approx(math.pi / 2, rel=1e-15)
+    assert float(terms.resistive["gravity"]) == pytest.approx(1.0, rel=1e-15)
+    # Gravity aiding everywhere (theta_0 = -pi: T_g = -sin(phi) <= 0) is not credited:
+    # TM = 3 / 1 - 1 = 2 at every point.
+    aided = margin_over_travel(
+        np.array([0.0, math.pi]),
+        np.array([3.0, 3.0]),
+        ecd_friction=0.6,
+        system_friction=0.4,
+        damping_rate=10.0,
+        stalled=False,
+        stall_angle=math.nan,
+        settings=settings,
+        gravity_amplitude=1.0,
+        gravity_angle=-math.pi,
+    ).at_minimum()
+    assert float(aided.margin) == pytest.approx(2.0, rel=1e-12)
+    assert float(aided.resistive["gravity"]) == 0.0
