@@ -119,6 +119,38 @@ def test_compiled_kernel_matches_the_numpy_integrator(
             assert np.allclose(a(times), b(times), rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.parametrize("threads", [2, 3, 7])
+def test_a_batch_split_over_threads_gives_the_same_bits(
+    threads: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # Each segment is integrated from its own row only, so splitting the batch into
+    # contiguous parts run on several threads must change no bit of any result (the
+    # uneven splits 3 and 7 put part edges at arbitrary segments).
+    model, segments = _segments("kloss", True, n=61)
+    control = rosenbrock.Control(rtol=1e-9, horizon=1e9, horizon_kind=4, record=False)
+    monkeypatch.setattr(compiled, "PARALLEL_MIN", 1)
+    monkeypatch.setattr(compiled, "THREADS", 1)
+    one = compiled.integrate_batch(model, segments, control)
+    monkeypatch.setattr(compiled, "THREADS", threads)
+    split = compiled.integrate_batch(model, segments, control)
+    assert compiled._split(61, threads)[-1][1] == 61
+    for a, b in zip(
+        (one.kind, one.duration, one.state, one.max_speed, one.max_thermal_state),
+        (split.kind, split.duration, split.state, split.max_speed, split.max_thermal_state),
+        strict=True,
+    ):
+        assert np.array_equal(a, b)
+
+
+def test_an_error_in_a_worker_thread_reaches_the_caller() -> None:
+    def run(lo: int, _hi: int) -> None:
+        if lo > 0:
+            raise ValueError("worker failed")
+
+    with pytest.raises(ValueError, match="worker failed"):
+        compiled._in_threads(run, compiled._split(10, 2))
+
+
 def _rolloff_heating_params(rtol: float = 1e-9) -> DynamicParameters:
     return DynamicParameters(
         load_inertia=np.array([0.5, 5.0]),

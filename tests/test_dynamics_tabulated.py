@@ -8,6 +8,7 @@ moves by one piece at a time), not O(P) (counting the breakpoints below the angl
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 import pytest
@@ -89,3 +90,40 @@ def test_ten_thousand_point_spring_against_scipy() -> None:
     assert result.deployment_time[0] == pytest.approx(float(sol.t_events[0][0]), rel=1e-8)
     assert result.arrival_speed[0] == pytest.approx(float(sol.y_events[0][0][1]), rel=1e-7)
     assert_energy_closes(result)
+
+
+def _table_system(points: int) -> DeploymentSystem:
+    angles = np.linspace(0.0, hand.TRAVEL, points)
+    torques = hand.TS - (hand.TS - hand.TE) * (angles / hand.TRAVEL) ** 1.5
+    base = paper_system()
+    spring = TabulatedSpring(tuple(angles.tolist()), tuple(torques.tolist()))
+    return DeploymentSystem(base.ecd, replace(base.load, spring=spring), name="table")
+
+
+def _solve(system: DeploymentSystem, **params: float) -> Any:
+    dynamics = DynamicParameters(load_inertia=5.0, **params)  # type: ignore[arg-type]
+    solution = predict(system, [25.0], ["dynamic"], dynamics=dynamics).solutions["dynamic"]
+    return solution.result  # type: ignore[attr-defined]
+
+
+def test_spring_breakpoints_do_not_count_against_the_event_limit() -> None:
+    # A table of 60 points is 58 breakpoint events: with an event limit of 1 the run must
+    # still reach the latch (its one pass that is not a breakpoint), and bit for bit as
+    # with the default limit, which it never approaches. Before, every breakpoint was a
+    # pass of the limit, and a table longer than max_events rows stopped short.
+    system = _table_system(60)
+    limited = _solve(system, max_events=1)
+    free = _solve(system)
+    assert limited.status_names() == ["latched"]
+    assert limited.events.count("breakpoint") == 58
+    assert limited.deployment_time[0] == free.deployment_time[0]
+    assert limited.arrival_speed[0] == free.arrival_speed[0]
+
+
+def test_the_event_limit_still_cuts_rebounds_short() -> None:
+    # A rebounding end stop (e = 0.5) needs several impacts to settle: a limit of 3
+    # passes ends the run as event_limit, breakpoints crossed on the way back or not.
+    result = _solve(_table_system(20), restitution=0.5, max_events=3)
+    assert result.status_names() == ["event_limit"]
+    assert result.events.count("event_limit") == 1
+    assert result.events.count("arrive") >= 1

@@ -229,3 +229,71 @@ def test_a_sample_mask_equals_dropping_the_samples() -> None:
     assert first is not None
     assert expected_first is not None
     np.testing.assert_allclose(first, expected_first, rtol=1e-9)
+
+
+def _samples(kind: str, n: int, rng: np.random.Generator) -> np.ndarray:
+    if kind == "continuous, stalled tail":
+        x = rng.lognormal(0.0, 0.2, n)
+        x[rng.random(n) < 0.02] = np.inf
+    elif kind == "negative, infinite both ways":
+        x = rng.normal(-1.0, 3.0, n)
+        x[rng.random(n) < 0.01] = -np.inf
+        x[rng.random(n) < 0.01] = np.inf
+    elif kind == "heavy ties":
+        x = rng.integers(0, 5, n).astype(float)
+    elif kind == "NaN tail":
+        x = rng.random(n)
+        x[rng.random(n) < 0.03] = np.nan
+    else:  # one value
+        x = np.full(n, 2.5)
+    return x
+
+
+@pytest.mark.parametrize(
+    "kind",
+    [
+        "continuous, stalled tail",
+        "negative, infinite both ways",
+        "heavy ties",
+        "NaN tail",
+        "one value",
+    ],
+)
+def test_order_statistics_are_those_of_a_full_sort(
+    kind: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The bracketed selection returns exactly np.sort(x)[ranks] (NaN last), whatever the
+    data; sizes shrunk so that 200,000 samples take the bracketed path."""
+    monkeypatch.setattr(intervals, "BRACKET_MIN_SIZE", 10_000)
+    monkeypatch.setattr(intervals, "BRACKET_SUBSAMPLE", 40_000)
+    n = 200_000
+    x = _samples(kind, n, np.random.default_rng(17))
+    ranks = [0, 1, 1999, n // 20, n // 2 - 7, n // 2, 190_000, 196_000, n - 2, n - 1]
+    for p in (0.01, 0.05, 0.5, 0.95, 0.99):
+        ranks += [intervals.rank_of(n, p), *(r for r in intervals.confidence_ranks(n, p) if r)]
+    expected = np.sort(x)[ranks]  # the reference: a full sort
+    found = intervals.order_statistics(x, ranks)
+    assert np.array_equal(found, expected, equal_nan=True)
+    copy = x.copy()
+    again = intervals.order_statistics(copy, ranks, overwrite=True)
+    assert np.array_equal(again, expected, equal_nan=True)
+    assert np.array_equal(np.sort(copy), np.sort(x), equal_nan=True)  # reordered at most
+
+
+def test_order_statistics_answer_from_the_brackets_on_a_smooth_sample(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """On continuous data the brackets hold their ranks (no fall-back to a partition of
+    the whole sample), and the answer is still the full sort's."""
+    monkeypatch.setattr(intervals, "BRACKET_MIN_SIZE", 10_000)
+    monkeypatch.setattr(intervals, "BRACKET_SUBSAMPLE", 40_000)
+    x = _samples("continuous, stalled tail", 200_000, np.random.default_rng(3))
+    ranks = [1999, 9999, 99_999, 189_999, 193_000]
+    found = intervals._bracketed(x, ranks)
+    assert found is not None
+    assert [found[r] for r in ranks] == list(np.sort(x)[ranks])
+
+
+def test_order_statistics_refuse_ranks_outside_the_sample() -> None:
+    with pytest.raises(IndexError, match="outside a sample of 3"):
+        intervals.order_statistics(np.array([1.0, 2.0, 3.0]), [3])

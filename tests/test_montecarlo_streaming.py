@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 from scipy.stats import qmc
@@ -150,3 +151,18 @@ def test_bin_labels_floor_the_scaled_score_and_cap_the_top() -> None:
     labels = bin_labels(scores, 10)
     assert labels.dtype == np.uint8
     np.testing.assert_array_equal(labels, expected)
+
+
+def test_a_chunk_file_with_the_wrong_samples_is_refused(tmp_path: Path) -> None:
+    """Chunks read back from their files are checked to hold their own sample indices."""
+    plan = build_plan(load_config(EXAMPLE), 3000, "exact", chunk_size=1024)
+    out = tmp_path / "study"
+    run(plan, out)
+    store.take_kept(out, plan.identity_sha256)  # forget the in-memory columns: read the files
+    path = store.chunk_path(out, 1)
+    table = pq.read_table(path)
+    shifted = pa.array(table.column("sample").to_numpy() + 1)
+    table = table.set_column(table.schema.get_field_index("sample"), "sample", shifted)
+    pq.write_table(table, path)  # same tag (identity, index, rows): only the indices differ
+    with pytest.raises(ValueError, match="chunk-000001.parquet: does not hold samples 1024..2047"):
+        summarize(plan, out)

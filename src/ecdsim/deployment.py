@@ -8,8 +8,9 @@ structured :class:`ModelWarning` records in the result.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ from ecdsim.methods import SOLVERS
 from ecdsim.model import DeploymentSystem, EcdState
 from ecdsim.physics import mechanics
 from ecdsim.physics.assembly import damper_torque
+from ecdsim.physics.gravity import STANDARD_GRAVITY
 from ecdsim.solvers import DeploymentSolution, QuasiStaticProblem, Trajectory
 
 DEFAULT_METHODS = ("paper", "exact")
@@ -89,6 +91,9 @@ class Prediction:
     problem: QuasiStaticProblem
     solutions: dict[str, DeploymentSolution]
     warnings: list[ModelWarning] = field(default_factory=list)
+    # With [load.gravity]: the same system in flight (0 g), for the side-by-side output
+    # (:func:`with_flight`); None otherwise.
+    flight: Prediction | None = None
 
     @property
     def resistance(self) -> FloatArray | None:
@@ -125,12 +130,54 @@ class Prediction:
         cases = []
         for i, temp in enumerate(self.temperatures):
             cases.append(self._case_dict(i, float(temp)))
-        return {
+        document: dict[str, Any] = {
             "ecdsim_version": __version__,
             "system": self.system.name,
             "methods": list(self.solutions),
             "cases": cases,
             "warnings": [w.to_dict() for w in self.warnings],
+        }
+        if self.flight is not None:
+            document["ground_test"] = self._ground_test()
+        return document
+
+    def _ground_test(self) -> dict[str, Any]:
+        """The gravity of the ground test, and flight against test per case and method.
+
+        The prediction itself is the test (as configured, in 1 g); ``flight`` the same
+        system in 0 g. ``test_minus_flight`` is None where either stalls.
+        """
+        gravity = self.system.load.gravity
+        assert gravity is not None
+        assert self.flight is not None
+        travel = float(np.max(self.problem.travel))
+        cases = []
+        for i, temp in enumerate(self.temperatures):
+            by_method: dict[str, Any] = {}
+            for name, test in self.solutions.items():
+                flight = self.flight.solutions[name]
+                t_test = float(np.broadcast_to(test.deployment_time, self.temperatures.shape)[i])
+                t_flight = float(
+                    np.broadcast_to(flight.deployment_time, self.temperatures.shape)[i]
+                )
+                both = math.isfinite(t_test) and math.isfinite(t_flight)
+                by_method[name] = {
+                    "flight_deployment_time_s": t_flight if math.isfinite(t_flight) else None,
+                    "test_deployment_time_s": t_test if math.isfinite(t_test) else None,
+                    "test_minus_flight_s": t_test - t_flight if both else None,
+                    "relative": (t_test - t_flight) / t_flight if both else None,
+                }
+            cases.append({"temperature_C": float(temp), **by_method})
+        return {
+            "mass_kg": float(np.max(gravity.mass)),
+            "cg_radius_m": float(np.max(gravity.cg_radius)),
+            "release_angle_rad": float(np.max(gravity.release_angle)),
+            "offload": float(np.max(gravity.offload)),
+            "gravity_m_s2": STANDARD_GRAVITY,
+            "torque_amplitude_Nm": float(np.max(gravity.amplitude)),
+            "torque_at_release_Nm": float(np.max(gravity.torque_at(0.0))),
+            "torque_at_latch_Nm": float(np.max(gravity.torque_at(travel))),
+            "cases": cases,
         }
 
     def _case_dict(self, i: int, temperature: float) -> dict[str, Any]:
@@ -203,11 +250,15 @@ def build_problem(
     angles, torques = load.drive.breakpoints(load.travel, temperatures)
     fs = np.asarray(load.system_friction(temperatures), dtype=float)
     friction = np.asarray(ecd.ecd_friction + fs, dtype=float)
+    gravity = load.gravity
     problem = QuasiStaticProblem(
         angles=np.asarray(angles, dtype=float),
         torques=np.asarray(torques, dtype=float),
         friction=friction,
         damping_rate=np.asarray(ecd.ecd_damping_rate, dtype=float),
+        # A ground test's gravity torque (docs/model.md); None in flight, as before.
+        gravity_amplitude=None if gravity is None else gravity.amplitude,
+        gravity_angle=None if gravity is None else np.asarray(gravity.release_angle, float),
     )
     return problem, fs
 
@@ -237,6 +288,13 @@ def predict(
     _check_finite(ecd)
     _check_damping_positive(ecd)
     problem, fs = build_problem(system, ecd, temps)
+    if problem.has_gravity and (needing := [m for m in methods if SOLVERS[m].needs_dynamics]):
+        # The dynamic method's segments do not carry the gravity torque yet (docs/model.md).
+        raise ModelDomainError(
+            "load.gravity",
+            f"the {needing[0]} method does not take gravity yet; predict the ground test "
+            "with the paper and exact methods, or remove [load.gravity] for flight",
+        )
     if dynamics is not None:
         try:
             problem = dynamic_problem(system, ecd, temps, problem, fs, dynamics)
@@ -259,6 +317,23 @@ def predict(
     )
     prediction.warnings.extend(collect_warnings(prediction))
     return prediction
+
+
+def with_flight(prediction: Prediction, dynamics: DynamicParameters | None = None) -> Prediction:
+    """``prediction`` with its flight (0 g) twin when the system has ``[load.gravity]``.
+
+    The configured system is the ground test; the twin is the same system without
+    gravity, solved by the same methods at the same temperatures, so that the output can
+    show both and their difference (docs/model.md, gravity in ground tests).
+    """
+    load = prediction.system.load
+    if load.gravity is None:
+        return prediction
+    flight_system = replace(prediction.system, load=replace(load, gravity=None))
+    flight = predict(
+        flight_system, prediction.temperatures, list(prediction.solutions), dynamics=dynamics
+    )
+    return replace(prediction, flight=flight)
 
 
 def _check_finite(ecd: EcdState) -> None:
@@ -402,7 +477,15 @@ def _stall_warnings(
     out = []
     shape = solution.stalled.shape
     temps = np.broadcast_to(prediction.temperatures, shape)
-    drive = np.broadcast_to(prediction.problem.torques[0], shape)
+    problem = prediction.problem
+    at_release = problem.torques[0]
+    what = "spring torque"
+    if problem.has_gravity:  # a ground test: the drive is the spring less gravity
+        assert problem.gravity_amplitude is not None
+        assert problem.gravity_angle is not None
+        at_release = at_release - problem.gravity_amplitude * np.sin(problem.gravity_angle)
+        what = "spring torque less gravity"
+    drive = np.broadcast_to(at_release, shape)
     friction = np.broadcast_to(_friction_at_release(prediction, solution), shape)
     stalled = solution.stalled
     for t, angle, start, resist in zip(
@@ -421,8 +504,7 @@ def _stall_warnings(
         else:
             message = (
                 f"stalls at {float(angle):.4g} rad ({np.degrees(float(angle)):.1f} deg) at "
-                f"{float(t):g} degC: spring torque falls to the friction before the end of "
-                "travel"
+                f"{float(t):g} degC: {what} falls to the friction before the end of travel"
             )
         out.append(ModelWarning("stall", message, float(t), name))
     return out

@@ -14,7 +14,7 @@ from typing import Protocol, TypeAlias
 import numpy as np
 
 from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
-from ecdsim.physics import assembly, laws, load
+from ecdsim.physics import assembly, gearing, gravity, laws, load
 
 Param: TypeAlias = float | FloatArray
 
@@ -131,6 +131,24 @@ class HighSpeedDamper:
 
 
 @dataclass(frozen=True)
+class GearEfficiency:
+    """Mesh efficiency of a lossy gear (issue 16 item 5; Modelica's LossyGear).
+
+    ``forward`` applies while the load drives the damper (power from the slow input to the
+    fast shaft, every deployment), ``backward`` while the damper side's inertia drives the
+    load (an overrunning rotor, a rebound): :mod:`ecdsim.physics.gearing`.
+
+    Attributes
+    ----------
+    forward : eta_f, in (0, 1] [-]
+    backward : eta_b, in (0, 1] [-]
+    """
+
+    forward: Param = 1.0
+    backward: Param = 1.0
+
+
+@dataclass(frozen=True)
 class Gearbox:
     """The step-up gearbox (paper section 3), damping and friction at the high-speed shaft.
 
@@ -145,6 +163,8 @@ class Gearbox:
     damping_rate : BG [N*m*s/rad], or None to use damping_fraction
     damping_fraction : BG / BD [-], or None to use damping_rate
     lost_motion : gear backlash seen at the input shaft [rad] (reported; used by dynamics)
+    efficiency : mesh efficiency forward and back-driven, the alternative to FG; None for
+        none (an ideal mesh: Eq. 3-4 as printed)
     """
 
     ratio: Param
@@ -152,6 +172,7 @@ class Gearbox:
     damping_rate: Param | None = None
     damping_fraction: Param | None = None
     lost_motion: float = 0.0
+    efficiency: GearEfficiency | None = None
 
     def __post_init__(self) -> None:
         if (self.damping_rate is None) == (self.damping_fraction is None):
@@ -182,6 +203,8 @@ class EcdState:
     ecd_damping_rate : BECD_T at the input shaft (Eq. 3) [N*m*s/rad]
     ecd_friction : FECD_T at the input shaft (Eq. 4) [N*m]
     gear_ratio : N [-]
+    forward_efficiency : eta_f of a lossy mesh (1: ideal); BECD_T and FECD_T include it
+    backward_efficiency : eta_b of a lossy mesh (1: ideal), for back-driven motion
     """
 
     temperature: FloatArray
@@ -195,6 +218,8 @@ class EcdState:
     ecd_damping_rate: FloatArray
     ecd_friction: FloatArray
     gear_ratio: FloatArray
+    forward_efficiency: FloatArray = field(default_factory=lambda: np.asarray(1.0))
+    backward_efficiency: FloatArray = field(default_factory=lambda: np.asarray(1.0))
 
     def input_speed(self, torque: ArrayLike) -> FloatArray:
         """Steady input speed under a constant input torque [N*m] (Eq. 5) [rad/s]."""
@@ -223,6 +248,25 @@ class Ecd:
         bt = assembly.total_damping_rate(bd_t, bg)
         ft = assembly.total_friction(fd, fl, fg)
         n = np.asarray(self.gearbox.ratio, dtype=float)
+        efficiency = self.gearbox.efficiency
+        if efficiency is not None:
+            # A lossy mesh driven forward (issue 16 item 5): Eq. 3-4 divided by eta_f.
+            eta_f = np.asarray(efficiency.forward, dtype=float)
+            return EcdState(
+                temperature=t,
+                damper_damping_rate=bd_t,
+                gearbox_damping_rate=bg,
+                total_damping_rate=bt,
+                damper_friction=fd,
+                lubrication_friction=fl,
+                gearbox_friction=fg,
+                total_friction=ft,
+                ecd_damping_rate=gearing.refer_damping_through_mesh(bt, n, eta_f),
+                ecd_friction=gearing.refer_friction_through_mesh(ft, n, eta_f),
+                gear_ratio=n,
+                forward_efficiency=eta_f,
+                backward_efficiency=np.asarray(efficiency.backward, dtype=float),
+            )
         return EcdState(
             temperature=t,
             damper_damping_rate=bd_t,
@@ -467,6 +511,44 @@ class ResistedSpring:
 
 
 @dataclass(frozen=True)
+class Gravity:
+    """Gravity on the deployed mass in a ground test (issue 16 item 2; docs/model.md).
+
+    The torque about the hinge, opposing deployment positive, is
+    ``m g r (1 - offload) sin(theta_0 + phi)`` (:mod:`ecdsim.physics.gravity`).
+
+    Attributes
+    ----------
+    mass : deployed mass m [kg]
+    cg_radius : centre of gravity's distance from the hinge axis r [m]
+    release_angle : theta_0, from the downward vertical to the hinge-to-CG line at
+        release, positive in the direction of deployment [rad]
+    offload : fraction of the weight carried by the ground-support equipment [-]
+    """
+
+    mass: Param
+    cg_radius: Param
+    release_angle: Param
+    offload: Param = 0.0
+
+    @property
+    def amplitude(self) -> FloatArray:
+        """W = m g r (1 - offload) [N*m]."""
+        return gravity.gravity_amplitude(self.mass, self.cg_radius, self.offload)
+
+    def torque_at(self, angle: ArrayLike) -> FloatArray:
+        """Gravity torque at deployed angle phi [N*m], opposing deployment positive."""
+        return gravity.gravity_torque(angle, self.amplitude, self.release_angle)
+
+    def describe(self) -> str:
+        """One-line description."""
+        return (
+            f"gravity on {np.max(self.mass):g} kg at {np.max(self.cg_radius):g} m, "
+            f"{np.max(self.offload) * 100:g} % offloaded"
+        )
+
+
+@dataclass(frozen=True)
 class Load:
     """The deployment load seen by the ECD's input shaft (paper section 5).
 
@@ -476,12 +558,15 @@ class Load:
     travel : deployment angle, delta_theta [rad]
     system_friction : FS_T, hinge and harness friction, a temperature law [N*m]
     resistance : resistive torque against angle (harness, blanket), None for none
+    gravity : gravity on the deployed mass in a ground test, None for flight (0 g)
     """
 
     spring: Spring
     travel: Param
     system_friction: TemperatureLaw = ZERO_LAW
     resistance: ResistiveTable | None = None
+    # Gravity in a ground test (issue 16 item 2); None = flight (0 g), today's model.
+    gravity: Gravity | None = None
 
     @property
     def drive(self) -> Spring:

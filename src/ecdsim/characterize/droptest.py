@@ -52,6 +52,7 @@ import numpy as np
 
 from ecdsim._types import ArrayLike, FloatArray, as_float
 from ecdsim._version import __version__
+from ecdsim.characterize import leastsq
 from ecdsim.characterize.csvdata import (
     INERTIA,
     LENGTH,
@@ -569,8 +570,6 @@ def _timing_line(
     residuals by ``1 / speed**2``: a relative speed error ``eps`` puts ``BECD * speed *
     eps`` into the torque.
     """
-    from scipy.optimize import least_squares
-
     log_time = np.log(time)
     scale = float(np.max(np.abs(torque)))
     ceiling = float(np.min(torque)) - FRICTION_CEILING * scale
@@ -602,14 +601,8 @@ def _timing_line(
         return as_float(-model(p)[1] * np.array([friction - ceiling, damping]))
 
     friction_start = min(start[0], ceiling - 0.01 * scale)
-    result = least_squares(
-        residual,
-        np.array([math.log((ceiling - friction_start) / scale), 0.0]),
-        jac=jacobian,
-        method="lm",
-        xtol=1e-14,
-        ftol=1e-14,
-        gtol=1e-14,
+    result = leastsq.solve(
+        residual, jacobian, np.array([math.log((ceiling - friction_start) / scale), 0.0])
     )
     if not result.success:
         raise LineFitError(f"the timing-noise fit did not converge ({result.message})")
@@ -691,7 +684,6 @@ def _fit_with_startup(
     start: tuple[float, float],
 ) -> tuple[float, float]:
     """Least-squares (FECD, BECD) of ``torque = F + B * theta / (t - lag(B))``."""
-    from scipy.optimize import least_squares
 
     def residual(p: FloatArray) -> FloatArray:
         return as_float(torque - p[0] - p[1] * corrected_speed(angle, time, p[1], inertia))
@@ -702,18 +694,12 @@ def _fit_with_startup(
         return np.column_stack([-np.ones_like(w), -dw])
 
     b0 = start[1]
-    scale = float(np.max(np.abs(torque)))
-    result = least_squares(
+    result = leastsq.solve(
         residual,
+        jacobian,
         np.array([start[0], b0]),
-        jac=jacobian,
-        bounds=([-np.inf, 1e-9 * b0], [np.inf, np.inf]),
-        x_scale=np.array([scale, b0]),
-        method="trf",
-        xtol=1e-14,
-        ftol=1e-14,
-        gtol=1e-14,
-        max_nfev=200,
+        lower=np.array([-np.inf, 1e-9 * b0]),
+        max_evaluations=200,
     )
     if not result.success:
         raise LineFitError(f"the start-up-corrected fit did not converge ({result.message})")

@@ -11,12 +11,14 @@ solution, with the design matrix ``D = d model / d parameters`` (for a straight 
 
 Reference: N. R. Draper and H. Smith, *Applied Regression Analysis*, 3rd ed., Wiley 1998,
 chapters 1-2 (line), 8 (residuals, leverage) and 24 (non-linear least squares).
-scipy is imported inside the functions, and only ``scipy.special`` for the distributions'
-tails and quantiles: ``scipy.stats`` computes them with the same special functions
-(``stdtrit``, ``stdtr``, ``chdtrc``, ``fdtrc``) after argument checks, but importing it
-costs about 0.3 s more on every ``ecdsim fit``; arguments outside the plain domain (a
-non-positive or infinite dof, a probability of 0 or 1, NaN) still go to ``scipy.stats``,
-so the answers are its answers (tests/test_characterize_stats.py checks both ways agree).
+The distributions' tails and quantiles come from :mod:`ecdsim.characterize.distributions`
+(no scipy import: ``scipy.special`` alone costs more than a whole ``ecdsim fit
+drop-test``) for finite positive degrees of freedom up to its ``MAX_DOF``; larger ones
+go to ``scipy.special`` (``stdtrit``, ``stdtr``, ``chdtrc``, ``fdtrc``, what
+``scipy.stats`` computes them with after its argument checks), and arguments outside the
+plain domain (a non-positive or infinite dof, a probability of 0 or 1, NaN) to
+``scipy.stats``, so the answers are its answers (tests/test_characterize_stats.py and
+tests/test_characterize_distributions.py check that the ways agree).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from ecdsim._types import FloatArray
+from ecdsim.characterize import distributions
 
 CONFIDENCE = 0.95
 # Singular values below this fraction of the largest mean the parameters cannot be told
@@ -67,6 +70,8 @@ def t_two_sided_p(statistic: float, dof: int) -> float:
 def chi2_survival(value: float, dof: int) -> float:
     """``P(chi2_dof > value)``: the p-value of a chi-square goodness-of-fit statistic."""
     if _plain(dof) and math.isfinite(value) and value >= 0.0:
+        if _lean(dof):
+            return distributions.chi2_tail(value, float(dof))
         from scipy.special import chdtrc
 
         return float(chdtrc(dof, value))
@@ -83,6 +88,8 @@ def f_survival(value: float, dof_numerator: int, dof_denominator: int) -> float:
     True
     """
     if _plain(dof_numerator) and _plain(dof_denominator) and math.isfinite(value) and value >= 0:
+        if _lean(dof_numerator) and _lean(dof_denominator):
+            return distributions.f_tail(value, float(dof_numerator), float(dof_denominator))
         from scipy.special import fdtrc
 
         return float(fdtrc(dof_numerator, dof_denominator, value))
@@ -97,9 +104,21 @@ def _plain(dof: Any) -> bool:
     return bool(np.all(np.isfinite(d) & (d > 0.0)))
 
 
+def _lean(dof: Any) -> bool:
+    """True when every (plain) dof is within what :mod:`distributions` computes to
+    1e-12 relative."""
+    return bool(np.all(np.asarray(dof, dtype=float) <= distributions.MAX_DOF))
+
+
+_t_quantile = np.vectorize(distributions.student_t_quantile, otypes=[float])
+_t_tail = np.vectorize(distributions.student_t_tail, otypes=[float])
+
+
 def student_t_ppf(probability: float, dof: Any) -> Any:
     """Student-t quantile ``scipy.stats.t.ppf(probability, dof)`` (dof may be an array)."""
     if _plain(dof) and 0.0 < probability < 1.0:
+        if _lean(dof):
+            return _t_quantile(probability, np.asarray(dof, dtype=float))
         from scipy.special import stdtrit
 
         return stdtrit(np.asarray(dof, dtype=float), probability)
@@ -112,6 +131,8 @@ def student_t_sf(statistic: Any, dof: Any) -> Any:
     """Student-t upper tail ``scipy.stats.t.sf(statistic, dof)`` (arrays broadcast)."""
     x = np.asarray(statistic, dtype=float)
     if _plain(dof) and bool(np.all(np.isfinite(x))):
+        if _lean(dof):
+            return _t_tail(x, np.asarray(dof, dtype=float))
         from scipy.special import stdtr
 
         return stdtr(np.asarray(dof, dtype=float), -x)

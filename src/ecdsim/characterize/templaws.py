@@ -70,6 +70,7 @@ from typing import Any
 import numpy as np
 
 from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim.characterize import leastsq
 from ecdsim.characterize.stats import (
     CONFIDENCE,
     EXACT_FIT_RESOLUTION,
@@ -367,8 +368,6 @@ def fit_law(
         intervals each temperature's own, with Welch-Satterthwaite degrees of freedom
         (module docstring). None: the standard errors are taken as known.
     """
-    from scipy.optimize import least_squares
-
     t = as_float(temperatures)
     y = np.array([v.value for v in values], dtype=float)
     if np.unique(t).size < 2:
@@ -388,7 +387,7 @@ def fit_law(
     def jacobian(p: FloatArray) -> FloatArray:
         return as_float(-law.jacobian(t, p, reference_temperature) / sigma[:, None])
 
-    result = least_squares(residual, x0, jac=jacobian, method="lm", xtol=1e-14, ftol=1e-14)
+    result = leastsq.solve(residual, jacobian, x0)
     p = np.asarray(result.x, dtype=float)
     if law is DAMPING_LAWS["resistivity"] and np.any(1.0 + p[1] * (t - reference_temperature) <= 0):
         raise LawFitError("the fitted law has its pole inside the tested temperature range")

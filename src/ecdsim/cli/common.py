@@ -122,11 +122,14 @@ def load_run(
 
 def predict_run(config: Config) -> Prediction:
     """:func:`ecdsim.deployment.predict` on a loaded config; a domain error exits 2."""
-    from ecdsim.deployment import ModelDomainError, predict
+    from ecdsim.deployment import ModelDomainError, predict, with_flight
 
     try:
-        return predict(
-            config.system, config.temperatures, config.methods, dynamics=config.spec.dynamics()
+        dynamics = config.spec.dynamics()
+        # With [load.gravity], the flight (0 g) twin too: the output shows both.
+        return with_flight(
+            predict(config.system, config.temperatures, config.methods, dynamics=dynamics),
+            dynamics,
         )
     except ModelDomainError as exc:
         fail([f"{config.source}: {exc}"])

@@ -149,11 +149,20 @@ def fit(console: Console, table: Table, drop: Sequence[str] = ()) -> list[str]:
 
     Returns the hidden columns' headers. With ``--wide`` nothing is hidden.
     """
+    return _hide(console, table, drop)[0]
+
+
+def _hide(console: Console, table: Table, drop: Sequence[str]) -> tuple[list[str], int | None]:
+    """:func:`fit`, also returning the width the table needs as it is left, where that
+    was measured (None where a column was hidden after the last measurement): measuring
+    renders every cell, so :func:`show` does not measure the same table twice."""
     if _DISPLAY.wide:
-        return []
+        return [], None
     hidden: list[str] = []
+    needed: int | None = None
     for prefix in drop:
-        if _needed(console, table) <= console.width or len(table.columns) < 2:
+        needed = _needed(console, table)
+        if needed <= console.width or len(table.columns) < 2:
             break
         # The header itself, else the first one that starts with it ("p" is not "parameter").
         names = [header_text(column) for column in table.columns]
@@ -163,7 +172,8 @@ def fit(console: Console, table: Table, drop: Sequence[str] = ()) -> list[str]:
         for j in found:
             hidden.append(names[j])
             del table.columns[j]
-    return hidden
+            needed = None
+    return hidden, needed
 
 
 def show(
@@ -179,8 +189,11 @@ def show(
     from rich.measure import Measurement
 
     _style(table, wrap)
-    hidden = fit(console, table, drop)
-    if not _DISPLAY.wide and _needed(console, table) > console.width:
+    hidden, needed = _hide(console, table, drop)
+    if (
+        not _DISPLAY.wide
+        and (needed if needed is not None else _needed(console, table)) > console.width
+    ):
         # Still too wide: let every column with spaces in its cells wrap there, so that
         # rich narrows those rather than cutting a number or a name without spaces.
         options = console.options.update(width=100_000)
@@ -220,7 +233,10 @@ def note(console: Console, text: str) -> None:
     """A dim note line (plain text with ``--plain``), wrapped to the console's width."""
     from rich.markup import escape
 
-    console.print(escape(text), style="" if _DISPLAY.plain else "dim")
+    # Without colours (a pipe, a file, --plain) highlighting would only add styles that
+    # are never shown, after compiling rich's highlighter's regular expressions.
+    highlight = False if console.color_system is None else None
+    console.print(escape(text), style="" if _DISPLAY.plain else "dim", highlight=highlight)
 
 
 def _no_type(ctx: _click.Context) -> str | None:

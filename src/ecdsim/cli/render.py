@@ -96,6 +96,50 @@ def print_tables(prediction: Prediction, units: UnitSystem = "si") -> None:
     display.note(console, f"methods: {labels}; speeds from the {reference} method")
     if "dynamic" in methods:
         print_dynamic_table(console, cases, u)
+    if "ground_test" in document:
+        print_ground_test_table(console, document["ground_test"], methods, u)
+
+
+def print_ground_test_table(
+    console: Any, ground: dict[str, Any], methods: list[str], u: Shown
+) -> None:
+    """Flight (0 g) against the ground test (1 g, offloaded), per temperature and method."""
+    offload = 100.0 * ground["offload"]
+    title = f"Flight (0 g) against ground test (1 g, {offload:.3g} % offloaded)"
+    headers = [u.head("T", "temperature"), "method", "flight t\n[s]", "test t\n[s]"]
+    headers += ["test - flight\n[s]", "rel.\n[%]"]
+    rows = []
+    for case in ground["cases"]:
+        for name in methods:
+            m = case[name]
+            rel = m["relative"]
+            rows.append(
+                [
+                    u.num(case["temperature_C"], "temperature"),
+                    name,
+                    _fmt(
+                        m["flight_deployment_time_s"]
+                        if m["flight_deployment_time_s"] is not None
+                        else math.inf
+                    ),
+                    _fmt(
+                        m["test_deployment_time_s"]
+                        if m["test_deployment_time_s"] is not None
+                        else math.inf
+                    ),
+                    _fmt(m["test_minus_flight_s"]),
+                    "-" if rel is None else f"{100.0 * rel:+.1f}",
+                ]
+            )
+    _simple_table(console, title, headers, rows)
+    display.note(
+        console,
+        "gravity torque m g r (1 - offload) sin(theta_0 + phi), positive opposing "
+        f"deployment: {_fmt(ground['torque_at_release_Nm'])} N*m at release, "
+        f"{_fmt(ground['torque_at_latch_Nm'])} N*m at the latch "
+        f"(m = {_fmt(ground['mass_kg'])} kg, r = {_fmt(ground['cg_radius_m'])} m); "
+        "inf = stalls",
+    )
 
 
 def _stop_text(outcome: dict[str, Any], method: str) -> str | None:

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import hashlib
+import os
 import tomllib
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -11,9 +14,31 @@ from typing import Any
 from pydantic import ValidationError
 
 from ecdsim.config.errors import ConfigError
-from ecdsim.config.schema import ConfigSpec, describe_field
 from ecdsim.config.units import quoted
 from ecdsim.model import DeploymentSystem
+
+
+@contextmanager
+def _without_pydantic_plugins() -> Iterator[None]:
+    """pydantic builds each model's validator when its class is defined, and on the first
+    build looks for plugins (observability hooks registered as package entry points) by
+    reading every installed distribution's metadata: about 10 ms of each command that
+    reads a config. ecdsim's config models have no use for them, so the schema is built
+    with plugins off, as typer builds its option adapters (PYDANTIC_DISABLE_PLUGINS is
+    read at each build; the variable is restored at once, before any user code runs)."""
+    previous = os.environ.get("PYDANTIC_DISABLE_PLUGINS")
+    os.environ["PYDANTIC_DISABLE_PLUGINS"] = "1"
+    try:
+        yield
+    finally:
+        if previous is None:
+            del os.environ["PYDANTIC_DISABLE_PLUGINS"]
+        else:
+            os.environ["PYDANTIC_DISABLE_PLUGINS"] = previous
+
+
+with _without_pydantic_plugins():
+    from ecdsim.config.schema import ConfigSpec, describe_field
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,7 @@ from ecdsim.config.fields import (
     Temperature,
     Torque,
     TorquePerKelvin,
+    non_negative,
     positive,
     quantity,
 )
@@ -38,6 +39,8 @@ from ecdsim.config.sizing_schema import FluidDamperSpec, RequirementsSpec
 from ecdsim.config.tolerance_schema import TolerancesSpec
 from ecdsim.config.units import (
     HEAT_CAPACITY,
+    LENGTH,
+    MASS,
     NUMBER,
     THERMAL_RESISTANCE,
     TORSIONAL_STIFFNESS,
@@ -49,6 +52,8 @@ from ecdsim.methods import SOLVERS
 from ecdsim.model import (
     Ecd,
     Gearbox,
+    GearEfficiency,
+    Gravity,
     HighSpeedDamper,
     LinearSpring,
     LinearTemperatureLaw,
@@ -74,6 +79,10 @@ Restitution = Annotated[
 ]
 Tolerance = Annotated[
     float, quantity(NUMBER, lambda x: None if 0.0 < x <= 0.1 else "must be in (0, 0.1]"), NUMBER
+]
+# A mesh efficiency (issue 16 item 5): dimensionless, 0 excluded (no power passes).
+Efficiency = Annotated[
+    float, quantity(NUMBER, lambda x: None if 0.0 < x <= 1.0 else "must be in (0, 1]"), NUMBER
 ]
 
 
@@ -176,16 +185,40 @@ class RolloffSpec(_Section):
 
 
 class ThermalSpec(_Section):
-    """``[damper.thermal]``: lumped heat capacity of the damper (docs/dynamics.md)."""
+    """``[damper.thermal]``: lumped heat capacity of the damper, or of its rotor and
+    housing (two nodes, with ``housing_heat_capacity``; docs/dynamics.md)."""
 
     heat_capacity: PositiveHeatCapacity
     thermal_resistance: PositiveThermalResistance | None = None
+    housing_heat_capacity: PositiveHeatCapacity | None = None
+    housing_thermal_resistance: PositiveThermalResistance | None = None
+
+    @model_validator(mode="after")
+    def _housing(self) -> ThermalSpec:
+        if self.housing_heat_capacity is None and self.housing_thermal_resistance is not None:
+            raise ValueError(
+                "housing_thermal_resistance needs housing_heat_capacity (J/K, the housing node)"
+            )
+        if self.housing_heat_capacity is not None and self.thermal_resistance is None:
+            raise ValueError(
+                "housing_heat_capacity needs thermal_resistance (K/W, rotor to housing)"
+            )
+        return self
 
     def to_model(self) -> Thermal:
         """The model object (SI); no thermal resistance means adiabatic."""
         if self.thermal_resistance is None:
             return Thermal(self.heat_capacity)
-        return Thermal(self.heat_capacity, self.thermal_resistance)
+        if self.housing_heat_capacity is None:
+            return Thermal(self.heat_capacity, self.thermal_resistance)
+        return Thermal(
+            self.heat_capacity,
+            self.thermal_resistance,
+            housing_heat_capacity=self.housing_heat_capacity,
+            housing_thermal_resistance=math.inf
+            if self.housing_thermal_resistance is None
+            else self.housing_thermal_resistance,
+        )
 
 
 class DamperSpec(_Section):
@@ -223,6 +256,22 @@ class DamperSpec(_Section):
         )
 
 
+class GearEfficiencySpec(_Section):
+    """``[gearbox] efficiency``: a lossy mesh (docs/model.md, lossy gear).
+
+    ``forward`` while the load drives the damper (every deployment), ``backward`` while
+    the damper side drives the load (an overrunning rotor); backward defaults to forward.
+    """
+
+    forward: Efficiency
+    backward: Efficiency | None = None
+
+    def to_model(self) -> GearEfficiency:
+        """The model object."""
+        backward = self.forward if self.backward is None else self.backward
+        return GearEfficiency(forward=self.forward, backward=backward)
+
+
 class GearboxSpec(_Section):
     """``[gearbox]``: the step-up gearbox (paper section 3)."""
 
@@ -236,6 +285,8 @@ class GearboxSpec(_Section):
     # series with the lost motion, at the input shaft; omitted = a rigid mesh.
     stiffness: PositiveStiffness | None = None
     mesh_damping: NonNegativeDamping | None = None
+    # Mesh efficiency, the load-dependent alternative to FG (issue 16 item 5).
+    efficiency: GearEfficiencySpec | None = None
 
     @model_validator(mode="after")
     def _one_damping(self) -> GearboxSpec:
@@ -249,6 +300,11 @@ class GearboxSpec(_Section):
                 "mesh_damping needs stiffness (the mesh's torsional stiffness in N*m/rad): "
                 "it damps a compliant mesh only"
             )
+        if self.efficiency is not None and self.coulomb_friction != 0.0:
+            raise ValueError(
+                f"efficiency replaces the constant gearbox friction: give coulomb_friction = "
+                f"'0 N*m' with it (got {self.coulomb_friction:g} N*m; docs/model.md, lossy gear)"
+            )
         return self
 
     def to_model(self) -> Gearbox:
@@ -259,7 +315,32 @@ class GearboxSpec(_Section):
             damping_rate=self.damping_rate,
             damping_fraction=self.damping_fraction,
             lost_motion=self.lost_motion,
+            efficiency=self.efficiency.to_model() if self.efficiency else None,
         )
+
+
+# Gravity in a ground test (issue 16 item 2; docs/config.md, docs/model.md).
+NonNegativeMass = Annotated[float, quantity(MASS, non_negative), MASS]
+NonNegativeLength = Annotated[float, quantity(LENGTH, non_negative), LENGTH]
+Offload = Annotated[
+    float, quantity(NUMBER, lambda x: None if 0.0 <= x <= 1.0 else "must be in [0, 1]"), NUMBER
+]
+
+
+class GravitySpec(_Section):
+    """``[load.gravity]``: gravity on the deployed mass in a ground test (docs/model.md).
+
+    Omitted = flight (0 g), today's model; ``mass = 0`` or ``offload = 1`` give no torque.
+    """
+
+    mass: NonNegativeMass
+    cg_radius: NonNegativeLength
+    release_angle: Angle
+    offload: Offload = 0.0
+
+    def to_model(self) -> Gravity:
+        """The model object (SI)."""
+        return Gravity(self.mass, self.cg_radius, self.release_angle, self.offload)
 
 
 class LoadSpec(_Section):
@@ -281,6 +362,7 @@ class LoadSpec(_Section):
     restitution: Restitution = 0.0
     # Breakaway over kinetic FS_T (dynamic method); None = [damper] static_friction_factor.
     static_friction_factor: StaticFactor | None = None
+    gravity: GravitySpec | None = None
 
     @model_validator(mode="after")
     def _one_spring(self) -> LoadSpec:
@@ -337,6 +419,7 @@ class LoadSpec(_Section):
             system_friction=(
                 self.system_friction.to_law() if self.system_friction else LinearTemperatureLaw()
             ),
+            gravity=None if self.gravity is None else self.gravity.to_model(),
         )
 
 

@@ -124,6 +124,8 @@ class FactorsSpec(_Section):
     harness: Factor = 1.0
     # [load] resistive_table: harness and blanket torque against angle, its own kind.
     resistive_table: Factor = 1.0
+    # [load.gravity]: a ground test's gravity torque where it opposes, its own kind.
+    gravity: Factor = 1.0
 
 
 class AllowancesSpec(_Section):

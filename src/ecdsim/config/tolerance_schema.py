@@ -33,6 +33,8 @@ from ecdsim.config.units import (
     ANGLE,
     DAMPING,
     INERTIA,
+    LENGTH,
+    MASS,
     MAX_QUANTITY_LENGTH,
     NUMBER,
     NUMBER_PATTERN,
@@ -74,6 +76,7 @@ class TolerableQuantity:
     owner : the model class that must own the field (e.g. "LinearSpring"); None if any
     lower_bound : the lowest physical value [SI], None if unbounded
     strict : True if the value must exceed lower_bound, False if it may equal it
+    upper_bound : the highest physical value [SI] (may equal it), None if unbounded
     """
 
     key: str
@@ -82,6 +85,7 @@ class TolerableQuantity:
     owner: str | None = None
     lower_bound: float | None = None
     strict: bool = False
+    upper_bound: float | None = None
 
 
 def _q(
@@ -136,6 +140,18 @@ TOLERABLE: dict[str, TolerableQuantity] = {
             "load.resistance.scale",
             "ResistiveTable",
             lower_bound=0.0,
+        ),
+        # Gravity in a ground test (docs/model.md); they need [load.gravity].
+        _q("load.gravity.mass", MASS, "load.gravity.mass", "Gravity", lower_bound=0.0),
+        _q("load.gravity.cg_radius", LENGTH, "load.gravity.cg_radius", "Gravity", lower_bound=0.0),
+        _q("load.gravity.release_angle", ANGLE, "load.gravity.release_angle", "Gravity"),
+        _q(
+            "load.gravity.offload",
+            NUMBER,
+            "load.gravity.offload",
+            "Gravity",
+            lower_bound=0.0,
+            upper_bound=1.0,
         ),
         _q(
             "load.spring_temperature_coefficient",

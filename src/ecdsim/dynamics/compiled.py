@@ -27,6 +27,8 @@ lumped heat balance Eq. 5.2 in the log state of :mod:`ecdsim.physics.thermal`).
 from __future__ import annotations
 
 import math
+import os
+import threading
 from collections.abc import Callable
 from typing import Any, TypeVar, cast
 
@@ -58,7 +60,10 @@ _jit = cast("Callable[[_F], _F]", numba.njit(cache=True, nogil=True, error_model
 
 # Columns of the per-segment parameter table handed to the kernels.
 _J, _K, _DRIVE, _N, _BG, _C, _R, _FA, _COEF, _LAW_A, _LAW_B, _FIXED, _DF, _WS = range(14)
-_COLUMNS = 14
+# Two-node heating (issue 16 item 6): the housing's heat capacity and its resistance to
+# the mount, used only when the state has the housing row (5 rows).
+_CH, _RHE = 14, 15
+_COLUMNS = 16
 LINEAR_LAW, KLOSS_LAW = 0, 1
 _REACH, _ZERO, _CAP, _REST = linear.REACH, linear.ZERO, linear.CAP, linear.REST
 
@@ -143,6 +148,41 @@ def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArr
     else:
         out[2] = 0.0
     out[3] = torque * u
+    if y.shape[0] > 4:
+        _housing_rhs(par, y, out)
+
+
+@_jit
+def _housing_rhs(par: FloatArray, y: FloatArray, out: FloatArray) -> None:
+    """The two-node terms of :meth:`Model.rhs`: the housing's return into ``out[2]``
+    (thermal.housing_return) and the housing rate ``out[4]`` (thermal.housing_rate)."""
+    s = y[2]
+    h = y[4]
+    c = par[_COEF]
+    f = par[_FA] * math.exp(c * s)
+    r = par[_R]
+    den = r * f * par[_C]
+    if math.isfinite(r) and math.isfinite(den) and den > 0.0:
+        out[2] += h / den
+    rise = par[_FA] * s * _exprel(c * s)
+    gain = (rise - h) / r if math.isfinite(r) else 0.0
+    loss = h / par[_RHE] if math.isfinite(par[_RHE]) else 0.0
+    out[4] = (gain - loss) / par[_CH]
+
+
+@_jit
+def _housing_jacobian(par: FloatArray, y: FloatArray) -> tuple[float, float, float, float]:
+    """The two-node entries of :meth:`Model.jacobian` and :meth:`Model.housing_jacobian`:
+    (the housing's addition to j22, j24, j42, j44)."""
+    c = par[_COEF]
+    f = par[_FA] * math.exp(c * y[2])
+    r = par[_R]
+    den = r * f * par[_C]
+    inverse = 1.0 / den if math.isfinite(r) and math.isfinite(den) and den > 0.0 else 0.0
+    coupling = 1.0 / r  # 0 where R is inf
+    j42 = f * coupling / par[_CH]
+    j44 = -(coupling + 1.0 / par[_RHE]) / par[_CH]
+    return -c * (y[4] * inverse), inverse, j42, j44
 
 
 @_jit
@@ -203,7 +243,19 @@ def _step(
     """
     hg = h * GAMMA
     j10, j11, j12, j21, j22, j31, j32 = _jacobian(par, kind, heating, y)
+    m = y.shape[0]
+    two_node = m > 4
+    inv4 = p42 = p24 = 0.0
+    if two_node:
+        # rosenbrock._Solver: z4 eliminated from row 2 (two-node heating)
+        dj22, j24, j42, j44 = _housing_jacobian(par, y)
+        j22 = j22 + dj22
+        inv4 = 1.0 / (1.0 - hg * j44)
+        p42 = hg * j42 * inv4
+        p24 = hg * j24 * inv4
     den2 = 1.0 - hg * j22
+    if two_node:
+        den2 = den2 - p24 * hg * j42
     safe2 = den2 if den2 != 0.0 else 1.0
     den1 = 1.0 - hg * j11 - hg * hg * j10 - hg * hg * j12 * j21 / safe2
     sound = abs(den2) > 1e-12 and abs(den1) > 1e-12
@@ -214,33 +266,36 @@ def _step(
     p21 = hg * j21 * inv2
     for i in range(6):
         if i == 0:
-            for r in range(4):
+            for r in range(m):
                 value[r] = f0[r] * hg
         else:
-            for r in range(4):
+            for r in range(m):
                 acc = y[r]
                 for jj in range(min(i, 5)):
                     acc += _A_TABLE[i, jj] * k[jj, r]
                 stage[r] = acc
             _rhs(par, kind, heating, stage, value)
-            for r in range(4):
+            for r in range(m):
                 coupling = 0.0
                 for jj in range(i):
                     coupling += _GC_TABLE[i, jj] * k[jj, r]
                 value[r] = value[r] * hg + coupling
+        v2 = value[2] + p24 * value[4] if two_node else value[2]
         z1 = value[1] * inv1 + p10 * value[0]
         if heating:
-            z1 += p12 * value[2]
+            z1 += p12 * v2
         k[i, 1] = z1
         k[i, 0] = value[0] + hg * z1
         if heating:
-            z2 = value[2] * inv2 + p21 * z1
+            z2 = v2 * inv2 + p21 * z1
             k[i, 2] = z2
             k[i, 3] = value[3] + hg * j31 * z1 + hg * j32 * z2
+            if two_node:
+                k[i, 4] = value[4] * inv4 + p42 * z2
         else:
             k[i, 2] = value[2]
             k[i, 3] = value[3] + hg * j31 * z1
-    for r in range(4):
+    for r in range(m):
         acc = y[r]
         for jj in range(5):
             acc += _A_TABLE[5, jj] * k[jj, r]
@@ -356,35 +411,37 @@ def _segment(
     """Integrate one segment to its first event (``rosenbrock.integrate_batch``, one case).
 
     Returns (event kind, duration, max speed, max temperature state, recorded steps as a
-    (9, m) table of time, state and slope, m); the end state is written into ``final``.
+    (1 + 2 rows, m) table of time, state and slope, m); the end state is written into
+    ``final``. The state has 4 rows, or 5 with two-node heating (the housing rise).
     """
     par[_FIXED] = par[_FA] * math.exp(par[_COEF] * y0[2])
-    k = np.empty((6, 4))
-    stage = np.empty(4)
-    value = np.empty(4)
+    rows = y0.shape[0]
+    k = np.empty((6, rows))
+    stage = np.empty(rows)
+    value = np.empty(rows)
     y = y0.copy()
-    y1 = np.empty(4)
-    f = np.empty(4)
-    fb = np.empty(4)
+    y1 = np.empty(rows)
+    f = np.empty(rows)
+    fb = np.empty(rows)
     _rhs(par, kind, heating, y, f)
     t = 0.0
     h = min(first_step, cap if math.isfinite(cap) else math.inf)
     end = min(cap, horizon)
     top_speed = y0[1]
     top_temp = y0[2]
-    steps = np.empty((9, 64 if record else 1))
+    steps = np.empty((1 + 2 * rows, 64 if record else 1))
     count = 0
     if record:
         steps[0, 0] = t
-        steps[1:5, 0] = y
-        steps[5:9, 0] = f
+        steps[1 : 1 + rows, 0] = y
+        steps[1 + rows :, 0] = f
         count = 1
     for _ in range(MAX_STEPS):
         h = min(h, end - t)
         sound = _step(par, kind, heating, y, f, h, k, stage, value, y1)
         err = 0.0
         total = 0.0
-        for r in range(4):
+        for r in range(rows):
             scale = max(abs(y[r]), abs(y1[r])) * rtol + atol[r]
             err = max(err, abs(k[5, r]) / scale)
             total += y1[r]
@@ -424,7 +481,7 @@ def _segment(
             if f[2] > 0.0 and fb[2] < 0.0:
                 top_temp = max(top_temp, _interior_peak(y[2], f[2], y1[2], fb[2], h, stop))
         if event >= 0:
-            for r in range(4):
+            for r in range(rows):
                 final[r] = _hermite(y[r], f[r], y1[r], fb[r], h, event_s)
             top_speed = max(top_speed, final[1])
             if heating:
@@ -438,8 +495,8 @@ def _segment(
                 _rhs(par, kind, heating, final, fb)
                 steps = _grow(steps, count)
                 steps[0, count] = duration
-                steps[1:5, count] = final
-                steps[5:9, count] = fb
+                steps[1 : 1 + rows, count] = final
+                steps[1 + rows :, count] = fb
                 count += 1
             return event, duration, top_speed, top_temp, steps, count
         t += h
@@ -448,8 +505,8 @@ def _segment(
         if record:
             steps = _grow(steps, count)
             steps[0, count] = t
-            steps[1:5, count] = y
-            steps[5:9, count] = f
+            steps[1 : 1 + rows, count] = y
+            steps[1 + rows :, count] = f
             count += 1
         if t >= end * (1.0 - 1e-15):
             final[:] = y
@@ -482,7 +539,7 @@ def _batch(
     max_temp: FloatArray,
 ) -> None:
     """:func:`_segment` over every segment of a batch (no recording)."""
-    end = np.empty(4)
+    end = np.empty(y0.shape[0])
     for j in range(par.shape[0]):
         code, time, top_speed, top_temp, _, _ = _segment(
             par[j],
@@ -520,21 +577,62 @@ def _parameters(model: Model) -> tuple[FloatArray, int]:
     table[:, _BG] = model.gearbox_damping
     table[:, _C] = model.heat_capacity
     table[:, _R] = model.thermal_resistance
-    table[:, _FA] = model.factor(np.zeros(n))
-    table[:, _COEF] = np.broadcast_to(eddy.coefficient, (n,))
+    # The factor at s = 0 is f_a exp(0) = f_a exactly: the model's ambient factor.
+    table[:, _FA] = (
+        model.factor(np.zeros(n)) if model.ambient_factor is None else model.ambient_factor
+    )
+    table[:, _COEF] = eddy.coefficient
     table[:, _FIXED] = np.nan  # set by _segment from the start state
     # No Stribeck friction: excess 0 (the kernels skip the term), w_St 1 (unused).
     table[:, _DF] = 0.0 if model.stribeck_excess is None else model.stribeck_excess
     table[:, _WS] = 1.0 if model.stribeck_speed is None else model.stribeck_speed
+    # One node: C_h, R_he unused (the state has no housing row).
+    table[:, _CH] = np.inf if model.housing_heat_capacity is None else model.housing_heat_capacity
+    table[:, _RHE] = np.inf if model.housing_resistance is None else model.housing_resistance
     if isinstance(eddy, LinearEddy):
-        table[:, _LAW_A] = np.broadcast_to(np.asarray(eddy.damping_rate, float), (n,))
+        table[:, _LAW_A] = eddy.damping_rate
         table[:, _LAW_B] = 0.0
         return table, LINEAR_LAW
     if isinstance(eddy, KlossEddy):
-        table[:, _LAW_A] = np.broadcast_to(np.asarray(eddy.peak_torque, float), (n,))
-        table[:, _LAW_B] = np.broadcast_to(np.asarray(eddy.reference_peak_speed, float), (n,))
+        table[:, _LAW_A] = eddy.peak_torque
+        table[:, _LAW_B] = eddy.reference_peak_speed
         return table, KLOSS_LAW
     raise TypeError(f"no compiled form of the eddy law {eddy.name!r}")
+
+
+# A batch of at least PARALLEL_MIN segments runs on THREADS threads (the kernels release
+# the GIL), each over a contiguous part of it; results are bit for bit those of one thread.
+THREADS = max(1, min(2, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1))
+PARALLEL_MIN = 256
+
+
+def _split(n: int, parts: int) -> list[tuple[int, int]]:
+    """``parts`` contiguous ranges covering 0 .. n (as equal as possible)."""
+    edges = [n * i // parts for i in range(parts + 1)]
+    return [(lo, hi) for lo, hi in zip(edges[:-1], edges[1:], strict=True) if hi > lo]
+
+
+def _in_threads(run: Callable[[int, int], None], parts: list[tuple[int, int]]) -> None:
+    """``run(lo, hi)`` for each part: the first in this thread, the others in new ones."""
+    errors: list[BaseException] = []
+
+    def guarded(lo: int, hi: int) -> None:
+        try:
+            run(lo, hi)
+        except BaseException as exc:  # re-raised in the calling thread
+            errors.append(exc)
+
+    workers = [threading.Thread(target=guarded, args=part) for part in parts[1:]]
+    for worker in workers:
+        worker.start()
+    try:
+        if parts:
+            run(*parts[0])
+    finally:
+        for worker in workers:
+            worker.join()
+    if errors:
+        raise errors[0]
 
 
 def integrate_batch(model: Model, segments: Segments, control: Control) -> Outcome:
@@ -545,7 +643,8 @@ def integrate_batch(model: Model, segments: Segments, control: Control) -> Outco
     atol = np.ascontiguousarray(segments.atol, dtype=float)
     kinds = np.empty(n, dtype=np.int8)
     duration = np.empty(n)
-    final = np.empty((4, n))
+    rows = y0.shape[0]
+    final = np.empty((rows, n))
     max_speed = np.empty(n)
     max_temp = np.empty(n)
     length = np.ascontiguousarray(segments.length, dtype=float)
@@ -556,13 +655,22 @@ def integrate_batch(model: Model, segments: Segments, control: Control) -> Outco
     heating = bool(model.heating)
     trajectories: list[Trajectory | None] = [None] * n
     if not control.record:
-        _batch(
-            par, law, heating, y0, length, cap, creep, creeps, atol, first, control.rtol,
-            control.horizon, control.horizon_kind,
-            kinds, duration, final, max_speed, max_temp,
-        )  # fmt: skip
+        parts = _split(n, THREADS if n >= PARALLEL_MIN else 1)
+
+        def run(lo: int, hi: int) -> None:
+            # Each segment depends on its own row only: any split gives the same bits.
+            part_final = np.empty((rows, hi - lo))
+            _batch(
+                par[lo:hi], law, heating, np.ascontiguousarray(y0[:, lo:hi]), length[lo:hi],
+                cap[lo:hi], creep[lo:hi], creeps[lo:hi], np.ascontiguousarray(atol[:, lo:hi]),
+                first[lo:hi], control.rtol, control.horizon, control.horizon_kind,
+                kinds[lo:hi], duration[lo:hi], part_final, max_speed[lo:hi], max_temp[lo:hi],
+            )  # fmt: skip
+            final[:, lo:hi] = part_final
+
+        _in_threads(run, parts)
         return Outcome(kinds, duration, final, max_speed, max_temp, trajectories)
-    end = np.empty(4)
+    end = np.empty(rows)
     for j in range(n):
         result: tuple[Any, ...] = _segment(
             par[j], law, heating, y0[:, j].copy(), length[j], cap[j], creep[j],
@@ -574,6 +682,8 @@ def integrate_batch(model: Model, segments: Segments, control: Control) -> Outco
         final[:, j] = end
         if count >= 2:
             trajectories[j] = Trajectory(
-                steps[0, :count].copy(), steps[1:5, :count].copy(), steps[5:9, :count].copy()
+                steps[0, :count].copy(),
+                steps[1 : 1 + rows, :count].copy(),
+                steps[1 + rows :, :count].copy(),
             )
     return Outcome(kinds, duration, final, max_speed, max_temp, trajectories)

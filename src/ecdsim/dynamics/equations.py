@@ -36,6 +36,17 @@ decays with speed, so ``J u' = a - k x - M_d - g(u)`` and ``E' = (M_d + g(u)) u`
 ``g = (F_brk - F_C) exp(-(u / w_St)^2)`` (:func:`stribeck_excess`): E then counts the
 Stribeck excess's dissipation with the damper's.
 
+Two-node heating (optional): with a housing heat capacity ``C_h`` the state has a fifth
+row, the housing's rise over the ambient (environment) temperature ``h = T_h - T_ambient``
+[K], and R is the rotor-to-housing resistance:
+
+    s' = (p - (T_d - T_ambient) / (R f) + h / (R f)) / C
+    h' = ((T_d - T_ambient - h) / R - h / R_he) / C_h
+
+(:mod:`ecdsim.physics.thermal`, two nodes). The rotor keeps the log state, so the
+invariant above holds for it unchanged; the housing is never hotter than the rotor's
+bound in exact arithmetic (it is heated only by the rotor).
+
 Both integrators of :mod:`ecdsim.dynamics.integrate` use this one :class:`Model`.
 """
 
@@ -104,6 +115,8 @@ class Model:
     ambient_factor : f_a, the law's temperature factor at ambient [-]; computed when None
     stribeck_excess : F_brk - F_C [N*m] of each segment, or None for no Stribeck friction
     stribeck_speed : w_St [rad/s] of each segment (with ``stribeck_excess``)
+    housing_heat_capacity : C_h [J/K] of each segment, or None for one-node heating
+    housing_resistance : R_he, housing to ambient [K/W] (with ``housing_heat_capacity``)
     """
 
     inertia: FloatArray
@@ -119,6 +132,18 @@ class Model:
     ambient_factor: FloatArray | None = None
     stribeck_excess: FloatArray | None = None
     stribeck_speed: FloatArray | None = None
+    housing_heat_capacity: FloatArray | None = None
+    housing_resistance: FloatArray | None = None
+
+    @property
+    def two_node(self) -> bool:
+        """True when the state has the housing row (index 4)."""
+        return self.heating and self.housing_heat_capacity is not None
+
+    @property
+    def rows(self) -> int:
+        """The state's length: 5 with a housing node, else 4."""
+        return 5 if self.two_node else 4
 
     def __post_init__(self) -> None:
         if self.ambient_factor is None:
@@ -151,6 +176,12 @@ class Model:
             ambient_factor=self._factor_at_ambient[index],
             stribeck_excess=None if self.stribeck_excess is None else self.stribeck_excess[index],
             stribeck_speed=None if self.stribeck_speed is None else self.stribeck_speed[index],
+            housing_heat_capacity=None
+            if self.housing_heat_capacity is None
+            else self.housing_heat_capacity[index],
+            housing_resistance=None
+            if self.housing_resistance is None
+            else self.housing_resistance[index],
         )
 
     def _stribeck(self, u: FloatArray) -> tuple[FloatArray, FloatArray] | None:
@@ -179,7 +210,7 @@ class Model:
         return np.minimum(temperature, np.where(falling, zero, np.inf))
 
     def rhs(self, y: FloatArray, out: FloatArray | None = None) -> FloatArray:
-        """``dy/dt``, shape (4, n), written into ``out`` if given (which must not be y)."""
+        """``dy/dt``, shape (rows, n), written into ``out`` if given (which must not be y)."""
         x, u, s = y[0], y[1], y[2]
         dy = np.empty_like(y) if out is None else out
         factor = self.factor(s)
@@ -202,6 +233,8 @@ class Model:
                 self.thermal_resistance,
                 self.eddy.coefficient,
             )
+            if self.two_node:
+                self._housing_rhs(y, factor, dy)
         else:
             dy[2] = 0.0
         if stribeck is not None:
@@ -243,13 +276,66 @@ class Model:
             j11 = -d_torque_du / self.inertia
         j31 = torque + d_torque_du * u
         j32 = d_torque_ds * u
+        if self.two_node:
+            # d/ds of the housing's return h / (R f C) (df/ds = c f)
+            j22 = j22 - c * thermal.housing_return(
+                y[4], factor, self.thermal_resistance, self.heat_capacity
+            )
         return j10, j11, j12, j21, j22, j31, j32
 
-    def jacobian_matrix(self, y: FloatArray) -> FloatArray:
-        """The full Jacobian of one segment (n = 1) at a state of shape (4,) or (4, 1)."""
-        j10, j11, j12, j21, j22, j31, j32 = (
-            float(np.ravel(j)[0]) for j in self.jacobian(np.reshape(y, (4, 1)))
+    def _housing_rhs(self, y: FloatArray, factor: FloatArray, dy: FloatArray) -> None:
+        """The two-node terms: the housing's return into ``dy[2]`` and ``dy[4]``."""
+        assert self.housing_heat_capacity is not None
+        assert self.housing_resistance is not None
+        housing = y[4]
+        dy[2] += thermal.housing_return(
+            housing, factor, self.thermal_resistance, self.heat_capacity
         )
+        rise = thermal.temperature_from_factor_log(
+            y[2], 0.0, self._factor_at_ambient, self.eddy.coefficient
+        )
+        dy[4] = thermal.housing_rate(
+            rise,
+            housing,
+            self.housing_heat_capacity,
+            self.thermal_resistance,
+            self.housing_resistance,
+        )
+
+    def housing_jacobian(self, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The two-node entries (j24, j42, j44) of ``df/dy`` (zeros without a housing).
+
+        ``j24 = 1 / (R f C)`` (the housing's return), ``j42 = f / (R C_h)`` (dT_d/ds = f),
+        ``j44 = -(1 / R + 1 / R_he) / C_h``.
+        """
+        if not self.two_node:
+            zero = np.zeros_like(y[1])
+            return zero, zero, zero
+        assert self.housing_heat_capacity is not None
+        assert self.housing_resistance is not None
+        factor = self.factor(y[2])
+        ones = np.ones_like(y[1])
+        j24 = thermal.housing_return(ones, factor, self.thermal_resistance, self.heat_capacity)
+        coupling = 1.0 / self.thermal_resistance  # 0 where R is inf
+        j42 = factor * coupling / self.housing_heat_capacity
+        j44 = -(coupling + 1.0 / self.housing_resistance) / self.housing_heat_capacity * ones
+        return j24, j42, j44
+
+    def jacobian_matrix(self, y: FloatArray) -> FloatArray:
+        """The full Jacobian of one segment (n = 1) at a state of shape (rows,) or (rows, 1)."""
+        column = np.reshape(y, (self.rows, 1))
+        j10, j11, j12, j21, j22, j31, j32 = (float(np.ravel(j)[0]) for j in self.jacobian(column))
+        if self.two_node:
+            j24, j42, j44 = (float(np.ravel(j)[0]) for j in self.housing_jacobian(column))
+            return np.array(
+                [
+                    [0.0, 1.0, 0.0, 0.0, 0.0],
+                    [j10, j11, j12, 0.0, 0.0],
+                    [0.0, j21, j22, 0.0, j24],
+                    [0.0, j31, j32, 0.0, 0.0],
+                    [0.0, 0.0, j42, 0.0, j44],
+                ]
+            )
         return np.array(
             [
                 [0.0, 1.0, 0.0, 0.0],

@@ -61,6 +61,10 @@ class NonlinearSegments:
     thermal : whether the damper temperature evolves
     stribeck_excess : F_brk - F_C of the Stribeck friction [N*m], or None for none
     stribeck_speed : w_St [rad/s] (with ``stribeck_excess``)
+    housing_state0 : the housing's rise over ambient at the start [K], or None for
+        one-node heating (then the next two are None too)
+    housing_heat_capacity : C_h [J/K]
+    housing_resistance : R_he, housing to ambient [K/W] (inf: adiabatic)
     """
 
     inertia: FloatArray
@@ -81,6 +85,9 @@ class NonlinearSegments:
     thermal: bool
     stribeck_excess: FloatArray | None = None
     stribeck_speed: FloatArray | None = None
+    housing_state0: FloatArray | None = None
+    housing_heat_capacity: FloatArray | None = None
+    housing_resistance: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -99,6 +106,7 @@ class NonlinearAdvance:
     max_temperature : highest damper temperature in the segment [degC]
     max_speed : highest speed in the segment [rad/s]
     solutions : dense output ``t -> [x, u, T_d, E]`` per segment (None if not recorded)
+    housing : the housing's rise over ambient at the end [K] (None for one node)
     """
 
     kind: NDArray[np.int8]
@@ -111,6 +119,7 @@ class NonlinearAdvance:
     max_temperature: FloatArray
     max_speed: FloatArray
     solutions: list[Callable[[FloatArray], FloatArray] | None]
+    housing: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -124,6 +133,7 @@ class _One:
     max_state: float
     max_speed: float
     solution: Callable[[FloatArray], FloatArray] | None
+    housing: float = 0.0
 
 
 class _Event:
@@ -174,6 +184,8 @@ def _scales(segs: NonlinearSegments, rtol: float) -> _Scales:
             rtol * 1e-3 * energy,
         ]
     )
+    if segs.housing_state0 is not None and segs.thermal:
+        atol = np.concatenate([atol, atol[2:3]])  # the housing rise, in kelvin like s
     # At rest the friction is the breakaway one: with Stribeck friction the motion can
     # only come to rest asymptotically where the drive equals it.
     rest_drive = segs.drive if segs.stribeck_excess is None else segs.drive - segs.stribeck_excess
@@ -198,7 +210,19 @@ def _model(segs: NonlinearSegments) -> Model:
         heating=segs.thermal,
         stribeck_excess=segs.stribeck_excess,
         stribeck_speed=segs.stribeck_speed,
+        housing_heat_capacity=segs.housing_heat_capacity,
+        housing_resistance=segs.housing_resistance,
     )
+
+
+def _start(segs: NonlinearSegments, model: Model) -> FloatArray:
+    """Start states ``[x, u, s, E]`` (and the housing rise h with two nodes), (rows, n)."""
+    zero = np.zeros_like(segs.speed0)
+    rows = [zero, segs.speed0, segs.state0, zero]
+    if model.two_node:
+        assert segs.housing_state0 is not None
+        rows.append(segs.housing_state0)
+    return np.stack(rows)
 
 
 class _InTemperature:
@@ -208,11 +232,26 @@ class _InTemperature:
         self, solution: Callable[[FloatArray], FloatArray], model: Model, index: int
     ) -> None:
         self.solution = solution
-        self.model = model.take(np.array([index]))
+        # The segment's own model is taken when the output is first evaluated: most
+        # recorded runs are never sampled, and a take builds a model and its law.
+        self._batch: Model | None = model
+        self._index = index
+        self._model: Model | None = None
+
+    @property
+    def model(self) -> Model:
+        """The model of this segment alone."""
+        if self._model is None:
+            assert self._batch is not None
+            self._model = self._batch.take(np.array([self._index]))
+            self._batch = None
+        return self._model
 
     def __call__(self, t: FloatArray) -> FloatArray:
         y = np.array(self.solution(t), dtype=float)
         y[2] = self.model.temperature(y[2])
+        if y.shape[0] > 4:
+            y[4] += self.model.ambient  # the housing rise as a temperature [degC]
         return y
 
 
@@ -239,9 +278,7 @@ def _advance_batched(
     from ecdsim.dynamics import rosenbrock
 
     scales = _scales(segs, rtol)
-    y0 = np.stack(
-        [np.zeros_like(segs.speed0), segs.speed0, segs.state0, np.zeros_like(segs.speed0)]
-    )
+    y0 = _start(segs, model)
     segments = rosenbrock.Segments(
         y0=y0,
         length=segs.length,
@@ -274,6 +311,7 @@ def _advance_batched(
             None if sol is None else _InTemperature(sol, model, j)
             for j, sol in enumerate(out.trajectories)
         ],
+        housing=out.state[4] if model.two_node else None,
     )
 
 
@@ -287,13 +325,16 @@ def _integrate_one(
     length = float(segs.length[j])
     cap = float(segs.cap[j])
     state0 = float(segs.state0[j])
+    start = _start(segs, model)[:, j]
+    housing0 = float(start[4]) if one.two_node else 0.0
     if length <= 0.0:
-        return _One(linear.REACH, 0.0, 0.0, u0, 0.0, state0, state0, u0, None)
+        return _One(linear.REACH, 0.0, 0.0, u0, 0.0, state0, state0, u0, None, housing0)
     if cap <= 0.0:
-        return _One(linear.CAP, 0.0, 0.0, u0, 0.0, state0, state0, u0, None)
+        return _One(linear.CAP, 0.0, 0.0, u0, 0.0, state0, state0, u0, None, housing0)
+    rows = one.rows
 
     def rhs(_t: float, y: FloatArray) -> FloatArray:
-        return one.rhs(np.reshape(y, (4, 1))).ravel()
+        return one.rhs(np.reshape(y, (rows, 1))).ravel()
 
     def jac(_t: float, y: FloatArray) -> FloatArray:
         return one.jacobian_matrix(y)
@@ -315,7 +356,7 @@ def _integrate_one(
     sol = solve_ivp(
         rhs,
         (0.0, t_end),
-        np.array([0.0, u0, state0, 0.0]),
+        start,
         method=method,
         rtol=rtol,
         atol=atol,
@@ -355,6 +396,7 @@ def _integrate_one(
         max_state,
         max_speed,
         None if solution is None else _InTemperature(solution, model, j),
+        float(y_end[4]) if one.two_node else 0.0,
     )
 
 
@@ -385,4 +427,5 @@ def advance_nonlinear(
         max_temperature=model.temperature(np.array([r.max_state for r in results])),
         max_speed=np.array([r.max_speed for r in results]),
         solutions=[r.solution for r in results],
+        housing=np.array([r.housing for r in results]) if model.two_node else None,
     )

@@ -142,6 +142,7 @@ def solution_from_result(
     shape = result.batch_shape
     arrived = result.arrived
     stalled = result.stuck & ~arrived
+    error = result.energy_balance_error  # computed once: the findings read it too
     return DynamicSolution(
         method=name,
         deployment_time=result.deployment_time,
@@ -155,20 +156,26 @@ def solution_from_result(
         stuck=result.stuck,
         stuck_angle=result.stuck_angle,
         stuck_time=result.stuck_time,
-        energy_balance_error=result.energy_balance_error,
+        energy_balance_error=error,
         result=result,
         problem=problem,
-        notes=tuple(_findings(problem, result)),
+        notes=tuple(_findings(problem, result, error)),
     )
 
 
-def _findings(problem: DynamicProblem, result: DynamicResult) -> list[tuple[str, str, int]]:
+_STOP_TIME = STATUSES.index("stop_time")
+_CUT_SHORT = {code: STATUSES.index(code) for code in ("event_limit", "horizon")}
+
+
+def _findings(
+    problem: DynamicProblem, result: DynamicResult, energy_error: FloatArray
+) -> list[tuple[str, str, int]]:
     """Outcomes a user must hear about, as (code, message, flat case index)."""
     out: list[tuple[str, str, int]] = []
     status = np.ravel(result.status)
     final_time = np.ravel(result.final_time)
     final_angle = np.ravel(result.final_angle)
-    for i in np.flatnonzero(status == STATUSES.index("stop_time")):
+    for i in np.flatnonzero(status == _STOP_TIME):
         out.append(
             (
                 "stop_time",
@@ -177,8 +184,8 @@ def _findings(problem: DynamicProblem, result: DynamicResult) -> list[tuple[str,
                 int(i),
             )
         )
-    for code in ("event_limit", "horizon"):
-        for i in np.flatnonzero(status == STATUSES.index(code)):
+    for code, value in _CUT_SHORT.items():
+        for i in np.flatnonzero(status == value):
             out.append(
                 (
                     code,
@@ -187,7 +194,7 @@ def _findings(problem: DynamicProblem, result: DynamicResult) -> list[tuple[str,
                     int(i),
                 )
             )
-    error = np.ravel(result.energy_balance_error)
+    error = np.ravel(energy_error)
     for i in np.flatnonzero(np.abs(error) > 1e-6):
         out.append(
             (

@@ -42,22 +42,54 @@ class Rolloff:
 
 @dataclass(frozen=True)
 class Thermal:
-    """The damper as one lumped heat capacity (see :mod:`ecdsim.physics.thermal`).
+    """The damper as one lumped heat capacity, or rotor and housing as two
+    (see :mod:`ecdsim.physics.thermal`).
 
     Attributes
     ----------
-    heat_capacity : C, the damper's heat capacity [J/K], > 0
-    thermal_resistance : R, damper to ambient [K/W]; ``inf`` (the default) is adiabatic
+    heat_capacity : C, the damper's (with a housing: the rotor's) heat capacity [J/K], > 0
+    thermal_resistance : R, damper to ambient [K/W]; ``inf`` (the default) is adiabatic.
+        With a housing it is the rotor's resistance to the housing, R_rh
+    housing_heat_capacity : C_h, the housing's heat capacity [J/K], > 0; None (the
+        default) for the one-node model
+    housing_thermal_resistance : R_he, housing to the environment (the mounting
+        interface at the deployment temperature) [K/W]; ``inf`` (the default) adiabatic
+    initial_rotor_rise : rotor temperature above the deployment temperature at release
+        [K], >= 0 (a deployment that follows another); 0 by default
+    initial_housing_rise : the housing's [K], >= 0; 0 by default
     """
 
     heat_capacity: Param
     thermal_resistance: Param = math.inf
+    housing_heat_capacity: Param | None = None
+    housing_thermal_resistance: Param = math.inf
+    initial_rotor_rise: Param = 0.0
+    initial_housing_rise: Param = 0.0
 
     def __post_init__(self) -> None:
         if np.any(np.asarray(self.heat_capacity, dtype=float) <= 0.0):
             raise ValueError("heat_capacity must be > 0")
         if np.any(np.asarray(self.thermal_resistance, dtype=float) <= 0.0):
             raise ValueError("thermal_resistance must be > 0 (omit it for adiabatic)")
+        if self.housing_heat_capacity is not None and np.any(
+            np.asarray(self.housing_heat_capacity, dtype=float) <= 0.0
+        ):
+            raise ValueError("housing_heat_capacity must be > 0")
+        if np.any(np.asarray(self.housing_thermal_resistance, dtype=float) <= 0.0):
+            raise ValueError("housing_thermal_resistance must be > 0 (omit it for adiabatic)")
+        for name in ("initial_rotor_rise", "initial_housing_rise"):
+            value = np.asarray(getattr(self, name), dtype=float)
+            if not np.all(np.isfinite(value) & (value >= 0.0)):
+                raise ValueError(f"{name} must be finite and >= 0")
+        if self.housing_heat_capacity is None and np.any(
+            np.asarray(self.initial_housing_rise, dtype=float) != 0.0
+        ):
+            raise ValueError("initial_housing_rise needs housing_heat_capacity")
+
+    @property
+    def two_node(self) -> bool:
+        """True when the housing is a node of its own."""
+        return self.housing_heat_capacity is not None
 
 
 @dataclass(frozen=True)

@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
-from ecdsim.dynamics.params import DynamicParameters
+from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.model import DeploymentSystem, EcdState
 from ecdsim.physics import mechanics, rolloff
 from ecdsim.solvers.base import QuasiStaticProblem
@@ -42,6 +43,10 @@ _CASE_FIELDS = (
     "stribeck_speed",
     "gear_stiffness",
     "gear_mesh_damping",
+    "housing_heat_capacity",
+    "housing_thermal_resistance",
+    "initial_rotor_rise",
+    "initial_housing_rise",
 )
 
 
@@ -85,8 +90,13 @@ class DynamicProblem(QuasiStaticProblem):
     gear_stiffness : c, torsional stiffness of the gear mesh at the input shaft
         [N*m/rad]; inf (the default) for a rigid mesh (plastic engagement)
     gear_mesh_damping : d, damping of the mesh in contact at the input shaft [N*m*s/rad]
+    housing_heat_capacity : C_h of the two-node heating [J/K]; inf for one node
+    housing_thermal_resistance : R_he, housing to the environment [K/W]; inf adiabatic
+    initial_rotor_rise : damper (rotor) temperature above T at release [K]
+    initial_housing_rise : housing temperature above T at release [K]
     eddy : the damper's eddy-current law (linear Eq. 1 or roll-off)
     thermal : True when self-heating is modelled
+    two_node : True when the housing is a heat capacity of its own
     stop_time : end of the simulated interval [s]
     rtol : relative tolerance of the integrator for nonlinear segments [-]
     integrator : integrator for nonlinear segments ("RODAS4" batched, or a solve_ivp method)
@@ -112,7 +122,12 @@ class DynamicProblem(QuasiStaticProblem):
     stribeck_speed: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
     gear_stiffness: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
     gear_mesh_damping: FloatArray = field(default_factory=lambda: np.asarray(0.0))
+    housing_heat_capacity: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
+    housing_thermal_resistance: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
+    initial_rotor_rise: FloatArray = field(default_factory=lambda: np.asarray(0.0))
+    initial_housing_rise: FloatArray = field(default_factory=lambda: np.asarray(0.0))
     thermal: bool = False
+    two_node: bool = False
     stop_time: float = math.inf
     rtol: float = 1e-8
     integrator: str = "RODAS4"
@@ -274,6 +289,7 @@ def dynamic_problem(
             0.0 if params.gear_mesh_damping is None else params.gear_mesh_damping, dtype=float
         ),
         thermal=thermal is not None,
+        **_two_node_fields(thermal),
         stop_time=params.stop_time,
         rtol=params.rtol,
         integrator=params.integrator,
@@ -301,3 +317,21 @@ def _check_compliant(params: DynamicParameters, damper_inertia: FloatArray) -> N
             "needs a damper-side inertia: give [damper] rotor_inertia or [gearbox] inertia "
             "> 0 kg*m^2 (a massless damper side behind a compliant mesh has no dynamics)",
         )
+
+
+def _two_node_fields(thermal: Thermal | None) -> dict[str, Any]:
+    """The housing node and the start temperatures of :class:`DynamicProblem`; none
+    (the one-node defaults) without ``Thermal.housing_heat_capacity``."""
+    if thermal is None:
+        return {}
+    fields: dict[str, Any] = {
+        "initial_rotor_rise": np.asarray(thermal.initial_rotor_rise, dtype=float),
+        "initial_housing_rise": np.asarray(thermal.initial_housing_rise, dtype=float),
+    }
+    if thermal.housing_heat_capacity is not None:
+        fields["housing_heat_capacity"] = np.asarray(thermal.housing_heat_capacity, float)
+        fields["housing_thermal_resistance"] = np.asarray(
+            thermal.housing_thermal_resistance, dtype=float
+        )
+        fields["two_node"] = True
+    return fields

@@ -270,6 +270,8 @@ class DynamicResult:
     energy : the energy balance
     events : every event
     trajectory : recorded segments for time series (None if not recorded)
+    final_housing_temperature : the housing's temperature at the end of the run with
+        two-node heating [degC]; None with one node or none
     """
 
     batch_shape: tuple[int, ...]
@@ -293,6 +295,7 @@ class DynamicResult:
     energy: EnergyBalance
     events: EventLog
     trajectory: TrajectoryData | None
+    final_housing_temperature: FloatArray | None = None
 
     @property
     def size(self) -> int:

@@ -83,11 +83,27 @@ class _Solver:
     solution's (``z[2] = r[2]``); :meth:`solve` then skips the temperature coupling.
     """
 
-    def __init__(self, jac: tuple[FloatArray, ...], c: FloatArray, heating: bool = True) -> None:
+    def __init__(
+        self,
+        jac: tuple[FloatArray, ...],
+        c: FloatArray,
+        heating: bool = True,
+        housing: tuple[FloatArray, FloatArray, FloatArray] | None = None,
+    ) -> None:
         j10, j11, j12, j21, j22, j31, j32 = jac
         self.c = c
         self.heating = heating
+        self.housing = housing is not None
         den2 = 1.0 - c * j22
+        if housing is not None:
+            # Two-node heating: z4 = (r4 + c j42 z2) / (1 - c j44) eliminated from row 2
+            # leaves the one-node system with den2 - c^2 j24 j42 / (1 - c j44) and
+            # r2 + c j24 r4 / (1 - c j44) in place of den2 and r2.
+            j24, j42, j44 = housing
+            self.inv4 = 1.0 / (1.0 - c * j44)  # j44 <= 0: never singular
+            self.p42 = c * j42 * self.inv4
+            self.p24 = c * j24 * self.inv4
+            den2 = den2 - self.p24 * c * j42
         safe2 = np.where(den2 != 0.0, den2, 1.0)
         den1 = 1.0 - c * j11 - c * c * j10 - c * c * j12 * j21 / safe2
         self.ok = (np.abs(den2) > 1e-12) & (np.abs(den1) > 1e-12)
@@ -107,9 +123,12 @@ class _Solver:
     def solve(
         self, r: FloatArray, out: FloatArray | None = None, scratch: FloatArray | None = None
     ) -> FloatArray:
-        """z with ``(I - c J) z = r``; r and z of shape (4, n); ``out`` must not be r."""
+        """z with ``(I - c J) z = r``; r and z of shape (rows, n); ``out`` must not be r."""
         z = np.empty_like(r) if out is None else out
         tmp = np.empty_like(r[0]) if scratch is None else scratch
+        if self.housing:
+            r = r.copy()
+            r[2] += self.p24 * r[4]
         z1 = z[1]
         np.multiply(r[1], self.inv1, out=z1)
         np.multiply(self.p10, r[0], out=tmp)
@@ -127,6 +146,9 @@ class _Solver:
             z[2] += tmp
             np.multiply(self.p32, z[2], out=tmp)
             z[3] += tmp
+            if self.housing:
+                np.multiply(r[4], self.inv4, out=z[4])
+                z[4] += self.p42 * z[2]
         else:
             z[2] = r[2]
         return z
@@ -139,14 +161,15 @@ _GC = tuple(tuple(GAMMA * c for c in row) for row in C)
 class _Work:
     """Preallocated arrays for :func:`_step` on a batch of n cases."""
 
-    def __init__(self, n: int) -> None:
+    def __init__(self, n: int, rows: int = 4) -> None:
         self.n = n
-        self.k = np.empty((6, 4, n))
-        self.stage = np.empty((4, n))
-        self.last = np.empty((4, n))
-        self.coupling = np.empty((4, n))
-        self.value = np.empty((4, n))
-        self.scratch = np.empty((4, n))
+        self.rows = rows
+        self.k = np.empty((6, rows, n))
+        self.stage = np.empty((rows, n))
+        self.last = np.empty((rows, n))
+        self.coupling = np.empty((rows, n))
+        self.value = np.empty((rows, n))
+        self.scratch = np.empty((rows, n))
 
 
 def _step(
@@ -158,17 +181,20 @@ def _step(
     then a view into it, valid until its next use.
     """
     n = y.shape[1]
-    if work is None or work.n != n:
-        work = _Work(n)
+    size = model.rows
+    if work is None or work.n != n or work.rows != size:
+        work = _Work(n, size)
     heating = model.heating
     hg = h * GAMMA
-    solver = _Solver(model.jacobian(y), hg, heating)
+    housing = model.housing_jacobian(y) if model.two_node else None
+    solver = _Solver(model.jacobian(y), hg, heating, housing)
     k, stage, last = work.k, work.stage, work.last
     coupling, value, scratch = work.coupling, work.value, work.scratch
     # Rows that vary: without heating the temperature stages are all zero (the stage
     # temperature stays y's) and the energy row is never read by the right-hand side.
-    every = slice(0, 4)
-    stage_rows = slice(0, 3) if heating else slice(0, 2)
+    # With a housing node (row 4) every row varies; the energy row 3 is then carried along.
+    every = slice(0, size)
+    stage_rows = every if size > 4 else slice(0, 3) if heating else slice(0, 2)
     coupling_rows = (every,) if heating else (slice(0, 2), slice(3, 4))
     np.copyto(stage, y)
     coupling[2] = 0.0
@@ -400,7 +426,7 @@ class _Running:
         self.creeping = segments.creeps.copy()
         self.top_speed = segments.y0[1].copy()
         self.top_temp = segments.y0[2].copy()
-        self.buffers = _Work(n)
+        self.buffers = _Work(n, model.rows)
 
     def keep(self, keep: NDArray[np.intp], end: FloatArray) -> FloatArray:
         """Keep only the segments ``keep``; returns ``end`` restricted to them."""
@@ -413,7 +439,7 @@ class _Running:
         )
         self.top_speed, self.top_temp = self.top_speed[keep], self.top_temp[keep]
         self.model = self.model.take(keep)
-        self.buffers = _Work(keep.size)
+        self.buffers = _Work(keep.size, self.model.rows)
         return end[keep]
 
 

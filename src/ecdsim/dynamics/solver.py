@@ -35,7 +35,7 @@ from ecdsim.dynamics.result import (
     EventLog,
     TrajectoryData,
 )
-from ecdsim.physics import mechanics
+from ecdsim.physics import mechanics, thermal
 
 # A breakaway needs the drive to exceed static friction by more than this relative margin;
 # at the boundary (a forward motion that stops where drive = kinetic friction = static
@@ -85,6 +85,13 @@ class _Cases:
     stribeck_speed: FloatArray
     stribeck: bool  # some case has a Stribeck speed
     eddy: EddyLaw
+    # Two-node heating and the start temperatures (issue 16 item 6); the defaults are
+    # the one-node model starting at the deployment temperature.
+    two_node: bool = False
+    housing_heat_capacity: FloatArray | None = None
+    housing_resistance: FloatArray | None = None
+    rotor_rise0: FloatArray | None = None
+    housing_rise0: FloatArray | None = None
 
 
 def _flatten(problem: DynamicProblem) -> _Cases:
@@ -122,6 +129,11 @@ def _flatten(problem: DynamicProblem) -> _Cases:
         stribeck_speed=flat(problem.stribeck_speed),
         stribeck=problem.stribeck,
         eddy=problem.eddy.flattened(shape),
+        two_node=problem.two_node,
+        housing_heat_capacity=flat(problem.housing_heat_capacity) if problem.two_node else None,
+        housing_resistance=flat(problem.housing_thermal_resistance) if problem.two_node else None,
+        rotor_rise0=flat(problem.initial_rotor_rise) if problem.thermal else None,
+        housing_rise0=flat(problem.initial_housing_rise) if problem.two_node else None,
     )
 
 
@@ -238,6 +250,7 @@ class _State:
     engagement_loss: FloatArray
     impact_loss: FloatArray
     piece: NDArray[np.intp]  # the spring piece each case was last on
+    housing: FloatArray | None = None  # two nodes: the housing's rise over ambient [K]
 
     @classmethod
     def initial(cls, c: _Cases) -> _State:
@@ -280,6 +293,25 @@ class _State:
         self.status[idx] = _ST[status]
 
 
+def _thermal_start(c: _Cases, s: _State) -> None:
+    """Start rotor (damper) and housing temperatures other than the deployment's.
+
+    The rotor's state is the damping law's log factor of its rise
+    (:func:`ecdsim.physics.thermal.factor_log_from_rise`); nothing changes (s = 0,
+    T_d = T) where no rise is given.
+    """
+    if c.two_node:
+        assert c.housing_rise0 is not None
+        s.housing = c.housing_rise0.copy()
+    rise = c.rotor_rise0
+    if rise is None or not np.any(rise != 0.0):
+        return
+    ambient_factor = np.maximum(c.eddy.factor(c.ambient), 0.0)
+    s.heat = thermal.factor_log_from_rise(rise, ambient_factor, c.eddy.coefficient)
+    s.temp = c.ambient + rise
+    s.max_temp = s.temp.copy()
+
+
 def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult:
     """Solve every case of ``problem``; ``record`` keeps the segments for time series.
 
@@ -290,19 +322,28 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
         return solve_compliant(problem, record=record)
     c = _flatten(problem)
     s = _State.initial(c)
+    _thermal_start(c, s)
     ke0 = mechanics.kinetic_energy(np.where(s.engaged, c.total_inertia, c.load_inertia), s.w)
     log = _Log()
     records: _Records | None = _Records([], []) if record else None
     log.add(np.arange(c.n), s.t, "release", s.phi, s.w)
 
-    for iteration in range(problem.max_events + 1):
+    # Passes of each case that ended in an event other than a spring breakpoint: the
+    # event limit counts these, so that a table of any size can be crossed. Between two
+    # such events the motion is monotone and passes each breakpoint at most once, so the
+    # loop still ends after at most (max_events + 1) P passes.
+    passes = np.zeros(c.n, dtype=np.int64)
+    while True:
         active = np.flatnonzero(~s.done)
         if active.size == 0:
             break
-        if iteration == problem.max_events:
-            s.finish(active, "event_limit")
-            log.add(active, s.t[active], "event_limit", s.phi[active], s.w[active])
-            break
+        over = active[passes[active] >= problem.max_events]
+        if over.size:
+            s.finish(over, "event_limit")
+            log.add(over, s.t[over], "event_limit", s.phi[over], s.w[over])
+            active = active[passes[active] < problem.max_events]
+            if active.size == 0:
+                break
         direction = np.zeros(c.n)
         resting = active[s.w[active] == 0.0]
         if resting.size:
@@ -311,7 +352,9 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
         direction[moving] = np.sign(s.w[moving])
         run = np.flatnonzero(~s.done & (direction != 0.0))
         if run.size:
-            _advance_cases(c, s, run, direction[run], problem, log, records)
+            passing = _advance_cases(c, s, run, direction[run], problem, log, records)
+            passes[run] += 1
+            passes[passing] -= 1
 
     final_inertia = np.where(s.engaged, c.total_inertia, c.load_inertia)
     keeps_speed = _KEEPS_SPEED[s.status]
@@ -365,6 +408,7 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
         stuck_time=shaped(s.stuck_time),
         max_speed=shaped(s.max_speed),
         max_damper_temperature=shaped(s.max_temp),
+        final_housing_temperature=None if s.housing is None else shaped(c.ambient + s.housing),
         engagement_time=shaped(s.engagement_time),
         rebound_speed=shaped(s.rebound_speed),
         impacts=shaped(s.impacts),
@@ -472,11 +516,12 @@ def _advance_cases(
     problem: DynamicProblem,
     log: _Log,
     records: _Records | None,
-) -> None:
+) -> NDArray[np.intp]:
     """Advance the cases ``run`` through one segment each and apply their events.
 
     Event finding (:func:`_segments`), stepping (:func:`_step_closed_form`,
     :func:`_step_integrated`) and bookkeeping (:func:`_account`, :func:`_apply_events`).
+    Returns the cases whose segment ended at a spring breakpoint.
     """
     seg = _segments(c, s, run, direction, problem.stop_time)
     step = _Step.empty(s.temp[run])
@@ -491,7 +536,7 @@ def _advance_cases(
     if nl_idx.size:
         _step_integrated(c, s, seg, nl_idx, step, problem, records)
     _account(s, seg, step)
-    _apply_events(c, s, seg, step, log)
+    return _apply_events(c, s, seg, step, log)
 
 
 def _segments(
@@ -619,6 +664,7 @@ def _step_integrated(
             thermal=problem.thermal,
             stribeck_excess=None if excess is None else excess[idx],
             stribeck_speed=None if excess is None else c.stribeck_speed[cases],
+            **_housing_segments(c, s, cases),
         ),
         rtol=problem.rtol,
         method=problem.integrator,
@@ -633,6 +679,8 @@ def _step_integrated(
     step.temperature[idx] = out.temperature
     step.peak_temperature[idx] = out.max_temperature
     s.heat[cases] = out.state
+    if s.housing is not None and out.housing is not None:
+        s.housing[cases] = out.housing
     start = s.t[cases]
     step.display_end[idx] = start + out.duration
     if records is not None:
@@ -649,6 +697,17 @@ def _step_integrated(
                         solution=sol,
                     )
                 )
+
+
+def _housing_segments(c: _Cases, s: _State, cases: NDArray[np.intp]) -> dict[str, Any]:
+    """The housing node's arguments of :class:`~ecdsim.dynamics.integrate.NonlinearSegments`."""
+    if s.housing is None or c.housing_heat_capacity is None or c.housing_resistance is None:
+        return {}
+    return {
+        "housing_state0": s.housing[cases],
+        "housing_heat_capacity": c.housing_heat_capacity[cases],
+        "housing_resistance": c.housing_resistance[cases],
+    }
 
 
 def _account(s: _State, seg: _Segment, step: _Step) -> None:
@@ -679,8 +738,11 @@ def _account(s: _State, seg: _Segment, step: _Step) -> None:
     s.w[run] = direction * step.v
 
 
-def _apply_events(c: _Cases, s: _State, seg: _Segment, step: _Step, log: _Log) -> None:
-    """Log each case's event and apply it: stop, cap, creep, engagement, impacts."""
+def _apply_events(c: _Cases, s: _State, seg: _Segment, step: _Step, log: _Log) -> NDArray[np.intp]:
+    """Log each case's event and apply it: stop, cap, creep, engagement, impacts.
+
+    Returns the cases that passed a spring breakpoint.
+    """
     run, kind = seg.run, step.kind
     zero = run[kind == linear.ZERO]
     s.w[zero] = 0.0  # the next iteration decides stick or breakaway
@@ -714,12 +776,13 @@ def _apply_events(c: _Cases, s: _State, seg: _Segment, step: _Step, log: _Log) -
         s.engagement_loss[engaging] += loss
         s.engaged[engaging] = True
         s.engagement_time[engaging] = s.t[engaging]
-    passing = run[reached & (seg.reach_kind == _EV["breakpoint"])]
+    passing: NDArray[np.intp] = run[reached & (seg.reach_kind == _EV["breakpoint"])]
     log.add(passing, s.t[passing], "breakpoint", s.phi[passing], s.w[passing])
     for name in ("arrive", "start_stop"):
         hit = run[reached & (seg.reach_kind == _EV[name])]
         if hit.size:
             _impact(c, s, hit, name, log)
+    return passing
 
 
 def _impact(c: _Cases, s: _State, hit: NDArray[np.intp], name: str, log: _Log) -> None:

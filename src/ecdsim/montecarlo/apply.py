@@ -48,6 +48,7 @@ _OWNERS = {
     "LinearSpring": "the linear spring's start_torque and end_torque (this config gives a "
     "spring_table)",
     "ResistiveTable": "[load] resistive_table, which this config does not give",
+    "Gravity": "[load.gravity], which this config does not give",
 }
 
 

@@ -8,6 +8,11 @@ these, so they live below both (definitions in docs/montecarlo.md).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from ecdsim._types import FloatArray
 
 CONFIDENCE = 0.95
 
@@ -72,3 +77,86 @@ def proportion_interval(successes: int, trials: int) -> tuple[float, float]:
         else float(betaincinv(successes + 1, trials - successes, 1.0 - tail))
     )
     return low, high
+
+
+# Order statistics of a large sample by bracketing (order_statistics): the size from which
+# it is used instead of np.partition, the systematic subsample that places the brackets,
+# and their half-width in standard deviations of the subsample's rank.
+BRACKET_MIN_SIZE = 1_000_000
+BRACKET_SUBSAMPLE = 131_072
+BRACKET_SIGMAS = 7.0
+
+
+def order_statistics(
+    values: FloatArray, ranks: Sequence[int], *, overwrite: bool = False
+) -> FloatArray:
+    """The values of the given 0-based ranks in sorted order: ``np.sort(values)[ranks]``.
+
+    Exact, with NaN sorted last as NumPy sorts it. For a large sample each wanted rank is
+    first bracketed by a sorted systematic subsample (every k-th value): the bracket's
+    values are selected in a few vectorised passes, the count below it is taken, and the
+    rank is read from the sorted bracket. Where a bracket does not hold its rank (the
+    subsample missed, heavy ties) the whole sample is partitioned as before, so the answer
+    never depends on the subsample; only the time does. ``overwrite`` lets that partition
+    reorder ``values`` in place instead of copying them.
+    """
+    x = np.asarray(values, dtype=float).reshape(-1)
+    wanted = sorted(set(ranks))
+    if wanted and (wanted[0] < 0 or wanted[-1] >= x.size):
+        raise IndexError(f"ranks {wanted[0]}..{wanted[-1]} outside a sample of {x.size}")
+    found = _bracketed(x, wanted) if x.size >= BRACKET_MIN_SIZE else None
+    if found is None:
+        ordered = x if overwrite else x.copy()
+        ordered.partition(wanted)
+        found = {r: float(ordered[r]) for r in wanted}
+    return np.array([found[r] for r in ranks], dtype=float)
+
+
+def _bracketed(x: FloatArray, wanted: list[int]) -> dict[int, float] | None:
+    """:func:`order_statistics` by brackets, or None where a bracket misses its ranks."""
+    n = x.size
+    sample = np.sort(x[:: max(1, n // BRACKET_SUBSAMPLE)])
+    m = sample.size
+    # Each rank's bracket, in subsample indices: about q*m of the subsample lies below
+    # the rank's value (q = its probability), give or take sqrt(m q (1 - q)); brackets
+    # that overlap are merged, so that each value is selected once.
+    spans: list[tuple[int, int, list[int]]] = []
+    for rank in wanted:
+        q = (rank + 0.5) / n
+        half = BRACKET_SIGMAS * math.sqrt(m * q * (1.0 - q)) + 2.0
+        low, high = math.floor(q * m - half), math.ceil(q * m + half)
+        if spans and low <= spans[-1][1]:
+            spans[-1] = (spans[-1][0], high, [*spans[-1][2], rank])
+        else:
+            spans.append((low, high, [rank]))
+    edges = [
+        (
+            float(sample[low]) if low > 0 else -math.inf,
+            float(sample[high]) if high < m else math.inf,
+        )
+        for low, high, _ in spans
+    ]
+    selected = np.zeros(n, dtype=bool)
+    inside = np.empty(n, dtype=bool)
+    inside_high = np.empty(n, dtype=bool)
+    belows = []
+    total = 0
+    for (lowest, highest), (_, _, members) in zip(edges, spans, strict=True):
+        below = int(np.count_nonzero(x < lowest))
+        np.greater_equal(x, lowest, out=inside)
+        np.less_equal(x, highest, out=inside_high)
+        inside &= inside_high
+        count = int(np.count_nonzero(inside))
+        total += count
+        # NaN is in no bracket and below none: a rank among them is never held.
+        if not (below <= members[0] and members[-1] < below + count) or total > n // 8:
+            return None
+        selected |= inside
+        belows.append(below)
+    candidates = x[selected]
+    found: dict[int, float] = {}
+    for (lowest, highest), (_, _, members), below in zip(edges, spans, belows, strict=True):
+        part = np.sort(candidates[(candidates >= lowest) & (candidates <= highest)])
+        for rank in members:
+            found[rank] = float(part[rank - below])
+    return found

@@ -32,10 +32,10 @@ from typing import Any
 import numpy as np
 
 from ecdsim._types import ArrayLike, as_float
-from ecdsim.montecarlo.intervals import proportion_interval, rank_of
+from ecdsim.montecarlo.intervals import order_statistics, proportion_interval, rank_of
 
 
-def typical_max_deviation(deviations: ArrayLike, runs: int) -> float:
+def typical_max_deviation(deviations: ArrayLike, runs: int, *, overwrite: bool = False) -> float:
     """Median of the largest of ``runs`` independent draws from the deviations [s].
 
     The largest of R draws is <= x with probability F(x)^R, so its median is the
@@ -47,7 +47,7 @@ def typical_max_deviation(deviations: ArrayLike, runs: int) -> float:
     """
     d = as_float(deviations).reshape(-1)
     rank = rank_of(d.size, 0.5 ** (1.0 / runs))
-    return float(np.partition(d, rank)[rank])
+    return float(order_statistics(d, [rank], overwrite=overwrite)[0])
 
 
 def required_std(within: float, runs: int) -> float:
@@ -93,7 +93,6 @@ def study(times: ArrayLike, nominal: float | None, within: float, runs: int) -> 
     hits = int(np.count_nonzero(inside))
     p = hits / t.size
     low, high = proportion_interval(hits, t.size)
-    typical = typical_max_deviation(deviation, runs)
     campaign: dict[str, Any] | None = None
     if t.size >= runs:
         first = t[:runs]
@@ -107,6 +106,7 @@ def study(times: ArrayLike, nominal: float | None, within: float, runs: int) -> 
             "stalled": int(runs - arrived.size),
             "all_within": bool(np.all(inside[:runs])),
         }
+    typical = typical_max_deviation(deviation, runs, overwrite=True)  # reorders deviation
     return {
         **base,
         "fraction_within": p,

@@ -165,8 +165,11 @@ class Plan:
 
     @property
     def summary_columns(self) -> tuple[str, ...]:
-        """The columns the summary reads whole (for order statistics): sample, outputs."""
-        return ("sample", *self.output_columns)
+        """The columns the summary reads whole (for order statistics): the outputs.
+
+        (The sample index is checked chunk by chunk where a chunk is read from its file.)
+        """
+        return self.output_columns
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -366,7 +369,8 @@ def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
     for output, array in outputs_of(plan, prediction).items():
         full = np.broadcast_to(array, shape)
         for i, temperature in enumerate(plan.temperatures):
-            columns[output_column(output, temperature)] = np.array(full[i])
+            # A view of the solution's row when it is solved contiguous (no copy).
+            columns[output_column(output, temperature)] = np.ascontiguousarray(full[i])
     counts: Counter[tuple[str, float | None, str | None]] = Counter()
     examples: dict[tuple[str, float | None, str | None], str] = {}
     for warning in prediction.warnings:

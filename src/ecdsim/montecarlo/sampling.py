@@ -80,9 +80,12 @@ def _lhs(seed: int, dimension: int, chunk_size: int, index: int, count: int) -> 
     for j in range(dimension):
         strata[j] = rng.permutation(count)
     strata += 1.0  # exact: integers below 2**53
-    samples = np.subtract(strata.T, jitter, out=jitter)
-    samples /= count
-    return samples
+    # Computed in the (d, count) buffer of the strata and handed out as its transpose: the
+    # same (count, d) numbers, but each quantity's column contiguous, so that the copula,
+    # the marginals and the chunk's columns read and keep them without strided copies.
+    np.subtract(strata, jitter.T, out=strata)
+    strata /= count
+    return strata.T
 
 
 def _sobol(seed: int, dimension: int, chunk_size: int, index: int, count: int) -> FloatArray:

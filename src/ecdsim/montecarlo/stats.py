@@ -52,7 +52,12 @@ from ecdsim.montecarlo.columns import MAX_BINS as MAX_BINS
 from ecdsim.montecarlo.columns import bin_count as bin_count
 from ecdsim.montecarlo.columns import bin_labels as bin_labels
 from ecdsim.montecarlo.columns import output_column
-from ecdsim.montecarlo.intervals import confidence_ranks, proportion_interval, rank_of
+from ecdsim.montecarlo.intervals import (
+    confidence_ranks,
+    order_statistics,
+    proportion_interval,
+    rank_of,
+)
 from ecdsim.montecarlo.streaming import Sums
 
 if TYPE_CHECKING:
@@ -72,12 +77,16 @@ def _number(value: float) -> float | None:
 
 
 def percentiles(
-    values: ArrayLike, probabilities: Mapping[str, float] = PERCENTILES
+    values: ArrayLike,
+    probabilities: Mapping[str, float] = PERCENTILES,
+    *,
+    overwrite: bool = False,
 ) -> dict[str, dict[str, float | None]]:
     """Each percentile of the values (inf allowed) and its 95 % interval.
 
     Returns {name: {"value": v, "low": lo, "high": hi}} with None for +inf (a percentile
-    in the stalled tail) and for interval ends the sample cannot bound.
+    in the stalled tail) and for interval ends the sample cannot bound. ``overwrite``:
+    the values may be reordered in place (no copy of a whole column).
     """
     x = as_float(values).reshape(-1)
     n = x.size
@@ -87,18 +96,21 @@ def percentiles(
     for name, p in probabilities.items():
         ranks[name] = (rank_of(n, p), *confidence_ranks(n, p))
     needed = sorted({r for triple in ranks.values() for r in triple if r is not None})
-    ordered = np.partition(x, needed)
+    ordered = dict(zip(needed, order_statistics(x, needed, overwrite=overwrite), strict=True))
 
     def at(rank: int | None) -> float | None:
-        return None if rank is None else _number(float(ordered[rank]))
+        return None if rank is None else _number(ordered[rank])
 
     return {
         name: {"value": at(k), "low": at(lo), "high": at(hi)} for name, (k, lo, hi) in ranks.items()
     }
 
 
-def describe(values: ArrayLike) -> dict[str, Any]:
-    """Percentiles over all values (inf allowed), moments over all and over finite ones."""
+def describe(values: ArrayLike, *, overwrite: bool = False) -> dict[str, Any]:
+    """Percentiles over all values (inf allowed), moments over all and over finite ones.
+
+    ``overwrite``: the values may be reordered in place once the moments are taken.
+    """
     x = as_float(values).reshape(-1)
     is_finite = np.isfinite(x)
     finite = x if is_finite.all() else x[is_finite]  # no copy when every sample arrives
@@ -120,16 +132,18 @@ def describe(values: ArrayLike) -> dict[str, Any]:
         return mean, std
 
     mean, std = moments(finite)
+    lowest = _number(float(np.min(x))) if x.size else None
+    highest = _number(float(np.max(x))) if x.size else None
     return {
         "samples": int(x.size),
         "arriving": int(arriving),
-        "percentiles": percentiles(x),
+        "percentiles": percentiles(x, overwrite=overwrite),  # last: it may reorder x
         "mean": mean if all_finite else None,
         "std": std if all_finite else None,
         "mean_arriving": mean,
         "std_arriving": std,
-        "min": _number(float(np.min(x))) if x.size else None,
-        "max": _number(float(np.max(x))) if x.size else None,
+        "min": lowest,
+        "max": highest,
     }
 
 
@@ -427,10 +441,12 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
     # of the files) enter through the sums each chunk carries (module streaming).
     # A run in this process kept them in memory (store.keep): only reused chunks are read.
     kept = take_kept(out, plan.identity_sha256)
-    data = reader.read(plan.summary_columns, [int(t["_rows"]) for t in tags], kept)
-    if not np.array_equal(data["sample"], np.arange(plan.samples)):
+    rows = [int(t["_rows"]) for t in tags]
+    if sum(rows) != plan.samples:
         raise ValueError(f"{out}: the chunk files do not hold samples 0..{plan.samples - 1}")
-    del data["sample"]
+    # The sample index of each chunk read from its file is checked as it is read; the
+    # chunks kept in memory were computed from their own indices in this process.
+    data = reader.read(plan.summary_columns, rows, kept, check_samples=True)
     keys = plan.tolerances.keys
     bins = bin_count(plan.samples)
     merged = _merged_sums(plan, reader, tags, bins)
@@ -441,16 +457,21 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
         stalled = np.asarray(data[output_column("stalled", temperature)], dtype=bool)
         speeds = np.asarray(data[output_column("end_speed_rad_s", temperature)], dtype=float)
         nominal_case = reference[temperature]
+        # The repeatability reads the samples in order (its first campaign): before the
+        # percentiles, which may reorder the columns (this summary's own) in place.
+        repeat = repeatability.study(
+            times, nominal_case["deployment_time_s"], plan.repeat_within, plan.repeat_runs
+        )
         case = {
             "temperature_C": temperature,
             "nominal": nominal_case,
-            "deployment_time_s": describe(times),
-            "end_speed_rad_s": describe(speeds[~stalled] if stalled.any() else speeds),
+            "deployment_time_s": describe(times, overwrite=True),
+            "end_speed_rad_s": describe(
+                speeds[~stalled] if stalled.any() else speeds, overwrite=True
+            ),
             "stall": stall(stalled),
             "sensitivity": sensitivity_from_sums(keys, sums, bins),
-            "repeatability": repeatability.study(
-                times, nominal_case["deployment_time_s"], plan.repeat_within, plan.repeat_runs
-            ),
+            "repeatability": repeat,
         }
         if plan.margin is not None:
             margins = np.asarray(data[output_column("min_torque_margin", temperature)], float)

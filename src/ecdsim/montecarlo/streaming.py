@@ -138,7 +138,7 @@ class _Inputs:
     mean_x: FloatArray
     dx_rows: FloatArray
     gram: FloatArray
-    cells: np.ndarray[Any, Any]
+    label_rows: np.ndarray[Any, Any]
     counts: FloatArray
 
     @classmethod
@@ -147,17 +147,21 @@ class _Inputs:
         rows = np.array(values.T, order="C")  # (d, n), a copy: each input contiguous
         mean_x = rows.mean(axis=1)
         rows -= mean_x[:, np.newaxis]
-        # One bincount for all inputs: input j's bin m is cell j * bins + m.
-        cells = (labels + np.arange(d, dtype=np.intp) * bins).ravel()
-        counts = np.bincount(cells, minlength=d * bins).reshape(d, bins).astype(float)
+        # Each input's labels as one contiguous row of indices (one cast, reused by every
+        # temperature's bincount). A bin's sum adds its samples in sample order, as one
+        # bincount over all inputs' cells did: the same numbers.
+        label_rows = np.array(labels.T, dtype=np.intp, order="C")
+        counts = np.empty((d, bins))
+        for j in range(d):
+            counts[j] = np.bincount(label_rows[j], minlength=bins)
         # NumPy's own (pairwise) sums, not BLAS: a multi-threaded BLAS may split a sum
         # differently from one process to the next; the sums must be the same bytes
-        # whoever computes them.
+        # whoever computes them. Row j's products with rows j..d-1 in one temporary and
+        # one reduction along each row: the same pairwise sums as one row pair at a time.
         gram = np.empty((d, d))
         for j in range(d):
-            for k in range(j, d):
-                gram[j, k] = gram[k, j] = np.add.reduce(rows[j] * rows[k])
-        return cls(mean_x, rows, gram, cells, counts)
+            gram[j, j:] = gram[j:, j] = np.add.reduce(rows[j:] * rows[j], axis=1)
+        return cls(mean_x, rows, gram, label_rows, counts)
 
 
 def sums_of(
@@ -184,7 +188,10 @@ def sums_of(
     inputs = shared if shared is not None else _Inputs.of(values, labels, bins)
     mean_y = float(times.mean())
     dy = times - mean_y
-    sums = np.bincount(inputs.cells, weights=np.repeat(times, d), minlength=d * bins)
+    weights = np.ascontiguousarray(times, dtype=float)
+    sums = np.empty((d, bins))
+    for j in range(d):
+        sums[j] = np.bincount(inputs.label_rows[j], weights=weights, minlength=bins)
     return Sums(
         count=float(n),
         mean_x=inputs.mean_x,
@@ -193,7 +200,7 @@ def sums_of(
         cross=np.add.reduce(inputs.dx_rows * dy, axis=1),
         total=float(np.add.reduce(dy * dy)),
         bin_counts=inputs.counts,
-        bin_sums=np.asarray(sums, dtype=float).reshape(d, bins),
+        bin_sums=sums,
     )
 
 
@@ -228,9 +235,10 @@ def chunk_sums(
     """
     tolerances = plan.tolerances.tolerances
     bins = bin_count(plan.samples)
-    values = np.stack([np.asarray(columns[t.key], dtype=float) for t in tolerances], axis=1)
+    # (n, d) views of (d, n) stacks: each input's column contiguous, as the chunk's own.
+    values = np.stack([np.asarray(columns[t.key], dtype=float) for t in tolerances]).T
     if scores is None:
-        scores = np.stack([t.scores(values[:, j]) for j, t in enumerate(tolerances)], axis=1)
+        scores = np.stack([t.scores(values[:, j]) for j, t in enumerate(tolerances)]).T
     labels = bin_labels(scores, bins)
     shared = _Inputs.of(values, labels, bins)
     return [

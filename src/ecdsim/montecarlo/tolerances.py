@@ -199,7 +199,7 @@ class ToleranceSet:
         # Clip away exact 0 and 1 so that the normal scores stay finite.
         tiny = np.finfo(float).tiny
         z = _ndtri(np.clip(u[:, involved], tiny, 1.0 - np.finfo(float).epsneg))
-        out = u.copy()
+        out = u.copy(order="K")  # keeps the design's layout (columns contiguous for LHS)
         out[:, involved] = _ndtr(z @ lower.T)
         return out
 
@@ -208,9 +208,15 @@ class ToleranceSet:
         return self.values_of_scores(self.correlate(u))
 
     def values_of_scores(self, scores: FloatArray) -> FloatArray:
-        """Parameter values (n, d) from scores that already carry the correlation."""
-        columns = [t.values(scores[:, j]) for j, t in enumerate(self.tolerances)]
-        return np.stack(columns, axis=1) if columns else np.zeros((scores.shape[0], 0))
+        """Parameter values (n, d) from scores that already carry the correlation.
+
+        Each quantity's values are contiguous (the array is column-major): a chunk's
+        columns are then views, not copies.
+        """
+        rows = np.empty((self.dimension, scores.shape[0]))
+        for j, t in enumerate(self.tolerances):
+            rows[j] = t.values(scores[:, j])
+        return rows.T
 
     def to_dict(self) -> list[dict[str, object]]:
         """JSON-ready description of every tolerance."""
@@ -257,6 +263,15 @@ def _resolve_one(
                 f"{low:.4g}{unit} ({reach}, nominal {nominal:.4g}{unit}), but the quantity must "
                 f"stay {relation} {bound:g}{unit}; use a smaller spread"
                 + (" or a bounded distribution" if spec.distribution == "normal" else "")
+            )
+            return None
+    if quantity.upper_bound is not None:
+        high = nominal + marginal.reach * scale
+        if high > quantity.upper_bound:
+            problems.append(
+                f"{where}.{name} = {spread.text!r}: the {spec.distribution} spread reaches "
+                f"{high:.4g} (nominal {nominal:.4g}), but the quantity must stay <= "
+                f"{quantity.upper_bound:g}; use a smaller spread"
             )
             return None
     return Tolerance(

@@ -244,3 +244,159 @@ def factor_log_rate_slope(
         cooling = np.where(finite, np.exp(-c * np.where(finite, as_float(state), 0.0)), 0.0)
         slope = slope - cooling / np.where(finite, r, 1.0)
     return as_float(slope / as_float(heat_capacity))
+
+
+# Two nodes: the damper's rotor and its housing
+# ---------------------------------------------
+# The eddy-current power is dissipated in the rotor's conductor; the rotor passes it to
+# the housing, which passes it to the mounting interface at the environment (deployment)
+# temperature. Two lumped capacitances joined by thermal resistances: the thermal
+# circuit of Incropera, DeWitt, Bergman and Lavine 2007 (section 3.1.3) with the lumped
+# capacitance balance of their section 5.2 written for each node:
+#
+#     C_r dT_r/dt = P - (T_r - T_h) / R_rh
+#     C_h dT_h/dt = (T_r - T_h) / R_rh - (T_h - T_env) / R_he
+#
+# In the rotor's log state s (the notes above) the first line becomes
+# ds/dt = (p - (T_r - T_env) / (R_rh f) + (T_h - T_env) / (R_rh f)) / C_r: the one-node
+# balance with R = R_rh plus the heat the housing returns, :func:`housing_return`.
+# Without power the pair relaxes linearly, in closed form (:func:`two_node_relaxation`).
+
+
+def housing_return(
+    housing_rise: ArrayLike,
+    factor: ArrayLike,
+    coupling_resistance: ArrayLike,
+    heat_capacity: ArrayLike,
+) -> FloatArray:
+    """``(T_h - T_env) / (R_rh f C_r)``: the housing's term in the rotor's ``ds/dt``.
+
+    The two-node balance (Incropera et al. 2007, sections 3.1.3 and 5.2; module notes)
+    in the rotor's log state: the rotor loses ``(T_r - T_h) / R_rh``, of which
+    ``-(T_h - T_env) / R_rh`` is this term times ``f C_r``. 0 where R_rh is inf or the
+    factor is 0 (a damping law already at its zero at the environment temperature).
+
+    Parameters
+    ----------
+    housing_rise : T_h - T_env [K]
+    factor : f, the damping law's temperature factor at the rotor temperature [-]
+    coupling_resistance : R_rh, rotor to housing [K/W]; ``inf`` for none
+    heat_capacity : C_r, the rotor's heat capacity [J/K], > 0
+
+    >>> float(housing_return(2.0, 0.5, 4.0, 0.5))  # 2 / (4 * 0.5 * 0.5)
+    2.0
+    """
+    r = as_float(coupling_resistance)
+    f = as_float(factor)
+    den = np.where(np.isfinite(r), r, np.inf) * f * as_float(heat_capacity)
+    rise = as_float(housing_rise) * np.ones_like(den)
+    return np.divide(rise, den, out=np.zeros_like(rise), where=np.isfinite(den) & (den > 0.0))
+
+
+def housing_rate(
+    rotor_rise: ArrayLike,
+    housing_rise: ArrayLike,
+    heat_capacity: ArrayLike,
+    coupling_resistance: ArrayLike,
+    environment_resistance: ArrayLike,
+) -> FloatArray:
+    """``dT_h/dt = ((T_r - T_h) / R_rh - (T_h - T_env) / R_he) / C_h`` (two-node network).
+
+    Incropera et al. 2007, section 5.2's lumped balance of the housing node, with the
+    resistances of their section 3.1.3 (module notes).
+
+    Parameters
+    ----------
+    rotor_rise : T_r - T_env [K]
+    housing_rise : T_h - T_env [K]
+    heat_capacity : C_h, the housing's heat capacity [J/K], > 0
+    coupling_resistance : R_rh, rotor to housing [K/W]; ``inf`` for none
+    environment_resistance : R_he, housing to the environment [K/W]; ``inf`` adiabatic
+
+    >>> float(housing_rate(10.0, 4.0, 3.0, 2.0, 4.0))  # (6 / 2 - 4 / 4) / 3
+    0.6666666666666666
+    """
+    gain = heat_loss(rotor_rise, housing_rise, coupling_resistance)
+    loss = heat_loss(housing_rise, 0.0, environment_resistance)
+    return as_float((gain - loss) / as_float(heat_capacity))
+
+
+def factor_log_from_rise(
+    rise: ArrayLike, ambient_factor: ArrayLike, coefficient: ArrayLike
+) -> FloatArray:
+    """The log state ``s = ln(1 + c (T - T_amb) / f_a) / c`` of a temperature rise.
+
+    The inverse of :func:`temperature_from_factor_log` (``f(T) = f_a + c (T - T_amb)``
+    for the affine factor of Eq. 1); at c = 0, ``s = (T - T_amb) / f_a``. The rise must
+    stay below the law's zero (``1 + c rise / f_a > 0``).
+
+    Parameters
+    ----------
+    rise : T - T_ambient [K]
+    ambient_factor : f_a [-], > 0
+    coefficient : c [1/K]
+
+    >>> round(float(factor_log_from_rise(125.0, 1.0, -0.004)), 9)  # f = 1/2: ln 2 / 0.004
+    173.28679514
+    >>> float(factor_log_from_rise(3.0, 0.5, 0.0))
+    6.0
+    """
+    c = as_float(coefficient)
+    z = c * as_float(rise) / as_float(ambient_factor)
+    safe = np.where(c != 0.0, c, 1.0)
+    return as_float(
+        np.where(c != 0.0, np.log1p(z) / safe, as_float(rise) / as_float(ambient_factor))
+    )
+
+
+def two_node_relaxation(
+    rotor_rise: ArrayLike,
+    housing_rise: ArrayLike,
+    time: ArrayLike,
+    rotor_heat_capacity: ArrayLike,
+    housing_heat_capacity: ArrayLike,
+    coupling_resistance: ArrayLike,
+    environment_resistance: ArrayLike,
+) -> tuple[FloatArray, FloatArray]:
+    """Rotor and housing rises after ``time`` without power: ``theta(t) = exp(A t) theta0``.
+
+    The two-node network of the module notes with P = 0 is linear,
+    ``theta' = A theta`` with ``A = [[-a, a], [b, -(b + d)]]``, ``a = 1 / (R_rh C_r)``,
+    ``b = 1 / (R_rh C_h)``, ``d = 1 / (R_he C_h)`` (Incropera et al. 2007, sections
+    3.1.3 and 5.2). Its eigenvalues ``l = m +- q``, ``m = -(a + b + d) / 2``,
+    ``q = sqrt((a - b - d)^2 / 4 + a b)``, are real and <= 0, and the matrix exponential
+    is ``exp(A t) = e^{m t} (cosh(q t) I + sinh(q t) / q (A - m I))`` (Cayley-Hamilton),
+    written with ``e^{l t}`` so that nothing overflows.
+
+    Parameters
+    ----------
+    rotor_rise, housing_rise : T_r - T_env, T_h - T_env at the start [K]
+    time : t >= 0 [s]
+    rotor_heat_capacity, housing_heat_capacity : C_r, C_h [J/K], > 0
+    coupling_resistance : R_rh [K/W]; ``inf`` for none
+    environment_resistance : R_he [K/W]; ``inf`` for an adiabatic housing
+
+    >>> r, h = two_node_relaxation(10.0, 0.0, 1e9, 1.0, 1.0, 1.0, float("inf"))
+    >>> round(float(r), 12), round(float(h), 12)  # adiabatic pair: shared to 5 K each
+    (5.0, 5.0)
+    """
+    cond_rh = 1.0 / as_float(coupling_resistance)  # 1 / inf = 0: no coupling
+    cond_he = 1.0 / as_float(environment_resistance)
+    a = cond_rh / as_float(rotor_heat_capacity)
+    b = cond_rh / as_float(housing_heat_capacity)
+    d = cond_he / as_float(housing_heat_capacity)
+    m = -0.5 * (a + b + d)
+    q = np.sqrt(0.25 * (a - b - d) ** 2 + a * b)
+    t = as_float(time)
+    e1 = np.exp((m + q) * t)
+    e2 = np.exp((m - q) * t)
+    even = 0.5 * (e1 + e2)  # e^{mt} cosh(qt)
+    # e^{mt} sinh(qt) / q, and its limit t e^{mt} as q -> 0
+    small = q * t < 1e-8
+    odd = np.where(small, t * np.exp(m * t), 0.5 * (e1 - e2) / np.where(small, 1.0, q))
+    r0 = as_float(rotor_rise)
+    h0 = as_float(housing_rise)
+    # (A - m I) = [[-a - m, a], [b, -(b + d) - m]]
+    rotor = even * r0 + odd * ((-a - m) * r0 + a * h0)
+    housing = even * h0 + odd * (b * r0 + (-(b + d) - m) * h0)
+    return as_float(rotor), as_float(housing)

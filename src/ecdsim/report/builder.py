@@ -24,7 +24,7 @@ from ecdsim._version import __version__
 from ecdsim.atomic import write_text
 from ecdsim.config.errors import ConfigError
 from ecdsim.config.units import Kind
-from ecdsim.deployment import Prediction, predict
+from ecdsim.deployment import Prediction, predict, with_flight
 from ecdsim.formatting import format_number
 from ecdsim.methods import SOLVERS
 from ecdsim.model import TabulatedTemperatureLaw
@@ -61,9 +61,12 @@ def predict_config(config: Config) -> Prediction:
     """Predict a loaded configuration exactly as ``ecdsim deploy`` does.
 
     Raises :class:`~ecdsim.deployment.ModelDomainError` where the model has no meaning.
+    With ``[load.gravity]`` the flight (0 g) twin comes too (:func:`with_flight`), for the
+    side-by-side table.
     """
-    return predict(
-        config.system, config.temperatures, config.methods, dynamics=config.spec.dynamics()
+    dynamics = config.spec.dynamics()
+    return with_flight(
+        predict(config.system, config.temperatures, config.methods, dynamics=dynamics), dynamics
     )
 
 
@@ -568,6 +571,7 @@ def build_context(
         "components": components,
         "method_columns": METHOD_COLUMNS,
         "deployment": _deployment_rows(document, u),
+        "ground_test": _ground_test(document, u),
         "methods": [(m, SOLVERS[m].label) for m in document["methods"]],
         "figures": _figures(prediction, units),
         "u": u,
@@ -582,6 +586,42 @@ def build_context(
         "data_id": DATA_ELEMENT_ID,
         # "</" must not appear inside <script>; JSON allows "<\/".
         "data_json": json.dumps(data, sort_keys=True, allow_nan=False).replace("</", "<\\/"),
+    }
+
+
+def _ground_test(document: dict[str, Any], u: Shown) -> dict[str, Any] | None:
+    """Flight (0 g) against the ground test, per temperature and method; None without
+    ``[load.gravity]`` (docs/model.md, gravity in ground tests)."""
+    ground = document.get("ground_test")
+    if ground is None:
+        return None
+    rows = []
+    for case in ground["cases"]:
+        for method in document["methods"]:
+            block = case[method]
+            rel = block["relative"]
+            rows.append(
+                {
+                    "temperature": u.num(case["temperature_C"], "temperature"),
+                    "method": method,
+                    "flight": fmt(block["flight_deployment_time_s"])
+                    if block["flight_deployment_time_s"] is not None
+                    else "stalls",
+                    "test": fmt(block["test_deployment_time_s"])
+                    if block["test_deployment_time_s"] is not None
+                    else "stalls",
+                    "difference": fmt(block["test_minus_flight_s"]),
+                    "relative": "-" if rel is None else f"{100.0 * rel:+.2f}",
+                }
+            )
+    return {
+        "offload": f"{100.0 * ground['offload']:.3g}",
+        "mass": fmt(ground["mass_kg"]),
+        "radius": fmt(ground["cg_radius_m"]),
+        "release_deg": f"{np.degrees(ground['release_angle_rad']):.4g}",
+        "at_release": fmt(ground["torque_at_release_Nm"]),
+        "at_latch": fmt(ground["torque_at_latch_Nm"]),
+        "rows": rows,
     }
 
 

@@ -22,7 +22,10 @@ The resistive torques of an ECD deployment, by kind (:data:`RESISTIVE_TYPES`):
   the quasi-static model does not contain;
 * ``resistive_table``: the config's ``[load] resistive_table`` at the angle (harness,
   blanket torque against angle), which the deployment does contain: the drive is then
-  the spring torque alone, and this its own kind with its own factor.
+  the spring torque alone, and this its own kind with its own factor;
+* ``gravity``: a ground test's gravity torque ``m g r (1 - offload) sin(theta_0 + phi)``
+  where it opposes deployment (``[load.gravity]``; an aiding gravity torque is not
+  credited to the drive), its own kind with its own factor.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from numpy.typing import NDArray
 
 from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim.physics.assembly import input_speed
+from ecdsim.physics.gravity import gravity_torque
 
 RESISTIVE_TYPES = (
     "ecd_friction",
@@ -44,6 +48,7 @@ RESISTIVE_TYPES = (
     "spring",
     "harness",
     "resistive_table",
+    "gravity",
 )
 # ECSS-E-ST-33-01C has one kind for friction; ``friction`` is the factor of both Coulomb
 # kinds unless ``ecd_friction`` or ``system_friction`` is given on its own.
@@ -247,6 +252,8 @@ def margin_over_travel(
     stall_angle: ArrayLike,
     settings: MarginSettings,
     resistance: ArrayLike | None = None,
+    gravity_amplitude: ArrayLike | None = None,
+    gravity_angle: ArrayLike | None = None,
 ) -> MarginOverTravel:
     """Torque margin at every spring breakpoint and at the stall point (docs/sizing.md).
 
@@ -268,9 +275,15 @@ def margin_over_travel(
     settings : factors, allowances and damping speed
     resistance : the resistive table's torque at each breakpoint [N*m], where
         ``spring_torques`` is the net drive (spring less resistance); None without one
+    gravity_amplitude : W = m g r (1 - offload) of a ground test [N*m], None without
+        gravity; the margin is then also taken on :data:`GRAVITY_GRID` equal steps of the
+        travel (the sine is not piecewise linear), the spring interpolated there
+    gravity_angle : theta_0, the gravity term's release angle [rad]
     """
     angles = as_float(breakpoint_angles)
     torques = as_float(spring_torques)
+    if gravity_amplitude is not None:
+        angles, torques, resistance = _gravity_grid(angles, torques, resistance)
     fecd = as_float(ecd_friction)
     fs = as_float(system_friction)
     f = as_float(fecd + fs)
@@ -287,12 +300,20 @@ def margin_over_travel(
         at_stop = _interpolate_axis0(np.broadcast_to(stop_angle, batch), points, resist_at)
         resist = as_float(np.concatenate([resist_at, at_stop[None]]))
     angles = np.concatenate([angles, np.broadcast_to(stop_angle, angles.shape[1:])[None]])
-    drive = np.concatenate([torques, np.broadcast_to(f, torques.shape[1:])[None]])
+    weight = as_float(0.0)
+    at_stall = f
+    if gravity_amplitude is not None:
+        # T_g at every point (physics.gravity); at the stall the net drive less gravity
+        # equals the friction, so there the spring less resistance is F + T_g.
+        theta0 = as_float(0.0 if gravity_angle is None else gravity_angle)
+        weight = gravity_torque(angles, as_float(gravity_amplitude), theta0)
+        at_stall = as_float(f + weight[-1])
+    drive = np.concatenate([torques, np.broadcast_to(at_stall, torques.shape[1:])[None]])
     if resist is not None:
         drive = drive + resist  # the spring torque: net drive plus the resistance
     angles, drive = np.broadcast_arrays(angles, drive)
     if settings.damping_speed is None:
-        speed = input_speed(drive, f, b)
+        speed = input_speed(drive - weight, f, b)
     else:
         speed = as_float(np.full(drive.shape, settings.damping_speed))
     resistive: dict[str, FloatArray] = {
@@ -302,6 +323,8 @@ def margin_over_travel(
     }
     if resist is not None:
         resistive["resistive_table"] = as_float(np.broadcast_to(resist, drive.shape))
+    if gravity_amplitude is not None:
+        resistive["gravity"] = as_float(np.broadcast_to(np.maximum(weight, 0.0), drive.shape))
     for kind, torque in settings.allowances.items():
         resistive[kind] = as_float(np.full(drive.shape, torque))
     margin = torque_margin(drive, resistive, settings.factors)
@@ -317,6 +340,36 @@ def margin_over_travel(
         margin=margin,
         valid=valid,
     )
+
+
+# Equal steps of the travel at which the margin is also taken under gravity.
+GRAVITY_GRID = 128
+
+
+def _gravity_grid(
+    angles: FloatArray, torques: FloatArray, resistance: ArrayLike | None
+) -> tuple[FloatArray, FloatArray, FloatArray | None]:
+    """The breakpoints and GRAVITY_GRID + 1 equal steps of the travel, in order of angle,
+    with the (piecewise-linear) drive and resistance interpolated there."""
+    resist = None if resistance is None else as_float(resistance)
+    shapes = [angles.shape[1:], torques.shape[1:]]
+    if resist is not None:
+        shapes.append(resist.shape[1:])
+    batch = np.broadcast_shapes(*shapes)
+    points = np.broadcast_to(angles, (angles.shape[0], *batch))
+    travel = points[-1]
+    steps = [travel * (k / GRAVITY_GRID) for k in range(GRAVITY_GRID + 1)]
+
+    def extended(values: FloatArray) -> FloatArray:
+        full = np.broadcast_to(values, points.shape)
+        grid = [_interpolate_axis0(x, points, full) for x in steps]
+        return as_float(np.concatenate([full, np.stack(grid)]))
+
+    all_angles = as_float(np.concatenate([points, np.stack(steps)]))
+    order = np.argsort(all_angles, axis=0, kind="stable")
+    new_torques = np.take_along_axis(extended(torques), order, axis=0)
+    new_resist = None if resist is None else np.take_along_axis(extended(resist), order, axis=0)
+    return np.take_along_axis(all_angles, order, axis=0), new_torques, new_resist
 
 
 def _interpolate_axis0(x: ArrayLike, xp: ArrayLike, fp: ArrayLike) -> FloatArray:

@@ -249,6 +249,7 @@ _KIND_HEADERS = {
     "spring": "spring",
     "harness": "harness",
     "resistive_table": "resist.",
+    "gravity": "gravity",
 }
 
 

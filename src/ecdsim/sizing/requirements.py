@@ -142,6 +142,7 @@ class Requirements:
             "spring": given.spring,
             "harness": given.harness,
             "resistive_table": given.resistive_table,
+            "gravity": given.gravity,
         }
         return cls(
             temperatures=spec.all_temperatures(),

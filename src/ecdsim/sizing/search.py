@@ -269,6 +269,9 @@ def evaluate(
         stall_angle=solution.stall_angle,
         settings=requirements.margin,
         resistance=prediction.resistance,
+        # A ground test's gravity (docs/sizing.md); None in flight, as before.
+        gravity_amplitude=problem.gravity_amplitude if problem.has_gravity else None,
+        gravity_angle=problem.gravity_angle if problem.has_gravity else None,
     ).at_minimum()
     terms = TorqueMarginTerms(
         margin=full(terms.margin),

@@ -24,12 +24,19 @@ class QuasiStaticProblem:
     torques : spring torque at each breakpoint [N*m]
     friction : total resisting Coulomb torque at the input shaft, FECD_T + FS_T [N*m]
     damping_rate : BECD_T at the input shaft [N*m*s/rad]
+    gravity_amplitude : W = m g r (1 - offload), the peak gravity torque of a ground test
+        [N*m]; None (the default) for none, today's piecewise-linear problem. With it the
+        drive is ``T(phi) - W sin(theta_0 + phi)`` (docs/model.md, gravity in ground tests)
+    gravity_angle : theta_0, the release angle of the gravity term [rad]; None with no
+        ``gravity_amplitude``
     """
 
     angles: FloatArray
     torques: FloatArray
     friction: FloatArray
     damping_rate: FloatArray
+    gravity_amplitude: FloatArray | None = None
+    gravity_angle: FloatArray | None = None
 
     def __post_init__(self) -> None:
         # Right-align the batch axes of the breakpoint arrays with the scalar fields and
@@ -40,8 +47,18 @@ class QuasiStaticProblem:
         damping = np.asarray(self.damping_rate, dtype=float)
         if angles.ndim < 1 or torques.ndim < 1 or angles.shape[0] != torques.shape[0]:
             raise ValueError("angles and torques need the same number of breakpoints on axis 0")
+        gravity: tuple[FloatArray, FloatArray] | None = None
+        if self.gravity_amplitude is not None:
+            gravity = (
+                np.asarray(self.gravity_amplitude, dtype=float),
+                np.asarray(0.0 if self.gravity_angle is None else self.gravity_angle, dtype=float),
+            )
         batch = np.broadcast_shapes(
-            angles.shape[1:], torques.shape[1:], friction.shape, damping.shape
+            angles.shape[1:],
+            torques.shape[1:],
+            friction.shape,
+            damping.shape,
+            *((gravity[0].shape, gravity[1].shape) if gravity is not None else ()),
         )
         points = (angles.shape[0], *batch)
         object.__setattr__(
@@ -52,6 +69,14 @@ class QuasiStaticProblem:
         )
         object.__setattr__(self, "friction", np.broadcast_to(friction, batch))
         object.__setattr__(self, "damping_rate", np.broadcast_to(damping, batch))
+        if gravity is not None:
+            object.__setattr__(self, "gravity_amplitude", np.broadcast_to(gravity[0], batch))
+            object.__setattr__(self, "gravity_angle", np.broadcast_to(gravity[1], batch))
+
+    @property
+    def has_gravity(self) -> bool:
+        """True when some case has a gravity torque (a ground test, docs/model.md)."""
+        return self.gravity_amplitude is not None and bool(np.any(self.gravity_amplitude != 0.0))
 
     @property
     def travel(self) -> FloatArray:

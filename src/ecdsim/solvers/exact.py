@@ -21,7 +21,7 @@ from ecdsim.physics.quasistatic import (
     segment_duration,
     segment_speed,
 )
-from ecdsim.solvers import exact_kernel
+from ecdsim.solvers import exact_gravity, exact_kernel
 from ecdsim.solvers.base import (
     DeploymentSolution,
     QuasiStaticProblem,
@@ -65,6 +65,8 @@ class ExactMethod:
         what is installed (:func:`ecdsim.solvers.exact_kernel.choose`). The fast kernels
         compute the same function as :meth:`solve_reference` (tests/test_exact_kernel.py).
         """
+        if problem.has_gravity:  # not piecewise linear: the quadrature path (docs/model.md)
+            return exact_gravity.solve(problem, self.name)
         chosen = kernel or exact_kernel.choose(int(np.prod(problem.batch_shape, dtype=np.int64)))
         if chosen == "reference":
             return self.solve_reference(problem)
@@ -84,6 +86,8 @@ class ExactMethod:
 
     def solve_reference(self, problem: QuasiStaticProblem) -> DeploymentSolution:
         """:meth:`solve` by the reference implementation: whole-batch NumPy, for clarity."""
+        if problem.has_gravity:
+            return exact_gravity.solve(problem, self.name)
         problem, undamped = undamped_cases(problem)
         return mark_unsolved(self._solve(problem), undamped)
 
@@ -109,6 +113,8 @@ class ExactMethod:
 
         A case with no damping (not solved, see :meth:`solve`) stays at 0.
         """
+        if problem.has_gravity:
+            return exact_gravity.trajectory(problem, times, self.name)
         problem, undamped = undamped_cases(problem)
         path = self._trajectory(problem, times)
         if not np.any(undamped):

@@ -18,7 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim.physics.gravity import gravity_torque
 from ecdsim.physics.quasistatic import locate_stall
+from ecdsim.solvers import exact_gravity
 from ecdsim.solvers.base import (
     DeploymentSolution,
     QuasiStaticProblem,
@@ -130,9 +132,24 @@ class PaperMethod:
 
     def _solve(self, problem: QuasiStaticProblem) -> DeploymentSolution:
         shape = problem.batch_shape
-        stalled, stall_angle = locate_stall(problem.angles, problem.net_torques)
-        omega_s = start_speed(problem.torques[0], problem.friction, problem.damping_rate)
-        omega_e = end_speed(problem.torques[-1], problem.friction, problem.damping_rate)
+        start_torque, end_torque = problem.torques[0], problem.torques[-1]
+        if problem.has_gravity:
+            # Eq. 8-9 with the end-point torques less gravity there; the stall and the
+            # peak are the load's, found as the exact method finds them (docs/model.md).
+            assert problem.gravity_amplitude is not None
+            assert problem.gravity_angle is not None
+            start_torque = start_torque - gravity_torque(
+                0.0, problem.gravity_amplitude, problem.gravity_angle
+            )
+            end_torque = end_torque - gravity_torque(
+                problem.travel, problem.gravity_amplitude, problem.gravity_angle
+            )
+            stalled, stall_angle, peak = exact_gravity.stall_and_peak(problem)
+        else:
+            stalled, stall_angle = locate_stall(problem.angles, problem.net_torques)
+            peak = problem.peak_speed_reached(stalled, stall_angle)
+        omega_s = start_speed(start_torque, problem.friction, problem.damping_rate)
+        omega_e = end_speed(end_torque, problem.friction, problem.damping_rate)
         omega_bar = mean_speed(omega_s, omega_e)
         safe_mean = np.where(stalled | (omega_bar <= 0.0), 1.0, omega_bar)
         delta_t = np.where(stalled, np.inf, deployment_time(problem.travel, safe_mean))
@@ -143,7 +160,7 @@ class PaperMethod:
             end_speed=np.broadcast_to(np.where(stalled, 0.0, omega_e), shape).astype(float),
             # The linear-range check is physical, not the method's: the peak speed is taken
             # over every breakpoint (a tabulated spring may peak mid-travel), as in exact.
-            max_speed=problem.peak_speed_reached(stalled, stall_angle),
+            max_speed=peak,
             stalled=np.broadcast_to(stalled, shape).copy(),
             stall_angle=np.broadcast_to(stall_angle, shape).astype(float),
         )

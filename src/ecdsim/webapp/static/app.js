@@ -381,6 +381,7 @@ function render() {
   Plotly.react("sweep-plot", sweep,
     layout(`Deployment time against temperature${suffix}`, `temperature [${label("temperature")}]`, "deployment time [s]"), PLOT_CONFIG);
   renderTable(doc, pinned ? pinned.response.prediction : null);
+  renderGroundTest(doc);
   renderMethodsNote(doc.methods);
   const warnings = document.getElementById("warnings");
   warnings.innerHTML = "";
@@ -391,6 +392,38 @@ function render() {
   }
   document.getElementById("timing").textContent = `Last computation ${sig(body.compute_ms, 3)} ms on the server.`;
   renderCompareSummary();
+}
+
+// With [load.gravity]: flight (0 g) against the ground test as configured (docs/model.md).
+function renderGroundTest(doc) {
+  const box = document.getElementById("ground-test");
+  const ground = doc.ground_test;
+  box.hidden = !ground;
+  if (!ground) return;
+  const offload = sig(100 * ground.offload, 3);
+  document.getElementById("ground-test-heading").textContent =
+    `Flight (0 g) against ground test (1 g, ${offload} % offloaded)`;
+  document.getElementById("ground-test-note").textContent =
+    `The results above are the ground test as configured: ${sig(ground.mass_kg)} kg at ` +
+    `${sig(ground.cg_radius_m)} m from the hinge, ${offload} % of the weight offloaded. ` +
+    `Gravity torque m g r (1 - offload) sin(theta_0 + phi), positive opposing deployment: ` +
+    `${sig(ground.torque_at_release_Nm, 4)} N*m at release, ${sig(ground.torque_at_latch_Nm, 4)} N*m at the latch.`;
+  const tl = label("temperature");
+  document.querySelector("#ground-table thead").innerHTML =
+    `<tr><th scope="col">T [${tl}]</th><th scope="col">method</th><th scope="col">flight t [s]</th>` +
+    '<th scope="col">test t [s]</th><th scope="col">test - flight [s]</th><th scope="col">rel. [%]</th></tr>';
+  const text = (v) => (v === null || v === undefined ? "stalls" : sig(v));
+  document.querySelector("#ground-table tbody").innerHTML = ground.cases.map((c, i) =>
+    doc.methods.map((m) => {
+      const b = c[m];
+      const d = b.test_minus_flight_s;
+      const rel = b.relative === null ? "-" : (b.relative > 0 ? "+" : "") + (100 * b.relative).toFixed(1);
+      return `<tr><th scope="row" class="num">${sig(show("temperature", c.temperature_C))}</th><td>${escapeHtml(m)}</td>` +
+        `<td class="num" data-case="${i}" data-ground-key="${m}.flight">${text(b.flight_deployment_time_s)}</td>` +
+        `<td class="num" data-case="${i}" data-ground-key="${m}.test">${text(b.test_deployment_time_s)}</td>` +
+        `<td class="num" data-case="${i}" data-ground-key="${m}.difference">${d === null ? "-" : (d > 0 ? "+" : "") + sig(d, 4)}</td>` +
+        `<td class="num">${rel}</td></tr>`;
+    }).join("")).join("");
 }
 
 function renderMethodsNote(methods) {

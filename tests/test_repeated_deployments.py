@@ -1,0 +1,130 @@
+"""Repeated deployments with cool-down and stow (issue 16, item 6; the paper's life test).
+
+References: the relaxation between deployments as two exponentials written here by hand,
+and the second deployment against the Radau rtol 1e-12 reference of
+tests/test_two_node_heating.py started from those temperatures.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from ecdsim.deployment import predict
+from ecdsim.dynamics import DynamicParameters, DynamicResult, Thermal
+from ecdsim.dynamics.method import DynamicSolution
+from ecdsim.dynamics.sequence import Cycle, run_sequence
+from tests.conftest import paper_system
+from tests.test_two_node_heating import two_node_deploy
+
+C_R, R_RH, C_H, R_HE = 0.002, 40.0, 0.2, 200.0  # rotor, rotor-housing, housing, mount
+TEMPS = np.array([25.0, -40.0])
+
+
+def _solve(params: DynamicParameters) -> DynamicResult:
+    solution = predict(paper_system(), TEMPS, ["dynamic"], dynamics=params).solutions["dynamic"]
+    assert isinstance(solution, DynamicSolution)
+    return solution.result
+
+
+def _params(thermal: Thermal | None, rtol: float = 1e-8) -> DynamicParameters:
+    return DynamicParameters(load_inertia=1.0, thermal=thermal, rtol=rtol)
+
+
+def relaxed(rotor: float, housing: float, t: float) -> tuple[float, float]:
+    """theta(t) = exp(A t) theta0 by hand: A = [[-a, a], [b, -(b + d)]] (the two-node
+    network without power), eigenvalues l from l^2 + (a + b + d) l + a d = 0,
+    eigenvectors (a, l + a), theta = k1 v1 e^{l1 t} + k2 v2 e^{l2 t}."""
+    a, b, d = 1.0 / (R_RH * C_R), 1.0 / (R_RH * C_H), 1.0 / (R_HE * C_H)
+    tr = a + b + d
+    root = math.sqrt(tr * tr / 4.0 - a * d)
+    l1, l2 = -tr / 2.0 + root, -tr / 2.0 - root
+    k2 = (housing - rotor * (l1 + a) / a) / (l2 - l1)
+    k1 = rotor / a - k2
+    e1, e2 = math.exp(l1 * t), math.exp(l2 * t)
+    return k1 * a * e1 + k2 * a * e2, k1 * (l1 + a) * e1 + k2 * (l2 + a) * e2
+
+
+def test_without_heating_there_is_no_drift() -> None:
+    result = run_sequence(_solve, _params(None), TEMPS, Cycle(500, 60.0, 30.0))
+    assert result.deployment_time.shape == (500, 2)
+    assert np.all(result.drift()["deployment_time_s"] == 0.0)
+    assert np.all(result.deployment_time == result.deployment_time[0])
+    assert np.all(result.start_rotor_temperature == TEMPS)
+    assert result.periodic_after == [1, 1]
+
+
+def test_a_long_cool_down_makes_every_deployment_the_first() -> None:
+    # 1e6 s against time constants below 30 s: exp(-1e6 / 30) is 0 in floating point,
+    # so each deployment starts exactly at T, as the first did.
+    thermal = Thermal(C_R, R_RH, C_H, R_HE)
+    result = run_sequence(_solve, _params(thermal), TEMPS, Cycle(20, 1e6, 0.0))
+    first = _solve(_params(thermal))
+    assert np.array_equal(result.deployment_time, np.tile(first.deployment_time, (20, 1)))
+    assert np.array_equal(result.start_rotor_temperature, np.tile(TEMPS, (20, 1)))
+    assert np.array_equal(
+        result.peak_rotor_temperature, np.tile(first.max_damper_temperature, (20, 1))
+    )
+    assert np.all(result.drift()["deployment_time_s"] == 0.0)
+    assert result.periodic_after == [1, 1]
+
+
+def test_two_deployments_by_hand() -> None:
+    # Deployment 1 from T; the rotor and housing relax for cool-down + stow = 8 s (the
+    # two exponentials above); deployment 2 starts there: its start temperatures are the
+    # hand relaxation and its course is the Radau reference started from them.
+    thermal = Thermal(C_R, R_RH, C_H, R_HE)
+    result = run_sequence(_solve, _params(thermal, rtol=1e-10), TEMPS, Cycle(2, 5.0, 3.0))
+    assert result.start_housing_temperature is not None
+    assert result.end_housing_temperature is not None
+    for j, temp in enumerate(TEMPS):
+        rotor1 = result.end_rotor_temperature[0, j] - temp
+        housing1 = result.end_housing_temperature[0, j] - temp
+        rotor2, housing2 = relaxed(rotor1, housing1, 8.0)
+        assert housing2 > 0.5  # heat is carried over: the case tests something
+        # The closed forms agree to rounding (relative 1e-13 of the ~K rises).
+        assert result.start_rotor_temperature[1, j] == pytest.approx(temp + rotor2, abs=1e-11)
+        assert result.start_housing_temperature[1, j] == pytest.approx(temp + housing2, abs=1e-11)
+        ref = two_node_deploy(temp, 1.0, C_R, R_RH, C_H, R_HE, start=(rotor2, housing2))
+        # rtol 1e-10 against the rtol 1e-12 reference: a few 1e-10 of global error.
+        assert result.deployment_time[1, j] == pytest.approx(ref.time, rel=1e-8)
+        assert result.peak_rotor_temperature[1, j] == pytest.approx(ref.max_rotor, abs=1e-7)
+        # The warmer damper damps less (Eq. 1): deployment 2 is faster.
+        assert result.deployment_time[1, j] < result.deployment_time[0, j]
+
+
+def test_a_short_cool_down_drifts_to_a_periodic_state() -> None:
+    thermal = Thermal(C_R, R_RH, C_H, R_HE)
+    cycle = Cycle(40, 5.0, 3.0)
+    result = run_sequence(_solve, _params(thermal), TEMPS, cycle)
+    drift = result.drift()
+    assert np.all(drift["start_rotor_temperature_K"] > 0.0)
+    assert np.all(drift["deployment_time_s"] < 0.0)
+    assert all(k is not None and 1 < k < 40 for k in result.periodic_after)
+    # In the periodic state the last deployment's end, relaxed over the interval, is its
+    # own start again (to the periodic tolerance of 1e-3 K).
+    assert result.end_housing_temperature is not None
+    assert result.start_housing_temperature is not None
+    for j, temp in enumerate(TEMPS):
+        rotor, housing = relaxed(
+            result.end_rotor_temperature[-1, j] - temp,
+            result.end_housing_temperature[-1, j] - temp,
+            cycle.interval,
+        )
+        assert rotor + temp == pytest.approx(result.start_rotor_temperature[-1, j], abs=1e-3)
+        assert housing + temp == pytest.approx(result.start_housing_temperature[-1, j], abs=1e-3)
+    document = json.loads(json.dumps(result.to_dict()))
+    assert document["count"] == 40
+    assert len(document["cases"][0]["deployments"]["deployment_time_s"]) == 40
+
+
+@pytest.mark.parametrize(
+    ("count", "cool_down", "stow", "message"),
+    [(0, 1.0, 0.0, "count"), (3, -1.0, 0.0, "cool_down"), (3, 1.0, math.inf, "stow_time")],
+)
+def test_bad_cycle(count: int, cool_down: float, stow: float, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        Cycle(count, cool_down, stow)
