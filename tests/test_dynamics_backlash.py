@@ -513,3 +513,24 @@ def test_a_speed_jump_at_the_stop_releases_a_pressing_mesh() -> None:
     assert mesh is not None
     assert float(mesh) > 0.0
     assert_energy_closes(result, 1e-8)
+
+
+def test_time_series_follow_the_load(bouncing: DynamicResult) -> None:
+    """The sampled angle and speed are the load's, from the recorded steps: at each event
+    time they are the event's (to the dense output's cubic interpolation), and the run ends
+    on the travel with the arrival speed."""
+    events = bouncing.events
+    times = np.asarray(events.time, dtype=float)
+    inside = times[(times > 0.0) & (times < float(bouncing.deployment_time))]
+    series = bouncing.sample(np.concatenate([inside, [float(bouncing.deployment_time)]]))
+    angle = np.ravel(series.angle)
+    chosen = (times > 0.0) & (times < float(bouncing.deployment_time))
+    # An event's state starts the next step: the series holds it exactly there.
+    assert angle[:-1] == pytest.approx(np.asarray(events.angle)[chosen], rel=1e-12)
+    # At the arrival the series holds the final state: the travel and the arrival speed.
+    assert angle[-1] == pytest.approx(1.5, rel=1e-12)
+    assert float(np.ravel(series.speed)[-1]) == pytest.approx(
+        float(bouncing.arrival_speed), rel=1e-12
+    )
+    frame = bouncing.to_pandas("events")
+    assert set(frame["kind"]) >= {"engage", "separate", "contact", "arrive", "latch"}
