@@ -736,6 +736,7 @@ def stribeck() -> CaseResult:
 BACKLASH_LOST_MOTION_DEG = 0.25
 BACKLASH_STIFFNESS = 2e3  # [N*m/rad]
 BACKLASH_DAMPING = 0.5  # [N*m*s/rad]
+BACKLASH_UNTIL = 10.0  # [s] the mesh's dissipation is compared up to here
 
 
 def compliant_backlash() -> CaseResult:
@@ -754,6 +755,10 @@ def compliant_backlash() -> CaseResult:
     assert dynamics.gear_stiffness == BACKLASH_STIFFNESS
     temps = [-40.0, 25.0, 100.0]
     result = _dynamic_result(predict(config.system, temps, ["dynamic"], dynamics=dynamics))
+    # The mesh's dissipation to 10 s, before any arrival (the run goes on after the latch,
+    # where the damper side overruns the held load).
+    early = replace(dynamics, stop_time=BACKLASH_UNTIL)
+    part = _dynamic_result(predict(config.system, temps, ["dynamic"], dynamics=early))
     damper_inertia = 2e-7 * 380.0**2  # the example's rotor reflected, as elsewhere
     system = PaperSystem()
     checks: list[Check] = []
@@ -767,14 +772,23 @@ def compliant_backlash() -> CaseResult:
             BACKLASH_DAMPING,
             math.radians(BACKLASH_LOST_MOTION_DEG),
         )
+        _, _, _, mesh = system.compliant_time(
+            temp,
+            5.0,
+            damper_inertia,
+            BACKLASH_STIFFNESS,
+            BACKLASH_DAMPING,
+            math.radians(BACKLASH_LOST_MOTION_DEG),
+            until=BACKLASH_UNTIL,
+        )
         label = "scipy Radau rtol 1e-12"
-        mesh_value = result.energy.mesh_dissipation
+        mesh_value = part.energy.mesh_dissipation
         assert mesh_value is not None
         for quantity, unit, reference, value in (
             ("engagement time", "s", engage, result.engagement_time[i]),
             ("deployment time", "s", time, result.deployment_time[i]),
             ("arrival speed", "rad/s", speed, result.arrival_speed[i]),
-            ("mesh dissipation", "J", mesh, mesh_value[i]),
+            (f"mesh dissipation to {BACKLASH_UNTIL:g} s", "J", mesh, mesh_value[i]),
         ):
             checks.append(
                 Check(

@@ -234,9 +234,12 @@ class PaperSystem:
         stiffness: float,
         damping: float,
         lost_motion: float,
+        until: float = math.inf,
     ) -> tuple[float, float, float, float]:
         """Engagement time [s], deployment time [s], arrival speed [rad/s] and the mesh's
-        dissipation [J] with a compliant mesh behind the lost motion, from rest.
+        dissipation [J] with a compliant mesh behind the lost motion, from rest; with
+        ``until`` [s] before the arrival, the time and speed are nan and the dissipation is
+        that up to ``until``.
 
         Two bodies (the MSL's ElastoBacklash between them, docs/model.md): the load
         ``J_L w_L' = T(phi_L) - FS_T - tau`` and the damper side
@@ -285,8 +288,16 @@ class PaperSystem:
         )
         for phase, events in phases:
             sol = solve_ivp(
-                rhs(phase), (t, t + 1e4), y, method="Radau", events=events, rtol=RTOL, atol=ATOL
+                rhs(phase),
+                (t, min(t + 1e4, until)),
+                y,
+                method="Radau",
+                events=events,
+                rtol=RTOL,
+                atol=ATOL,
             )
+            if sol.status == 0 and until < math.inf:
+                return engage, math.nan, math.nan, float(sol.y[4, -1])
             hit = [i for i, times in enumerate(sol.t_events) if len(times)]
             assert sol.status == 1, "the reference did not reach an event"
             assert hit[0] in (0, 1), "the damper side stopped or the contact opened"

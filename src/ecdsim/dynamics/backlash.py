@@ -25,7 +25,9 @@ accuracy. Within a segment every term is smooth; the events change the mode:
   that of the flank), released (past the flank, but the limited torque is zero: the
   flanks separate faster than the mesh relaxes);
 - each body: sliding forward, backward, or stuck (friction holds up to its breakaway);
-- the load's spring piece: breakpoints, the end of travel, the start of travel.
+- the load's spring piece: breakpoints, the end of travel, the start of travel (a latch
+  holds the load and the run goes on until the damper side, overrunning it through the
+  backlash, has come to rest).
 
 Contact changes follow Modelica's rule with no extra threshold: a linear spring-damper
 contact lasts about half a period of the two-inertia mode whatever the impact speed, so
@@ -106,6 +108,7 @@ class _Mode:
     side: int  # flank of PRESS / RELEASED: +1 forward (load drives), -1 backward
     piece: int  # the load's spring piece
     at_start: bool = False  # load held against the start stop
+    held: str = ""  # "latched" or "settled": the load is held at the end of travel
 
 
 @dataclass
@@ -128,6 +131,8 @@ class _Run:
     spring_work: float = 0.0
     friction_work: float = 0.0
     impact_loss: float = 0.0
+    max_mesh_torque: float = 0.0  # largest |tau| at the steps and events [N*m]
+    latch_mesh_torque: float = 0.0  # the same once the load is held at the end [N*m]
     events: list[tuple[float, int, float, float]] = field(default_factory=list)
     times: list[float] = field(default_factory=list)
     states: list[FloatArray] = field(default_factory=list)
@@ -238,7 +243,7 @@ def _events(case: _Case, mode: _Mode, y: FloatArray) -> FloatArray:
         g[_END] = phi - case.angles[mode.piece]
     if mode.load:
         g[_LOAD_ZERO] = mode.load * w_l
-    else:
+    elif not mode.held:
         net = _spring(case, mode.piece, phi)[0] - tau
         limit = case.load_static * (1.0 + _STICK_MARGIN)
         g[_LOAD_BREAK] = limit - (net if mode.at_start else abs(net))
@@ -488,7 +493,10 @@ def _solve_case(case: _Case, record: bool) -> _Run:
         run.slopes.append(f.copy())
     while run.status == "running":
         if mode.load == 0 and mode.damper == 0:
-            _finish_stuck(case, run, y)
+            if mode.held:
+                run.status = mode.held  # the damper side has come to rest too
+            else:
+                _finish_stuck(case, run, y)
             break
         if events >= case.max_events:
             run.status = "event_limit"
@@ -536,12 +544,17 @@ def _solve_case(case: _Case, record: bool) -> _Run:
         y[:] = y1
         run.y = y
         f = f1
+        _track_torque(case, mode, y, run)
         if not math.isfinite(run.arrival_time):
             run.max_speed = max(run.max_speed, float(y[1]))
         if code < 0:
             h *= min(5.0, max(0.2, 0.9 * max(norm, 1e-10) ** -0.25))
             if _creeping(case, mode, y):
-                _finish_creep(case, run, y)
+                if mode.held:
+                    y[3] = 0.0
+                    run.status = mode.held
+                else:
+                    _finish_creep(case, run, y)
             continue
         events += 1
         _apply(case, mode, y, code, run, hint)
@@ -553,6 +566,15 @@ def _solve_case(case: _Case, record: bool) -> _Run:
                 run.states.append(y.copy())
                 run.slopes.append(f.copy())
     return run
+
+
+def _track_torque(case: _Case, mode: _Mode, y: FloatArray, run: _Run) -> None:
+    """The largest mesh torque, at the accepted steps and the events (where the peak of
+    an undamped contact lies: the damper side's zero speed)."""
+    torque = abs(_mesh(case, mode, float(y[2]), float(y[1] - y[3]))[0])
+    run.max_mesh_torque = max(run.max_mesh_torque, torque)
+    if mode.held:
+        run.latch_mesh_torque = max(run.latch_mesh_torque, torque)
 
 
 def _account_part(case: _Case, mode: _Mode, run: _Run, y0: FloatArray, y1: FloatArray) -> None:
@@ -573,7 +595,7 @@ def _creeping(case: _Case, mode: _Mode, y: FloatArray) -> bool:
     if abs(y[1]) > threshold or abs(y[3]) > threshold:
         return False
     tau = _mesh(case, mode, float(y[2]), 0.0)[0]
-    net = _spring(case, mode.piece, float(y[0]))[0] - tau
+    net = 0.0 if mode.held else _spring(case, mode.piece, float(y[0]))[0] - tau
     # A sliding body creeps towards where its torques balance its kinetic friction, at
     # most its breakaway; at these speeds the damping is CREEP_FRACTION of the drive.
     slack = 1e3 * CREEP_FRACTION * case.torque_scale
@@ -656,7 +678,7 @@ def _recheck(case: _Case, mode: _Mode, y: FloatArray, run: _Run) -> None:
     (Its breakaway event function would start already negative, which no root finder
     sees: e.g. the mesh's damping torque d w_rel acting at once when the flanks meet.)
     """
-    if mode.load == 0:
+    if mode.load == 0 and not mode.held:
         net = _load_net(case, mode, y)
         beyond = (net if mode.at_start else abs(net)) > case.load_static * (1.0 + _STICK_MARGIN)
         if beyond:
@@ -700,10 +722,19 @@ def _arrive(case: _Case, mode: _Mode, y: FloatArray, run: _Run) -> None:
     if not math.isfinite(run.arrival_time):
         run.arrival_time, run.arrival_speed, run.arrival_ke = run.t, float(y[1]), ke
     if case.restitution <= 0.0:
-        run.status = "latched"
         run.log("latch")
+        _hold(case, mode, y, run, "latched")
         return
     _rebound(case, mode, y, run, 0.5 * case.load_inertia * y[1] ** 2, arriving=True)
+
+
+def _hold(case: _Case, mode: _Mode, y: FloatArray, run: _Run, how: str) -> None:
+    """The load is held at the end of travel (latch, or rebounds settled); the damper side
+    turns on through the mesh until it comes to rest, overrunning the load across the gap
+    (the latch takes the load's kinetic energy, booked as impact loss)."""
+    run.impact_loss += 0.5 * case.load_inertia * float(y[1]) ** 2
+    y[1] = 0.0
+    mode.load, mode.at_start, mode.held = 0, False, how
 
 
 def _rebound(case: _Case, mode: _Mode, y: FloatArray, run: _Run, ke: float, arriving: bool) -> None:
@@ -720,8 +751,8 @@ def _rebound(case: _Case, mode: _Mode, y: FloatArray, run: _Run, ke: float, arri
     if settle:
         y[1] = 0.0
         if arriving:
-            run.status = "settled"
             run.log("settle")
+            _hold(case, mode, y, run, "settled")
         else:
             _set_load_mode(case, mode, y, run)
         return
@@ -980,6 +1011,8 @@ def solve_compliant(problem: DynamicProblem, record: bool = True) -> DynamicResu
         energy=energy,
         events=log,
         trajectory=trajectory,
+        max_mesh_torque=arr([r.max_mesh_torque for r in runs]),
+        latch_mesh_torque=arr([r.latch_mesh_torque for r in runs]),
     )
 
 

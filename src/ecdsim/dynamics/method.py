@@ -87,7 +87,11 @@ class DynamicSolution(DeploymentSolution):
             "impacts",
             "energy_J",
         )
-        return {key: summary[key] for key in keys}
+        fields = {key: summary[key] for key in keys}
+        for key in ("max_mesh_torque_Nm", "latch_mesh_torque_Nm"):  # compliant backlash only
+            if key in summary:
+                fields[key] = summary[key]
+        return fields
 
     def time_series_csv(self) -> str:
         """The time series, one block per case (:meth:`DynamicResult.timeseries_csv`)."""

@@ -272,6 +272,10 @@ class DynamicResult:
     trajectory : recorded segments for time series (None if not recorded)
     final_housing_temperature : the housing's temperature at the end of the run with
         two-node heating [degC]; None with one node or none
+    max_mesh_torque : compliant backlash only: the largest torque through the gear mesh
+        over the run (engagement impacts included) [N*m]; None for a rigid mesh
+    latch_mesh_torque : compliant backlash only: the largest mesh torque once the load is
+        held at the end of travel, as the damper side overruns it [N*m]
     """
 
     batch_shape: tuple[int, ...]
@@ -296,6 +300,8 @@ class DynamicResult:
     events: EventLog
     trajectory: TrajectoryData | None
     final_housing_temperature: FloatArray | None = None
+    max_mesh_torque: FloatArray | None = None
+    latch_mesh_torque: FloatArray | None = None
 
     @property
     def size(self) -> int:
@@ -430,6 +436,14 @@ class DynamicResult:
                 ),
             },
             "energy_balance_error": at(e.error),
+            **(
+                {}
+                if self.max_mesh_torque is None or self.latch_mesh_torque is None
+                else {
+                    "max_mesh_torque_Nm": at(self.max_mesh_torque),
+                    "latch_mesh_torque_Nm": at(self.latch_mesh_torque),
+                }
+            ),
         }
 
     def to_dict(self, events: bool = True) -> dict[str, Any]:
