@@ -366,6 +366,24 @@ def test_unsupported_combinations_name_the_key() -> None:
             ["dynamic"],
             dynamics=DynamicParameters(load_inertia=5.0, gear_stiffness=1e4),
         )
+    # Beyond a 1e7 rad/s mode (or 1e7 1/s damping rate) the mesh is the rigid one: here
+    # sqrt(1e13 (1/5 + 1/0.03)) = 1.8e7 rad/s, and 4e5 (1/5 + 1/0.03) = 1.3e7 1/s.
+    with pytest.raises(ModelDomainError, match="gearbox.stiffness.*natural frequency"):
+        predict(
+            system,
+            25.0,
+            ["dynamic"],
+            dynamics=DynamicParameters(load_inertia=5.0, rotor_inertia=0.03, gear_stiffness=1e13),
+        )
+    with pytest.raises(ModelDomainError, match="gearbox.mesh_damping.*damping rate"):
+        predict(
+            system,
+            25.0,
+            ["dynamic"],
+            dynamics=DynamicParameters(
+                load_inertia=5.0, rotor_inertia=0.03, gear_stiffness=1e4, gear_mesh_damping=4e5
+            ),
+        )
 
 
 def test_creep_to_the_static_equilibrium_by_hand() -> None:

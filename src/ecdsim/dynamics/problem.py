@@ -50,6 +50,12 @@ _CASE_FIELDS = (
 )
 
 
+# The compliant mesh's two-inertia mode above this [rad/s] (a period under 60 ns), or its
+# damping rate above it [1/s], is refused: every contact would be a swarm of events and
+# steps, and the rigid model is its limit (docs/dynamics.md, the error falls as 1/c).
+MAX_MESH_FREQUENCY = 1e7
+
+
 class DynamicDomainError(ValueError):
     """A dynamic parameter outside its domain; ``key`` names the config field."""
 
@@ -316,6 +322,30 @@ def _check_compliant(params: DynamicParameters, damper_inertia: FloatArray) -> N
             "gearbox.stiffness",
             "needs a damper-side inertia: give [damper] rotor_inertia or [gearbox] inertia "
             "> 0 kg*m^2 (a massless damper side behind a compliant mesh has no dynamics)",
+        )
+    jd = np.asarray(damper_inertia, dtype=float)
+    frequency = np.sqrt(
+        np.asarray(params.gear_stiffness, dtype=float)
+        * (1.0 / np.asarray(params.load_inertia, dtype=float) + 1.0 / jd)
+    )
+    damping = 0.0 if params.gear_mesh_damping is None else params.gear_mesh_damping
+    rate = np.asarray(damping, dtype=float) * (
+        1.0 / np.asarray(params.load_inertia, dtype=float) + 1.0 / jd
+    )
+    if np.any(rate > MAX_MESH_FREQUENCY):
+        raise DynamicDomainError(
+            "gearbox.mesh_damping",
+            f"the mesh's damping rate d (1/J_L + 1/J_D) is {float(np.max(rate)):.3g} 1/s, "
+            f"above {MAX_MESH_FREQUENCY:.0e} 1/s: a mesh that damped locks the flanks "
+            "together, rigid for this model (omit stiffness for the rigid mesh)",
+        )
+    if np.any(frequency > MAX_MESH_FREQUENCY):
+        raise DynamicDomainError(
+            "gearbox.stiffness",
+            f"the mesh's natural frequency sqrt(c (1/J_L + 1/J_D)) is "
+            f"{float(np.max(frequency)):.3g} rad/s, above {MAX_MESH_FREQUENCY:.0e} rad/s: "
+            "a mesh that stiff is rigid for this model (omit the key for the rigid mesh, "
+            "its limit)",
         )
 
 
