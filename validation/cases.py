@@ -37,7 +37,9 @@ from ecdsim.model import (
 )
 from validation.checks import CaseResult, Check
 from validation.scipy_reference import (
+    GRAVITY,
     RESISTIVE_ROWS,
+    GroundTestPaperSystem,
     PaperSystem,
     ResistedPaperSystem,
     SpinDown,
@@ -72,6 +74,12 @@ INTEGRATED_REASON = (
 # Linear segments are solved in closed form, exact to rounding; the scipy reference at
 # rtol 1e-12 carries about 1e-11 relative error of its own.
 CLOSED_FORM_RTOL = 1e-9
+# The exact method with gravity integrates by adaptive Gauss-Kronrod to a stated 1e-9.
+GRAVITY_RTOL = 1e-9
+GRAVITY_REASON = (
+    "1e-9 relative: the stated accuracy of ecdsim's adaptive quadrature "
+    "(solvers/exact_gravity.py); the scipy reference is integrated at rtol 1e-12"
+)
 CLOSED_FORM_REASON = (
     "1e-9 relative: ecdsim's closed form is exact to rounding, the scipy reference is "
     "integrated at rtol 1e-12"
@@ -729,6 +737,62 @@ def stribeck() -> CaseResult:
     )
 
 
+def gravity_ground_test() -> CaseResult:
+    """A 1 g ground test with offload (issue 16 item 2) by the exact and paper methods."""
+    source = EXAMPLES / "paper_cc16.toml"
+    g = GRAVITY
+    section = (
+        f'\n[load.gravity]\nmass = "{g["mass"]} kg"\ncg_radius = "{g["cg_radius"]} m"\n'
+        f'release_angle = "{g["release_angle"]!r} rad"\noffload = "{g["offload"]}"\n'
+    )
+    config = parse_config(source.read_text() + section, str(source) + " + [load.gravity]")
+    temps = [-40.0, 25.0, 100.0]
+    found = predict(config.system, temps, ["paper", "exact"])
+    system = GroundTestPaperSystem()
+    checks: list[Check] = []
+    for i, temp in enumerate(temps):
+        at = f"at {temp:+g} degC"
+        exact_time = system.quasi_static_time(temp)
+        checks.append(
+            Check(
+                f"exact-method time in the ground test {at}",
+                "s",
+                exact_time,
+                "scipy DOP853 rtol 1e-12 of Eq. 5, spring less gravity",
+                float(found.solutions["exact"].deployment_time[i]),
+                _relative(exact_time, GRAVITY_RTOL),
+                GRAVITY_REASON,
+            )
+        )
+        paper_time = system.paper_time(temp)
+        checks.append(
+            Check(
+                f"paper-method time in the ground test {at}",
+                "s",
+                paper_time,
+                "Eq. 8-11 with the end torques less gravity, in plain floats",
+                float(found.solutions["paper"].deployment_time[i]),
+                _relative(paper_time, 1e-12),
+                "1e-12 relative: the same arithmetic in another order",
+            )
+        )
+    return CaseResult(
+        name="gravity_ground_test",
+        title="A 1 g ground test with 90 % offload on the paper's example",
+        source=(
+            "the paper's constants typed in plain Python with the gravity torque "
+            "m g r (1 - offload) sin(theta_0 + phi) written out "
+            "(`validation/scipy_reference.py`, GroundTestPaperSystem), integrated with scipy"
+        ),
+        mapping=(
+            "`examples/paper_cc16.toml` with `[load.gravity]` mass 1.2 kg, cg_radius 0.3 m, "
+            "release_angle -60 deg, offload 0.9 (ILLUSTRATIVE values: gravity aids at "
+            "release and opposes at the latch)."
+        ),
+        checks=tuple(checks),
+    )
+
+
 CASES: tuple[Callable[[], CaseResult], ...] = (
     msl_eddy_current_brake,
     msl_damper,
@@ -738,6 +802,7 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     paper_heating_limit,
     resistive_table,
     stribeck,
+    gravity_ground_test,
 )
 
 

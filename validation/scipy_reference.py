@@ -257,3 +257,33 @@ class ResistedPaperSystem(PaperSystem):
         angles = [a for a, _ in RESISTIVE_ROWS]
         torques = [r for _, r in RESISTIVE_ROWS]
         return super().spring(angle) - float(np.interp(angle, angles, torques))
+
+
+# The ground test of validation case "gravity_ground_test" (ILLUSTRATIVE values): the
+# deployed mass [kg], its CG radius from the hinge [m], the release angle from the
+# downward vertical [rad] and the offloaded fraction of the weight [-].
+GRAVITY = {"mass": 1.2, "cg_radius": 0.3, "release_angle": -math.pi / 3, "offload": 0.9}
+STANDARD_GRAVITY = 9.80665  # m/s^2 (CGPM 1901), typed here on its own
+
+
+@dataclass(frozen=True)
+class GroundTestPaperSystem(PaperSystem):
+    """The paper's system in a 1 g ground test: Eq. 7 less m g r (1 - offload) sin(theta_0 + phi)
+    (rigid-body statics: the weight's moment about the hinge, opposing deployment positive)."""
+
+    def gravity(self, angle: float) -> float:
+        """The gravity torque about the hinge [N*m], opposing deployment positive."""
+        g = GRAVITY
+        weight = g["mass"] * STANDARD_GRAVITY * g["cg_radius"] * (1.0 - g["offload"])
+        return weight * math.sin(g["release_angle"] + angle)
+
+    def spring(self, angle: float) -> float:
+        """Eq. 7 less the gravity torque."""
+        return super().spring(angle) - self.gravity(angle)
+
+    def paper_time(self, temperature: float) -> float:
+        """Eq. 8-11 with the end-point torques less gravity there [s]."""
+        b, f = self.becd(temperature), self.friction(temperature)
+        start = (self.spring(0.0) - f) / b
+        end = (self.spring(self.travel) - f) / b
+        return self.travel / ((start + end) / 2.0)
