@@ -39,11 +39,14 @@ from validation.checks import CaseResult, Check
 from validation.scipy_reference import (
     GRAVITY,
     RESISTIVE_ROWS,
+    TWO_NODE,
     GroundTestPaperSystem,
     PaperSystem,
     ResistedPaperSystem,
     SpinDown,
     damped_mass,
+    two_node_relaxed,
+    two_node_time,
 )
 
 HERE = Path(__file__).resolve().parent
@@ -793,6 +796,77 @@ def gravity_ground_test() -> CaseResult:
     )
 
 
+def two_node_heating() -> CaseResult:
+    """Two-node heating (issue 16 item 6) and a second deployment after a cool-down."""
+    from ecdsim.dynamics.sequence import Cycle, run_sequence
+
+    source = EXAMPLES / "paper_cc16_dynamic.toml"
+    n = TWO_NODE
+    section = (
+        f'\n[damper.thermal]\nheat_capacity = "{n["c_r"]} J/K"\nthermal_resistance = '
+        f'"{n["r_rh"]} K/W"\nhousing_heat_capacity = "{n["c_h"]} J/K"\n'
+        f'housing_thermal_resistance = "{n["r_he"]} K/W"\n'
+    )
+    text = source.read_text().replace("\n[gearbox]", section + "\n[gearbox]", 1)
+    config = parse_config(text, str(source) + " + [damper.thermal] with a housing")
+    dynamics = config.spec.dynamics()
+    assert dynamics is not None
+    temps = [-40.0, 25.0, 100.0]
+    cool_down, stow = 20.0, 10.0
+
+    def solve(params: DynamicParameters) -> DynamicResult:
+        return _dynamic_result(predict(config.system, temps, ["dynamic"], dynamics=params))
+
+    sequence = run_sequence(solve, dynamics, temps, Cycle(2, cool_down, stow))
+    assert sequence.end_housing_temperature is not None
+    inertia = 5.0 + 2e-7 * 380.0**2  # as in paper_example_methods
+    system = PaperSystem()
+    label = "scipy Radau rtol 1e-12"
+    checks: list[Check] = []
+    for i, temp in enumerate(temps):
+        at = f"at {temp:+g} degC"
+        time, rotor, housing = two_node_time(system, temp, inertia)
+        start = two_node_relaxed(rotor - temp, housing - temp, cool_down + stow)
+        time2, _, _ = two_node_time(system, temp, inertia, start)
+        for quantity, unit, reference, value, tolerance in (
+            ("deployment time", "s", time, sequence.deployment_time[0, i], None),
+            ("rotor temperature at arrival", "degC", rotor, sequence.end_rotor_temperature[0, i],
+             rotor - temp),
+            ("housing temperature at arrival", "degC", housing,
+             sequence.end_housing_temperature[0, i], housing - temp),
+            ("deployment 2 time after 20 s cool-down + 10 s stow", "s", time2,
+             sequence.deployment_time[1, i], None),
+        ):  # fmt: skip
+            # Temperatures: rtol 1e-7 of the rise, the integrated quantity.
+            bound = _relative(reference, INTEGRATED_RTOL) if tolerance is None else (
+                INTEGRATED_RTOL * tolerance
+            )  # fmt: skip
+            checks.append(
+                Check(f"{quantity} {at}", unit, reference, label, float(value), bound,
+                      INTEGRATED_REASON + ("" if tolerance is None else " (of the rise)"))
+            )  # fmt: skip
+    return CaseResult(
+        name="two_node_heating",
+        title="Rotor and housing heating on the paper's example, and a second deployment",
+        source=(
+            "the paper's Eq. 1-4 and constants typed in plain Python with two lumped "
+            "capacitances, C_r T_r' = BD(T_r) N^2 w^2 - (T_r - T_h)/R_rh and "
+            "C_h T_h' = (T_r - T_h)/R_rh - (T_h - T)/R_he (Incropera et al., sections 3.1.3 "
+            "and 5.2), integrated with scipy; the cool-down and stow by scipy.linalg.expm "
+            "(`validation/scipy_reference.py`, two_node_time, two_node_relaxed)"
+        ),
+        mapping=(
+            "`examples/paper_cc16_dynamic.toml` with `[damper.thermal]` heat_capacity "
+            f"{n['c_r']} J/K, thermal_resistance {n['r_rh']} K/W (rotor to housing), "
+            f"housing_heat_capacity {n['c_h']} J/K, housing_thermal_resistance {n['r_he']} K/W "
+            "(ILLUSTRATIVE values, a light rotor that warms by kelvins); deployment 2 of "
+            "`ecdsim.dynamics.sequence.run_sequence` starts from deployment 1's end relaxed "
+            "over 30 s without heat input."
+        ),
+        checks=tuple(checks),
+    )
+
+
 CASES: tuple[Callable[[], CaseResult], ...] = (
     msl_eddy_current_brake,
     msl_damper,
@@ -803,6 +877,7 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     resistive_table,
     stribeck,
     gravity_ground_test,
+    two_node_heating,
 )
 
 

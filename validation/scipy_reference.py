@@ -287,3 +287,59 @@ class GroundTestPaperSystem(PaperSystem):
         start = (self.spring(0.0) - f) / b
         end = (self.spring(self.travel) - f) / b
         return self.travel / ((start + end) / 2.0)
+
+
+# Two-node heating of validation case "two_node_heating" (issue 16 item 6): rotor C_r
+# [J/K], rotor to housing R_rh [K/W], housing C_h [J/K], housing to mount R_he [K/W].
+# ILLUSTRATIVE values, light enough for the rotor to warm by kelvins in one deployment.
+TWO_NODE = {"c_r": 0.05, "r_rh": 20.0, "c_h": 0.5, "r_he": 100.0}
+
+
+def two_node_time(
+    system: PaperSystem,
+    temperature: float,
+    inertia: float,
+    start: tuple[float, float] = (0.0, 0.0),
+) -> tuple[float, float, float]:
+    """Time [s], rotor and housing temperatures at arrival [degC] with two-node heating.
+
+    ``C_r T_r' = BD(T_r) (N w)^2 - (T_r - T_h) / R_rh`` and
+    ``C_h T_h' = (T_r - T_h) / R_rh - (T_h - T) / R_he`` (two lumped capacitances,
+    Incropera et al., Fundamentals of Heat and Mass Transfer, sections 3.1.3 and 5.2);
+    the damping follows Eq. 1 at T_r, BG and the frictions stay at T. ``start``: the
+    rotor's and housing's rises above T at release [K].
+    """
+    c_r, r_rh, c_h, r_he = (TWO_NODE[k] for k in ("c_r", "r_rh", "c_h", "r_he"))
+    f = system.friction(temperature)
+    bg = system.bg_fraction * system.bd * system.ratio**2
+
+    def rhs(_t: float, y: FloatArray) -> list[float]:
+        phi, w, tr, th = y
+        eddy = system.damper_rate(tr) * system.ratio**2
+        flow = (tr - th) / r_rh
+        return [
+            w,
+            (system.spring(phi) - f - (eddy + bg) * w) / inertia,
+            (eddy * w * w - flow) / c_r,
+            (flow - (th - temperature) / r_he) / c_h,
+        ]
+
+    y0 = [0.0, 0.0, temperature + start[0], temperature + start[1]]
+    time, state = _arrival(rhs, y0, system.travel, "Radau")
+    return time, float(state[2]), float(state[3])
+
+
+def two_node_relaxed(rotor: float, housing: float, time: float) -> tuple[float, float]:
+    """The rises [K] after ``time`` [s] without heat input: scipy's matrix exponential of
+    ``[[-1/(R_rh C_r), 1/(R_rh C_r)], [1/(R_rh C_h), -(1/R_rh + 1/R_he)/C_h]]``."""
+    from scipy.linalg import expm
+
+    c_r, r_rh, c_h, r_he = (TWO_NODE[k] for k in ("c_r", "r_rh", "c_h", "r_he"))
+    a = np.array(
+        [
+            [-1.0 / (r_rh * c_r), 1.0 / (r_rh * c_r)],
+            [1.0 / (r_rh * c_h), -(1.0 / r_rh + 1.0 / r_he) / c_h],
+        ]
+    )
+    out = expm(a * time) @ np.array([rotor, housing])
+    return float(out[0]), float(out[1])
