@@ -19,7 +19,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ecdsim.config.schema import ThermalSpec
-from ecdsim.deployment import predict
+from ecdsim.deployment import ModelDomainError, predict
 from ecdsim.dynamics import DynamicParameters, DynamicResult, Thermal, integrate
 from ecdsim.dynamics.damping import LinearEddy
 from ecdsim.dynamics.method import DynamicSolution
@@ -314,3 +314,13 @@ def test_compiled_and_numpy_rodas4_agree(monkeypatch: pytest.MonkeyPatch, numba:
     assert result.deployment_time[0] == pytest.approx(ref.time, rel=1e-8)
     assert result.final_housing_temperature[0] == pytest.approx(ref.housing, abs=1e-7)
     assert result.max_damper_temperature[0] == pytest.approx(ref.max_rotor, abs=1e-7)
+
+
+def test_a_warm_start_beyond_the_zero_of_the_damping_law_is_refused() -> None:
+    # Eq. 1 reaches zero damping at 275 degC: a rotor started 260 K above 25 degC would be
+    # beyond it. A domain error naming the field, not a NaN from the log state.
+    thermal = Thermal(C_R, R_RH, C_H, R_HE, initial_rotor_rise=260.0)
+    with pytest.raises(ModelDomainError, match="initial_rotor_rise"):
+        predict(
+            paper_system(), [25.0], ["dynamic"], dynamics=DynamicParameters(1.0, thermal=thermal)
+        )

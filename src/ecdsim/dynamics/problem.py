@@ -235,6 +235,14 @@ def dynamic_problem(
             f"{float(np.max(start)):.6g} rad",
         )
     thermal = params.thermal
+    if thermal is not None and np.any(np.asarray(thermal.initial_rotor_rise) != 0.0):
+        # A warm start (repeated deployments) must lie below the damping law's zero.
+        warm = eddy.factor(np.asarray(temperatures, float) + thermal.initial_rotor_rise)
+        if np.any(warm <= 0.0):
+            raise DynamicDomainError(
+                "damper.thermal.initial_rotor_rise",
+                "puts the damper at or beyond the temperature where its damping law reaches zero",
+            )
     return DynamicProblem(
         angles=base.angles,
         torques=base.torques,
