@@ -444,3 +444,37 @@ def test_the_torque_margin_counts_opposing_gravity_as_its_own_kind() -> None:
     ).at_minimum()
     assert float(aided.margin) == pytest.approx(2.0, rel=1e-12)
     assert float(aided.resistive["gravity"]) == 0.0
+
+
+def test_monte_carlo_torque_margin_counts_gravity(tmp_path: Path) -> None:
+    # Fixed damping speed 0, factor 2 on gravity; theta_0 = -60 deg, so gravity opposes
+    # only past phi = 60 deg and grows to W sin(30 deg) at the latch while the spring
+    # falls: the margin is lowest at the end of travel, Te / (F + 2 W sin(30 deg)) - 1 by
+    # hand (the sampled mass has a tiny spread; the nominal case is checked).
+    from ecdsim.config import load_config
+    from ecdsim.montecarlo import build_plan, run
+    from ecdsim.montecarlo.stats import summarize
+    from tests.test_montecarlo_config import write_config
+
+    requirements = (
+        '\n[requirements]\ntemperatures = ["25 degC"]\nmin_torque_margin = 0.1\n'
+        '[requirements.torque_margin]\ndamping_speed = "0 rad/s"\n'
+        "factors = { gravity = 2.0 }\n"
+    )
+    base = _gravity("1.2 kg", "0.3 m", "-60 deg", "0.9") + requirements
+    config = load_config(
+        write_config(
+            tmp_path,
+            '"load.gravity.mass" = { distribution = "uniform", plus_minus = "0.1 %" }',
+            'sampling = "random"\nseed = 7\nchunk_size = 64',
+            base=base,
+        )
+    )
+    plan = build_plan(config, 64, temperatures=[25.0])
+    run(plan, tmp_path / "run")
+    case = summarize(plan, tmp_path / "run")["cases"][0]
+    w = 1.2 * G * 0.3 * 0.1
+    f = hand.fecd(25.0) + hand.fs(25.0)
+    expected = hand.TE / (f + 2.0 * w * math.sin(math.radians(-60.0) + hand.TRAVEL)) - 1.0
+    # 1e-12: the same arithmetic at the last breakpoint
+    assert case["nominal"]["min_torque_margin"] == pytest.approx(expected, rel=1e-12)

@@ -347,6 +347,9 @@ def outputs_of(plan: Plan, prediction: Prediction) -> dict[str, np.ndarray[Any, 
             stall_angle=solution.stall_angle,
             settings=plan.margin,
             resistance=prediction.resistance,
+            # A ground test's gravity (docs/sizing.md); None in flight, as before.
+            gravity_amplitude=problem.gravity_amplitude if problem.has_gravity else None,
+            gravity_angle=problem.gravity_angle if problem.has_gravity else None,
         ).minimum()
         found[MARGIN] = np.broadcast_to(lowest, shape)
     return found
