@@ -484,6 +484,8 @@ class _Step:
     temperature: FloatArray  # damper temperature at the end [degC]
     peak_temperature: FloatArray
     display_end: FloatArray  # where a plot of the case should end if this is its last
+    # Spring work over segments that crossed several pieces (NaN: the one piece's formula).
+    spring_work: FloatArray | None = None
 
     @classmethod
     def empty(cls, temperature: FloatArray) -> _Step:
@@ -522,7 +524,11 @@ def _advance_cases(
     if seg.stribeck_excess is not None:
         # Stribeck friction makes any sliding segment nonlinear, free play included.
         integrated = integrated | (seg.stribeck_excess > 0.0)
-    closed_idx = np.flatnonzero(~integrated)
+    tabled = _table_cases(c, seg, problem)
+    if tabled is not None:
+        _step_table(c, s, seg, np.flatnonzero(tabled), step, problem, log, records)
+        integrated = integrated & ~tabled
+    closed_idx = np.flatnonzero(~integrated if tabled is None else ~integrated & ~tabled)
     if closed_idx.size:
         _step_closed_form(s, seg, closed_idx, step, records)
     nl_idx = np.flatnonzero(integrated)
@@ -578,6 +584,133 @@ def _segments(
         speed0=direction * s.w[run],
         cap=np.maximum(stop_time - s.t[run], 0.0),
     )
+
+
+# A forward engaged segment with at least this many spring pieces ahead crosses them in
+# one compiled call (ecdsim.dynamics.compiled_table) instead of one event-loop pass each.
+TABLE_PIECES = 32
+
+
+def _table_cases(c: _Cases, seg: _Segment, problem: DynamicProblem) -> BoolArray | None:
+    """The segments (of ``seg``) that run over the spring table compiled; None for none."""
+    if c.angles.shape[0] - 1 < TABLE_PIECES or problem.integrator != integrate.BATCHED:
+        return None
+    if c.two_node or integrate.compiled_kernel() is None:
+        return None
+    ahead = (c.angles.shape[0] - 2) - seg.piece.index  # pieces after the current one
+    chosen = seg.forward & seg.engaged & (ahead + 1 >= TABLE_PIECES)
+    chosen &= seg.reach_kind == _EV["breakpoint"]
+    if seg.stribeck_excess is not None:
+        chosen &= ~(seg.stribeck_excess > 0.0)
+    return chosen if np.any(chosen) else None
+
+
+def _step_table(
+    c: _Cases,
+    s: _State,
+    seg: _Segment,
+    idx: NDArray[np.intp],
+    step: _Step,
+    problem: DynamicProblem,
+    log: _Log,
+    records: _Records | None,
+) -> None:
+    """Segments ``idx`` (of ``seg``) over the spring pieces ahead, compiled, to their
+    first event other than a breakpoint; the breakpoints crossed are logged here."""
+    from ecdsim.dynamics import compiled, compiled_table, rosenbrock
+
+    cases = seg.run[idx]
+    segs = integrate.NonlinearSegments(
+        inertia=seg.inertia[idx],
+        stiffness=seg.piece.stiffness[idx],
+        drive=seg.drive[idx],
+        speed0=seg.speed0[idx],
+        length=seg.length[idx],
+        cap=seg.cap[idx],
+        state0=s.heat[cases],
+        ambient=c.ambient[cases],
+        ratio=c.ratio[cases],
+        gearbox_damping=c.gearbox_damping[cases],
+        heat_capacity=c.heat_capacity[cases],
+        thermal_resistance=c.thermal_resistance[cases],
+        linear_damping=c.damping[cases],
+        eddy=c.eddy,
+        case=cases,
+        thermal=problem.thermal,
+    )
+    model = integrate._model(segs)
+    par, law = compiled._parameters(model)
+    if step.spring_work is None:
+        step.spring_work = np.full(step.kind.size, np.nan)
+    end_state = np.empty(idx.size)
+    hottest = np.empty(idx.size)
+    for j, (k, case) in enumerate(zip(idx.tolist(), cases.tolist(), strict=True)):
+        first = int(seg.piece.index[k])
+        angles = c.angles[first:, case]
+        torques = c.torques[first:, case]
+        width = np.diff(angles)
+        positive = width > 0.0
+        # The pieces' stiffness as _piece computes it; zero-width pieces are skipped.
+        slope = np.where(positive, np.diff(torques) / np.where(positive, width, 1.0), 0.0)
+        start_torque = torques[:-1].copy()
+        start_torque[0] = seg.piece.torque[k]
+        length = width.copy()
+        length[0] = seg.length[k]
+        keep = positive.copy()
+        keep[0] = True
+        kept = np.flatnonzero(keep)
+        final = np.empty(4)
+        cross_time = np.empty(kept.size)
+        cross_speed = np.empty(kept.size)
+        out = compiled_table.table_run(
+            par[j], law, bool(model.heating), np.array([0.0, seg.speed0[k], s.heat[case], 0.0]),
+            np.ascontiguousarray(start_torque[kept]), np.ascontiguousarray(-slope[kept]),
+            np.ascontiguousarray(length[kept]), float(seg.kinetic[k]), float(seg.cap[k]),
+            problem.rtol, integrate.HORIZON_TIME, integrate.HORIZON, float(c.damping[case]),
+            records is not None, final, cross_time, cross_speed,
+        )  # fmt: skip
+        code, duration, top_speed, top_temp, spring, crossed, steps, count = out
+        start = float(s.t[case])
+        step.kind[k] = code
+        step.duration[k] = duration
+        step.x[k] = final[0]
+        step.v[k] = 0.0 if code in (linear.ZERO, linear.REST) else final[1]
+        step.damper_work[k] = final[3]
+        step.peak_speed[k] = max(top_speed, seg.speed0[k])
+        step.spring_work[k] = spring
+        step.display_end[k] = start + duration
+        end_state[j] = final[2]
+        hottest[j] = max(top_temp, final[2])
+        # The run's geometric end is the end of travel (the table's last angle).
+        seg.length[k] = max(angles[-1] - s.phi[case], 0.0)
+        seg.reach_kind[k] = _EV["arrive"]
+        s.piece[case] = first + int(kept[crossed])
+        if crossed:
+            log.add(
+                np.full(crossed, case),
+                start + cross_time[:crossed],
+                "breakpoint",
+                angles[kept[:crossed] + 1],
+                cross_speed[:crossed],
+            )
+        if records is not None and count >= 2:
+            trajectory = rosenbrock.Trajectory(
+                steps[0, :count].copy(), steps[1:5, :count].copy(), steps[5:9, :count].copy()
+            )
+            records.integrated.append(
+                IntegratedRecord(
+                    case=case,
+                    start_time=start,
+                    duration=float(duration),
+                    start_angle=float(s.phi[case]),
+                    direction=1.0,
+                    solution=integrate._InTemperature(trajectory, model, j),
+                )
+            )
+    temperature, peak = model.temperature(np.stack([end_state, hottest]))
+    step.temperature[idx] = temperature
+    step.peak_temperature[idx] = peak
+    s.heat[cases] = end_state
 
 
 def _step_closed_form(
@@ -709,9 +842,10 @@ def _account(s: _State, seg: _Segment, step: _Step) -> None:
     phi_r = s.phi[run]
     # Spring work exact for the linear spring piece.
     displacement = direction * step.x
-    s.spring_work[run] += (
-        piece.torque * displacement - 0.5 * piece.stiffness * displacement * displacement
-    )
+    work = piece.torque * displacement - 0.5 * piece.stiffness * displacement * displacement
+    if step.spring_work is not None:
+        work = np.where(np.isnan(step.spring_work), work, step.spring_work)
+    s.spring_work[run] += work
     s.friction_work[run] += seg.kinetic * np.abs(step.x)
     s.damper_work[run] += step.damper_work
     before_arrival = ~np.isfinite(s.arrival_time[run]) & seg.forward
