@@ -328,6 +328,7 @@ def test_deploy_shows_flight_and_ground_test_side_by_side(tmp_path: Path) -> Non
     wide = runner.invoke(app, ["deploy", str(path)], env={"COLUMNS": "80"})
     assert wide.exit_code == 0
     assert "Flight (0 g) against ground test (1 g, 90 % offloaded)" in wide.stdout
+    assert "Deployment (ground test, 1 g)" in wide.stdout
     assert all(len(line) <= 80 for line in wide.stdout.splitlines())
     plain = tmp_path / "flight.toml"
     plain.write_text(TEXT)

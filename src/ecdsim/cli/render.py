@@ -59,7 +59,9 @@ def print_tables(prediction: Prediction, units: UnitSystem = "si") -> None:
     # The summary (BECD, FECD, FS) stays; the components behind it go first at 80 columns.
     display.show(console, ecd, drop=("BD_T", "BT_T", "FT_T"))
 
-    table = Table(title="Deployment", title_justify="left")
+    # With [load.gravity] the configured system is the ground test; flight follows below.
+    title = "Deployment (ground test, 1 g)" if "ground_test" in document else "Deployment"
+    table = Table(title=title, title_justify="left")
     table.add_column(escape(u.head("T", "temperature")), justify="right")
     methods = document["methods"]
     for name in methods:
