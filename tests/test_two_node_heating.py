@@ -324,3 +324,19 @@ def test_a_warm_start_beyond_the_zero_of_the_damping_law_is_refused() -> None:
         predict(
             paper_system(), [25.0], ["dynamic"], dynamics=DynamicParameters(1.0, thermal=thermal)
         )
+
+
+def test_the_housing_temperature_is_reported_only_with_a_housing() -> None:
+    # The JSON case of the dynamic method gains final_housing_temperature_C with two nodes,
+    # equal to the result's; without a housing the document keeps its old keys.
+    for thermal, has_housing in ((Thermal(C_R, R_RH, C_H, R_HE), True), (Thermal(C_R), False)):
+        params = DynamicParameters(load_inertia=1.0, thermal=thermal)
+        prediction = predict(paper_system(), [25.0], ["dynamic"], dynamics=params)
+        case = prediction.to_dict()["cases"][0]["dynamic"]
+        assert ("final_housing_temperature_C" in case) == has_housing
+        solution = prediction.solutions["dynamic"]
+        assert isinstance(solution, DynamicSolution)
+        housing = solution.result.final_housing_temperature
+        if has_housing:
+            assert housing is not None
+            assert case["final_housing_temperature_C"] == float(housing[0])

@@ -231,11 +231,14 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | No
         headers = [u.head("T", "temperature", "\n")]
         headers += ["engaged at\n[s]"] if engage else []
         headers += [u.head("peak damper\nT", "temperature", "\n")] if heated else []
+        housing = heated and "final_housing_temperature_C" in dyn[0]  # two-node heating
+        headers += [u.head("housing T\nat end", "temperature", "\n")] if housing else []
         rows = []
         for d, t in zip(dyn, temps, strict=True):
             row = [u.num(t, "temperature")]
             row += [_fmt(d["engagement_time_s"])] if engage else []
             row += [u.num(d["max_damper_temperature_C"], "temperature")] if heated else []
+            row += [u.num(d["final_housing_temperature_C"], "temperature")] if housing else []
             rows.append(row)
         _simple_table(console, "Dynamic method: damper", headers, rows)
     said = ["latch: speed and kinetic energy on arrival at the end of travel"]

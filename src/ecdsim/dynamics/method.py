@@ -87,7 +87,10 @@ class DynamicSolution(DeploymentSolution):
             "impacts",
             "energy_J",
         )
-        return {key: summary[key] for key in keys}
+        fields = {key: summary[key] for key in keys}
+        if "final_housing_temperature_C" in summary:  # two-node heating
+            fields["final_housing_temperature_C"] = summary["final_housing_temperature_C"]
+        return fields
 
     def time_series_csv(self) -> str:
         """The time series, one block per case (:meth:`DynamicResult.timeseries_csv`)."""

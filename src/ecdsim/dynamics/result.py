@@ -381,7 +381,10 @@ class DynamicResult:
 
         e = self.energy
         stuck = bool(np.ravel(self.stuck)[case])
-        return {
+        housing = self.final_housing_temperature
+        # Two-node heating only: without a housing node the dictionary is as before.
+        extra = {} if housing is None else {"final_housing_temperature_C": at(housing)}
+        return extra | {
             "temperature_C": at(self.temperature),
             "status": STATUSES[int(np.ravel(self.status)[case])],
             "deployment_time_s": _json_float(at(self.deployment_time)),
