@@ -595,14 +595,17 @@ def _table_cases(c: _Cases, seg: _Segment, problem: DynamicProblem) -> BoolArray
     """The segments (of ``seg``) that run over the spring table compiled; None for none."""
     if c.angles.shape[0] - 1 < TABLE_PIECES or problem.integrator != integrate.BATCHED:
         return None
-    if c.two_node or integrate.compiled_kernel() is None:
+    if c.two_node:
         return None
     ahead = (c.angles.shape[0] - 2) - seg.piece.index  # pieces after the current one
-    chosen = seg.forward & seg.engaged & (ahead + 1 >= TABLE_PIECES)
+    chosen: BoolArray = seg.forward & seg.engaged & (ahead + 1 >= TABLE_PIECES)
     chosen &= seg.reach_kind == _EV["breakpoint"]
     if seg.stribeck_excess is not None:
         chosen &= ~(seg.stribeck_excess > 0.0)
-    return chosen if np.any(chosen) else None
+    # numba is imported only when some segment qualifies.
+    if not np.any(chosen) or integrate.compiled_kernel() is None:
+        return None
+    return chosen
 
 
 def _step_table(
