@@ -38,9 +38,11 @@ from ecdsim.model import (
 from validation.checks import CaseResult, Check
 from validation.scipy_reference import (
     GRAVITY,
+    LOSSY_ROWS,
     RESISTIVE_ROWS,
     TWO_NODE,
     GroundTestPaperSystem,
+    LossyGearTrain,
     PaperSystem,
     ResistedPaperSystem,
     SpinDown,
@@ -867,6 +869,86 @@ def two_node_heating() -> CaseResult:
     )
 
 
+def lossy_gear() -> CaseResult:
+    """A lossy gear (issue 16 item 5): a braked load back-driven by its rotor."""
+    source = EXAMPLES / "paper_cc16_dynamic.toml"
+    train = LossyGearTrain()
+    rows = ", ".join(f'["{a} rad", "{r} N*m"]' for a, r in LOSSY_ROWS)
+    text = (
+        source.read_text()
+        .replace(
+            'coulomb_friction = "4.5e-4 N*m"',
+            f'coulomb_friction = "0 N*m"\nefficiency = {{ forward = {train.eta_f}, '
+            f"backward = {train.eta_b} }}",
+            1,
+        )
+        .replace('rotor_inertia = "2e-7 kg*m^2"', f'rotor_inertia = "{train.rotor} kg*m^2"', 1)
+        .replace(
+            'damping_rate = "1.3e-4 N*m*s/rad"',
+            f'damping_rate = "{train.damper_rate} N*m*s/rad"',
+            1,
+        )
+        .replace('travel = "1.57 rad"', f'travel = "1.57 rad"\nresistive_table = [{rows}]', 1)
+    )
+    config = parse_config(text, str(source) + " + efficiency")
+    dynamics = config.spec.dynamics()
+    assert dynamics is not None
+    temps = [-40.0, 25.0, 100.0]
+    result = _dynamic_result(predict(config.system, temps, ["dynamic"], dynamics=dynamics))
+    checks: list[Check] = []
+    for i, temp in enumerate(temps):
+        at = f"at {temp:+g} degC"
+        expected = train.run(temp)
+        switch = [e["time_s"] for e in result.events.for_case(i) if e["kind"] == "power_flow"]
+        for quantity, unit, reference, value in (
+            ("power flow reverses (forward to back-driven)", "s", expected["switch"], switch[0]),
+            ("stick time", "s", expected["stick_time"], result.stuck_time[i]),
+            ("stick angle", "rad", expected["stick_angle"], result.stuck_angle[i]),
+            ("gear (mesh) loss", "J", expected["gear_loss"], result.energy.gear_loss[i]),
+        ):
+            checks.append(
+                Check(
+                    f"{quantity} {at}",
+                    unit,
+                    reference,
+                    "scipy DOP853 rtol 1e-12, stopped at every switch",
+                    float(value),
+                    _relative(reference, CLOSED_FORM_RTOL),
+                    CLOSED_FORM_REASON,
+                )
+            )
+        checks.append(
+            Check(
+                f"energy balance error {at}",
+                "-",
+                0.0,
+                "energy conservation",
+                float(np.ravel(result.energy.error)[i]),
+                1e-12,
+                "1e-12 of the spring work: every term is a closed form of its own",
+            )
+        )
+    return CaseResult(
+        name="lossy_gear",
+        title="A lossy gear, forward and back-driven, on a braked load (dynamic method)",
+        source=(
+            "the equations of Modelica.Mechanics.Rotational.Components.LossyGear (no bearing "
+            "friction) between the load and the damper side, typed in plain Python with the "
+            "paper's constants and integrated with scipy (`validation/scipy_reference.py`, "
+            "LossyGearTrain)"
+        ),
+        mapping=(
+            "`examples/paper_cc16_dynamic.toml` with FG = 0 and `[gearbox] efficiency = "
+            f"{{ forward = {train.eta_f}, backward = {train.eta_b} }}`, a rotor of "
+            f"{train.rotor} kg*m^2, BD = {train.damper_rate} N*m*s/rad and `[load] "
+            f"resistive_table` = {[list(r) for r in LOSSY_ROWS]} (rad, N*m): ILLUSTRATIVE "
+            "values chosen so that the rising resistance brakes the load harder than the "
+            "damper slows its rotor, which then drives the load (back-driven) until it stops."
+        ),
+        checks=tuple(checks),
+    )
+
+
 CASES: tuple[Callable[[], CaseResult], ...] = (
     msl_eddy_current_brake,
     msl_damper,
@@ -878,6 +960,7 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     stribeck,
     gravity_ground_test,
     two_node_heating,
+    lossy_gear,
 )
 
 

@@ -42,6 +42,7 @@ EVENT_KINDS = (
     "creep",  # asymptotic approach to the static equilibrium (time = inf)
     "event_limit",  # too many events: the run was cut short
     "horizon",  # the integrator reached its time horizon without an event
+    "power_flow",  # the power through a lossy gear reversed (forward <-> back-driven)
 )
 STATUSES = (
     "running",
@@ -83,6 +84,8 @@ class EnergyBalance:
     impact_loss : kinetic energy lost in impacts on the stops (rebounds, settling) [J]
     final_kinetic_energy : kinetic energy at the end of the run (absorbed by the latch
         when the run ends latched) [J]
+    gear_loss : energy lost in a lossy gear's mesh, forward and back-driven [J] (0 for an
+        ideal gear; issue 16 item 5)
     """
 
     spring_work: FloatArray
@@ -92,6 +95,7 @@ class EnergyBalance:
     engagement_loss: FloatArray
     impact_loss: FloatArray
     final_kinetic_energy: FloatArray
+    gear_loss: FloatArray
 
     def reshaped(self, shape: tuple[int, ...]) -> EnergyBalance:
         """The same balance with arrays of the given shape."""
@@ -113,6 +117,7 @@ class EnergyBalance:
             + self.engagement_loss
             + self.impact_loss
             + self.final_kinetic_energy
+            + self.gear_loss
         )
 
     @property
@@ -408,6 +413,7 @@ class DynamicResult:
                 "engagement_loss": at(e.engagement_loss),
                 "impact_loss": at(e.impact_loss),
                 "final_kinetic": at(e.final_kinetic_energy),
+                "gear_loss": at(e.gear_loss),
             },
             "energy_balance_error": at(e.error),
         }

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ecdsim._types import BoolArray, FloatArray
-from ecdsim.dynamics import integrate, linear
+from ecdsim.dynamics import gearflow, integrate, linear
 from ecdsim.dynamics.damping import EddyLaw
 from ecdsim.dynamics.problem import DynamicProblem
 from ecdsim.dynamics.records import ClosedFormRecord, IntegratedRecord
@@ -34,7 +34,7 @@ from ecdsim.dynamics.result import (
     EventLog,
     TrajectoryData,
 )
-from ecdsim.physics import mechanics, thermal
+from ecdsim.physics import gearing, mechanics, thermal
 
 # A breakaway needs the drive to exceed static friction by more than this relative margin;
 # at the boundary (a forward motion that stops where drive = kinetic friction = static
@@ -84,6 +84,9 @@ class _Cases:
     stribeck_speed: FloatArray
     stribeck: bool  # some case has a Stribeck speed
     eddy: EddyLaw
+    eta_forward: FloatArray  # lossy gear's forward mesh efficiency (1: ideal)
+    eta_backward: FloatArray  # and back-driven
+    lossy: bool  # some case has a lossy gear (issue 16 item 5)
     # Two-node heating and the start temperatures (issue 16 item 6); the defaults are
     # the one-node model starting at the deployment temperature.
     two_node: bool = False
@@ -133,6 +136,9 @@ def _flatten(problem: DynamicProblem) -> _Cases:
         housing_resistance=flat(problem.housing_thermal_resistance) if problem.two_node else None,
         rotor_rise0=flat(problem.initial_rotor_rise) if problem.thermal else None,
         housing_rise0=flat(problem.initial_housing_rise) if problem.two_node else None,
+        eta_forward=flat(problem.forward_efficiency),
+        eta_backward=flat(problem.backward_efficiency),
+        lossy=problem.lossy,
     )
 
 
@@ -249,6 +255,10 @@ class _State:
     engagement_loss: FloatArray
     impact_loss: FloatArray
     piece: NDArray[np.intp]  # the spring piece each case was last on
+    gear_loss: FloatArray  # energy lost in a lossy gear's mesh
+    # The power flow to take on the next segment after a power_flow event (+1 forward,
+    # -1 back-driven), 0 to decide from the state: at the switch sigma is 0 to rounding.
+    flow_hint: NDArray[np.int8]
     housing: FloatArray | None = None  # two nodes: the housing's rise over ambient [K]
 
     @classmethod
@@ -284,6 +294,8 @@ class _State:
             engagement_loss=np.zeros(n),
             impact_loss=np.zeros(n),
             piece=_first_piece(c, c.angle0),
+            gear_loss=np.zeros(n),
+            flow_hint=np.zeros(n, dtype=np.int8),
         )
 
     def finish(self, idx: NDArray[np.intp], status: str) -> None:
@@ -360,6 +372,7 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
         engagement_loss=s.engagement_loss,
         impact_loss=s.impact_loss,
         final_kinetic_energy=mechanics.kinetic_energy(final_inertia, final_speed),
+        gear_loss=s.gear_loss,
     )
     shape = problem.batch_shape
     trajectory = None
@@ -469,6 +482,12 @@ class _Segment:
     drive: FloatArray  # a, spring torque minus friction, forward frame [N*m]
     speed0: FloatArray  # forward-frame speed at the start [rad/s]
     cap: FloatArray  # time left before the stop time [s]
+    # A lossy gear's power flow on engaged segments (None: every gear ideal): +1 forward,
+    # -1 back-driven, and its factor m (1/eta_f or eta_b) on the damper side's inertia,
+    # damping and friction; the kinetic friction the path dissipates (FECD_T eta_f + FS_T).
+    flow: FloatArray | None = None
+    factor: FloatArray | None = None
+    dissipating: FloatArray | None = None
 
 
 @dataclass
@@ -486,6 +505,8 @@ class _Step:
     display_end: FloatArray  # where a plot of the case should end if this is its last
     # Spring work over segments that crossed several pieces (NaN: the one piece's formula).
     spring_work: FloatArray | None = None
+    gear_loss: FloatArray | None = None  # mesh loss of a lossy gear [J]
+    switched: BoolArray | None = None  # the power flow reversed at the segment's end
 
     @classmethod
     def empty(cls, temperature: FloatArray) -> _Step:
@@ -530,7 +551,7 @@ def _advance_cases(
         integrated = integrated & ~tabled
     closed_idx = np.flatnonzero(~integrated if tabled is None else ~integrated & ~tabled)
     if closed_idx.size:
-        _step_closed_form(s, seg, closed_idx, step, records)
+        _step_closed_form(c, s, seg, closed_idx, step, records)
     nl_idx = np.flatnonzero(integrated)
     if nl_idx.size:
         _step_integrated(c, s, seg, nl_idx, step, problem, records)
@@ -568,6 +589,10 @@ def _segments(
             eng, c.ecd_friction[run] * (c.factor[run] - 1.0) + system_excess, system_excess
         )
         excess = np.where(np.isfinite(c.stribeck_speed[run]), np.maximum(excess, 0.0), 0.0)
+    if c.lossy:
+        return _lossy_segment(
+            c, s, run, direction, forward, piece, eng, length, reach_kind, stop_time
+        )
     return _Segment(
         run=run,
         direction=direction,
@@ -581,8 +606,74 @@ def _segments(
         kinetic=kinetic,
         stribeck_excess=excess,
         drive=np.where(forward, piece.torque - kinetic, -(piece.torque + kinetic)),
-        speed0=direction * s.w[run],
+        # + 0.0: a backward breakaway from rest gives -0.0, whose atan2 in the zero-speed
+        # time of an underdamped segment is -pi (a negative duration, then the event limit).
+        speed0=direction * s.w[run] + 0.0,
         cap=np.maximum(stop_time - s.t[run], 0.0),
+    )
+
+
+def _lossy_segment(
+    c: _Cases,
+    s: _State,
+    run: NDArray[np.intp],
+    direction: FloatArray,
+    forward: BoolArray,
+    piece: _Piece,
+    eng: BoolArray,
+    length: FloatArray,
+    reach_kind: NDArray[np.int64],
+    stop_time: float,
+) -> _Segment:
+    """The segments of a batch with a lossy gear: the power flow decides the mesh factor.
+
+    Forward (the load drives the damper) the damper side's inertia J_D, damping and
+    friction reach the input divided by eta_f (BECD_T and FECD_T already are),
+    back-driven multiplied by eta_b (docs/dynamics.md, lossy gear). The flow is that of
+    the sign of ``J_L D + J_D A`` (:func:`ecdsim.physics.gearing.power_flow_indicator`)
+    at the segment's start, or the one a power_flow event has just switched to.
+    """
+    eta_f, eta_b = c.eta_forward[run], c.eta_backward[run]
+    # + 0.0: a backward breakaway from rest would give -0.0, whose atan2 in the zero-speed
+    # time of an underdamped segment is -pi (a negative duration).
+    speed0 = direction * s.w[run] + 0.0
+    fs = c.system_friction[run]
+    ideal_damping = c.damping[run] * eta_f  # BT_T N^2, through an ideal gear
+    ideal_friction = c.ecd_friction[run] * eta_f  # FT_T N
+    load_drive = np.where(forward, piece.torque, -piece.torque) - fs
+    sigma = gearing.power_flow_indicator(
+        c.load_inertia[run],
+        c.damper_inertia[run],
+        ideal_damping * speed0 + ideal_friction,
+        load_drive,
+    )
+    hint = s.flow_hint[run]
+    flow = np.where(hint != 0, hint, np.where(sigma >= 0.0, 1.0, -1.0))
+    s.flow_hint[run] = 0
+    ahead = flow > 0.0
+    back = np.where(eng, eta_f * eta_b, 1.0)  # forward values -> back-driven ones
+    factor = np.where(eng, np.where(ahead, 1.0 / eta_f, eta_b), 1.0)
+    damping = np.where(eng, np.where(ahead, c.damping[run], c.damping[run] * back), 0.0)
+    ecd = np.where(eng, np.where(ahead, c.ecd_friction[run], c.ecd_friction[run] * back), 0.0)
+    kinetic = ecd + fs
+    return _Segment(
+        run=run,
+        direction=direction,
+        forward=forward,
+        piece=piece,
+        engaged=eng,
+        length=length,
+        reach_kind=reach_kind,
+        inertia=c.load_inertia[run] + np.where(eng, factor * c.damper_inertia[run], 0.0),
+        damping=damping,
+        kinetic=kinetic,
+        stribeck_excess=None,
+        drive=load_drive - ecd,
+        speed0=speed0,
+        cap=np.maximum(stop_time - s.t[run], 0.0),
+        flow=np.where(eng, flow, 0.0),
+        factor=factor,
+        dissipating=np.where(eng, ideal_friction, 0.0) + fs,
     )
 
 
@@ -595,7 +686,8 @@ def _table_cases(c: _Cases, seg: _Segment, problem: DynamicProblem) -> BoolArray
     """The segments (of ``seg``) that run over the spring table compiled; None for none."""
     if c.angles.shape[0] - 1 < TABLE_PIECES or problem.integrator != integrate.BATCHED:
         return None
-    if c.two_node:
+    if c.two_node or c.lossy:
+        # A lossy gear's power flow is found on closed-form segments (gearflow).
         return None
     ahead = (c.angles.shape[0] - 2) - seg.piece.index  # pieces after the current one
     chosen: BoolArray = seg.forward & seg.engaged & (ahead + 1 >= TABLE_PIECES)
@@ -717,6 +809,7 @@ def _step_table(
 
 
 def _step_closed_form(
+    c: _Cases,
     s: _State,
     seg: _Segment,
     idx: NDArray[np.intp],
@@ -732,11 +825,19 @@ def _step_closed_form(
         seg.speed0[idx],
     )
     adv = linear.advance(closed, seg.length[idx], seg.cap[idx])
+    if seg.flow is not None:
+        adv = _lossy_advance(c, seg, idx, closed, adv, step)
     step.kind[idx] = adv.kind
     step.duration[idx] = adv.duration
     step.x[idx] = adv.x
     step.v[idx] = adv.v
     step.damper_work[idx] = seg.damping[idx] * adv.speed_squared_integral
+    if seg.factor is not None:
+        # The damper's own dissipation, BT_T N^2 int v^2; the mesh's is the gear loss.
+        ideal = np.where(
+            seg.engaged[idx], c.damping[seg.run[idx]] * c.eta_forward[seg.run[idx]], 0.0
+        )
+        step.damper_work[idx] = ideal * adv.speed_squared_integral
     step.peak_speed[idx] = adv.max_speed
     start = s.t[seg.run[idx]]
     # A plot of an asymptotic approach to rest ends after a few slow time constants.
@@ -755,6 +856,72 @@ def _step_closed_form(
                 segment=closed,
             )
         )
+
+
+def _lossy_advance(
+    c: _Cases,
+    seg: _Segment,
+    idx: NDArray[np.intp],
+    closed: linear.Segment,
+    adv: linear.Advance,
+    step: _Step,
+) -> linear.Advance:
+    """Cut engaged segments of a lossy gear where the power flow reverses; book the loss.
+
+    The switch is an event (:func:`ecdsim.dynamics.gearflow.switch_time`): the segment
+    is re-run to it with that time as its cap. The mesh loss of the segment is
+    ``(m - 1) (dKE_D + B_q int v^2 + F_q |x|)`` with m = 1/eta_f or eta_b: what the
+    effective equation ``(J_L + m J_D) v' = A - m (B_q v + F_q)`` charges the load for
+    the damper side beyond its own kinetic energy and dissipation.
+    """
+    assert seg.flow is not None
+    assert seg.factor is not None
+    cases = seg.run[idx]
+    flow = seg.flow[idx]
+    engaged = flow != 0.0
+    eta_f = c.eta_forward[cases]
+    ideal_damping = c.damping[cases] * eta_f
+    ideal_friction = c.ecd_friction[cases] * eta_f
+    switched = np.zeros(idx.size, dtype=bool)
+    lossy = np.flatnonzero(engaged)
+    if lossy.size:
+        sub = closed.take(lossy)
+        horizon = adv.duration[lossy]
+        resting = ~np.isfinite(horizon)
+        horizon = np.where(resting, linear.rest_time(sub), horizon)
+        load_drive = seg.drive[idx][lossy] + np.where(
+            flow[lossy] > 0.0,
+            c.ecd_friction[cases][lossy],
+            c.ecd_friction[cases][lossy] * eta_f[lossy] * c.eta_backward[cases][lossy],
+        )
+        t_switch = gearflow.switch_time(
+            sub,
+            ideal_damping[lossy],
+            ideal_friction[lossy],
+            c.load_inertia[cases][lossy],
+            c.damper_inertia[cases][lossy],
+            load_drive,
+            flow[lossy],
+            horizon,
+        )
+        cut = np.isfinite(t_switch) & (t_switch < seg.cap[idx][lossy])
+        if np.any(cut):
+            switched[lossy[cut]] = True
+            caps = seg.cap[idx].copy()
+            caps[lossy[cut]] = t_switch[cut]
+            adv = linear.advance(closed, seg.length[idx], caps)
+    factor = seg.factor[idx]
+    speed_squared = adv.speed_squared_integral
+    kinetic_change = 0.5 * c.damper_inertia[cases] * (adv.v * adv.v - seg.speed0[idx] ** 2)
+    own = kinetic_change + ideal_damping * speed_squared + ideal_friction * np.abs(adv.x)
+    loss = np.where(engaged, (factor - 1.0) * own, 0.0)
+    if step.gear_loss is None:
+        step.gear_loss = np.zeros(step.kind.size)
+        step.switched = np.zeros(step.kind.size, dtype=bool)
+    assert step.switched is not None
+    step.gear_loss[idx] = loss
+    step.switched[idx] = switched
+    return adv
 
 
 def _step_integrated(
@@ -849,7 +1016,11 @@ def _account(s: _State, seg: _Segment, step: _Step) -> None:
     if step.spring_work is not None:
         work = np.where(np.isnan(step.spring_work), work, step.spring_work)
     s.spring_work[run] += work
-    s.friction_work[run] += seg.kinetic * np.abs(step.x)
+    s.friction_work[run] += (seg.kinetic if seg.dissipating is None else seg.dissipating) * np.abs(
+        step.x
+    )
+    if step.gear_loss is not None:
+        s.gear_loss[run] += step.gear_loss
     s.damper_work[run] += step.damper_work
     before_arrival = ~np.isfinite(s.arrival_time[run]) & seg.forward
     s.max_speed[run] = np.where(
@@ -878,7 +1049,13 @@ def _apply_events(c: _Cases, s: _State, seg: _Segment, step: _Step, log: _Log) -
     s.w[zero] = 0.0  # the next iteration decides stick or breakaway
     log.add(zero, s.t[zero], "zero_speed", s.phi[zero], s.w[zero])
 
-    capped = run[kind == linear.CAP]
+    if step.switched is not None and seg.flow is not None:
+        switching = run[step.switched]
+        s.flow_hint[switching] = -seg.flow[step.switched]
+        log.add(switching, s.t[switching], "power_flow", s.phi[switching], s.w[switching])
+        capped = run[(kind == linear.CAP) & ~step.switched]
+    else:
+        capped = run[kind == linear.CAP]
     s.finish(capped, "stop_time")
     log.add(capped, s.t[capped], "stop_time", s.phi[capped], s.w[capped])
 
@@ -902,6 +1079,16 @@ def _apply_events(c: _Cases, s: _State, seg: _Segment, step: _Step, log: _Log) -
         w_after, loss = mechanics.plastic_engagement(
             c.load_inertia[engaging], s.w[engaging], c.damper_inertia[engaging]
         )
+        if c.lossy:
+            # The load drives the damper side through the mesh: its impulse reaches the
+            # input divided by eta_f, as J_D / eta_f; the energy lost is the kinetic
+            # energy's drop, the mesh's share included.
+            j_l, w_before = c.load_inertia[engaging], s.w[engaging]
+            j_d = c.damper_inertia[engaging]
+            w_after = j_l * w_before / (j_l + j_d / c.eta_forward[engaging])
+            loss = mechanics.kinetic_energy(j_l, w_before) - mechanics.kinetic_energy(
+                j_l + j_d, w_after
+            )
         s.w[engaging] = w_after
         s.engagement_loss[engaging] += loss
         s.engaged[engaging] = True

@@ -350,6 +350,11 @@ def outputs_of(plan: Plan, prediction: Prediction) -> dict[str, np.ndarray[Any, 
             # A ground test's gravity (docs/sizing.md); None in flight, as before.
             gravity_amplitude=problem.gravity_amplitude if problem.has_gravity else None,
             gravity_angle=problem.gravity_angle if problem.has_gravity else None,
+            forward_efficiency=(
+                None
+                if prediction.system.ecd.gearbox.efficiency is None
+                else prediction.ecd.forward_efficiency
+            ),
         ).minimum()
         found[MARGIN] = np.broadcast_to(lowest, shape)
     return found
