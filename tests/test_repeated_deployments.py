@@ -218,3 +218,18 @@ def test_repeat_help(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
         },
     )
     run_example(runner, app, screen, tmp_path, monkeypatch)
+
+
+@pytest.mark.parametrize("resistance", [40.0, math.inf])
+def test_one_node_cools_by_one_exponential(resistance: float) -> None:
+    # One node: the rise decays as exp(-t / (R C)) over cool-down + stow; adiabatic
+    # (R = inf) it does not decay at all, and each deployment starts where the last ended.
+    thermal = Thermal(0.05, resistance)
+    result = run_sequence(_solve, _params(thermal), TEMPS, Cycle(3, 2.0, 1.0))
+    assert result.start_housing_temperature is None
+    decay = math.exp(-3.0 / (resistance * 0.05))
+    for k in (1, 2):
+        expected = TEMPS + (result.end_rotor_temperature[k - 1] - TEMPS) * decay
+        # exp and one product: rounding of the ~K rises only.
+        np.testing.assert_allclose(result.start_rotor_temperature[k], expected, rtol=0, atol=1e-12)
+    assert np.all(result.start_rotor_temperature[1] > TEMPS)  # heat carried over
