@@ -281,18 +281,25 @@ def test_bad_gravity_keys_are_refused_by_name(
     assert "Traceback" not in result.output
 
 
-def test_the_dynamic_method_refuses_gravity_by_name(tmp_path: Path) -> None:
-    # Not implemented for the dynamic method: a one-line refusal naming the key, never
-    # a silent flight answer for a ground test.
-    text = _gravity("2 kg", "0.3 m", "30 deg", "0.9").replace(
-        'travel = "1.57 rad"', 'travel = "1.57 rad"\ninertia = "5 kg*m^2"'
-    )
+def test_the_dynamic_method_takes_gravity_and_shows_flight_beside_it(tmp_path: Path) -> None:
+    # Flight and test by the dynamic method too: the flight time equals the dynamic
+    # method's on the config without [load.gravity].
+    import json
+
+    inertia = 'travel = "1.57 rad"\ninertia = "5 kg*m^2"'
+    text = _gravity("2 kg", "0.3 m", "30 deg", "0.9").replace('travel = "1.57 rad"', inertia)
     path = tmp_path / "ground.toml"
     path.write_text(text)
-    result = CliRunner().invoke(app, ["deploy", str(path), "-m", "dynamic"])
-    assert result.exit_code == 2
-    assert "load.gravity" in result.output
-    assert "Traceback" not in result.output
+    result = CliRunner().invoke(app, ["deploy", str(path), "-m", "dynamic", "--json"])
+    assert result.exit_code == 0, result.output
+    ground = json.loads(result.stdout)["ground_test"]
+    plain = parse_config(TEXT.replace('travel = "1.57 rad"', inertia))
+    temps = np.array(plain.temperatures)
+    flight = predict(plain.system, temps, ("dynamic",), dynamics=plain.spec.dynamics())
+    for i, case in enumerate(ground["cases"]):
+        time = float(flight.solutions["dynamic"].deployment_time[i])
+        expected = time if math.isfinite(time) else None
+        assert case["dynamic"]["flight_deployment_time_s"] == expected
 
 
 def test_deploy_shows_flight_and_ground_test_side_by_side(tmp_path: Path) -> None:

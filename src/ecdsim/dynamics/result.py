@@ -86,6 +86,9 @@ class EnergyBalance:
         when the run ends latched) [J]
     gear_loss : energy lost in a lossy gear's mesh, forward and back-driven [J] (0 for an
         ideal gear; issue 16 item 5)
+    gravity_work : work done against a ground test's gravity, the rise of the CG's
+        potential energy ``W (cos(theta_0 + phi_0) - cos(theta_0 + phi_end))`` [J]
+        (gravity is conservative: start and end angles suffice); None without gravity
     """
 
     spring_work: FloatArray
@@ -96,17 +99,25 @@ class EnergyBalance:
     impact_loss: FloatArray
     final_kinetic_energy: FloatArray
     gear_loss: FloatArray
+    gravity_work: FloatArray | None = None
 
     def reshaped(self, shape: tuple[int, ...]) -> EnergyBalance:
         """The same balance with arrays of the given shape."""
-        return EnergyBalance(
-            **{f.name: np.asarray(getattr(self, f.name)).reshape(shape) for f in fields(self)}
-        )
+        values: dict[str, Any] = {
+            f.name: None
+            if getattr(self, f.name) is None
+            else np.asarray(getattr(self, f.name)).reshape(shape)
+            for f in fields(self)
+        }
+        return EnergyBalance(**values)
 
     @property
     def supplied(self) -> FloatArray:
-        """Spring work plus initial kinetic energy [J]."""
-        return np.asarray(self.spring_work + self.initial_kinetic_energy)
+        """Spring work plus initial kinetic energy, less the work against gravity [J]."""
+        supplied = self.spring_work + self.initial_kinetic_energy
+        if self.gravity_work is not None:
+            supplied = supplied - self.gravity_work
+        return np.asarray(supplied)
 
     @property
     def accounted(self) -> FloatArray:
@@ -414,6 +425,7 @@ class DynamicResult:
                 "impact_loss": at(e.impact_loss),
                 "final_kinetic": at(e.final_kinetic_energy),
                 "gear_loss": at(e.gear_loss),
+                **({} if e.gravity_work is None else {"gravity_work": at(e.gravity_work)}),
             },
             "energy_balance_error": at(e.error),
         }

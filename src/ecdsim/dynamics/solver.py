@@ -15,6 +15,7 @@ bookkeeping (:func:`_account`, :func:`_apply_events`, :func:`_impact`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,6 +36,7 @@ from ecdsim.dynamics.result import (
     TrajectoryData,
 )
 from ecdsim.physics import gearing, mechanics, thermal
+from ecdsim.physics.gravity import gravity_torque, gravity_work
 
 # A breakaway needs the drive to exceed static friction by more than this relative margin;
 # at the boundary (a forward motion that stops where drive = kinetic friction = static
@@ -94,6 +96,9 @@ class _Cases:
     housing_resistance: FloatArray | None = None
     rotor_rise0: FloatArray | None = None
     housing_rise0: FloatArray | None = None
+    # A ground test's gravity (issue 16 item 2): W [N*m] and theta_0 [rad]; None in flight.
+    gravity_amplitude: FloatArray | None = None
+    gravity_angle: FloatArray | None = None
 
 
 def _flatten(problem: DynamicProblem) -> _Cases:
@@ -136,10 +141,19 @@ def _flatten(problem: DynamicProblem) -> _Cases:
         housing_resistance=flat(problem.housing_thermal_resistance) if problem.two_node else None,
         rotor_rise0=flat(problem.initial_rotor_rise) if problem.thermal else None,
         housing_rise0=flat(problem.initial_housing_rise) if problem.two_node else None,
+        gravity_amplitude=_flat_or_none(flat, problem.gravity_amplitude, problem.has_gravity),
+        gravity_angle=_flat_or_none(flat, problem.gravity_angle, problem.has_gravity),
         eta_forward=flat(problem.forward_efficiency),
         eta_backward=flat(problem.backward_efficiency),
         lossy=problem.lossy,
     )
+
+
+def _flat_or_none(
+    flat: Callable[[FloatArray], FloatArray], values: FloatArray | None, given: bool
+) -> FloatArray | None:
+    """``flat(values)`` where the problem gives them (a ground test's gravity), else None."""
+    return flat(values) if given and values is not None else None
 
 
 @dataclass(frozen=True)
@@ -372,6 +386,10 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
         engagement_loss=s.engagement_loss,
         impact_loss=s.impact_loss,
         final_kinetic_energy=mechanics.kinetic_energy(final_inertia, final_speed),
+        # Gravity is conservative: the work against it follows from the end angles.
+        gravity_work=None
+        if c.gravity_amplitude is None or c.gravity_angle is None
+        else gravity_work(c.angle0, s.phi, c.gravity_amplitude, c.gravity_angle),
         gear_loss=s.gear_loss,
     )
     shape = problem.batch_shape
@@ -447,6 +465,11 @@ def _stick_or_break(
         0.0,
     )
     drive = piece.torque
+    if c.gravity_amplitude is not None and c.gravity_angle is not None:
+        # At rest gravity acts too: the spring less W sin(theta_0 + phi) (physics.gravity).
+        drive = drive - gravity_torque(
+            s.phi[resting], c.gravity_amplitude[resting], c.gravity_angle[resting]
+        )
     holds = np.abs(drive) <= static + _STICK_MARGIN * np.maximum(np.abs(drive), static)
     sticking = resting[holds]
     s.finish(sticking, "stuck")
@@ -545,7 +568,15 @@ def _advance_cases(
     if seg.stribeck_excess is not None:
         # Stribeck friction makes any sliding segment nonlinear, free play included.
         integrated = integrated | (seg.stribeck_excess > 0.0)
+    weighed = None
+    if c.gravity_amplitude is not None:
+        # Gravity's sine makes every sliding segment nonlinear, free play included.
+        weighed = c.gravity_amplitude[run] != 0.0
+        integrated = integrated | weighed
     tabled = _table_cases(c, seg, problem)
+    if tabled is not None and weighed is not None:
+        tabled = tabled & ~weighed  # the compiled table kernel has no gravity term
+        tabled = tabled if np.any(tabled) else None
     if tabled is not None:
         _step_table(c, s, seg, np.flatnonzero(tabled), step, problem, log, records)
         integrated = integrated & ~tabled
@@ -961,6 +992,7 @@ def _step_integrated(
             stribeck_excess=None if excess is None else excess[idx],
             stribeck_speed=None if excess is None else c.stribeck_speed[cases],
             **_housing_segments(c, s, cases),
+            **_gravity_segments(c, s, cases, seg.direction[idx]),
         ),
         rtol=problem.rtol,
         method=problem.integrator,
@@ -993,6 +1025,20 @@ def _step_integrated(
                         solution=sol,
                     )
                 )
+
+
+def _gravity_segments(
+    c: _Cases, s: _State, cases: NDArray[np.intp], direction: FloatArray
+) -> dict[str, Any]:
+    """The gravity arguments of :class:`~ecdsim.dynamics.integrate.NonlinearSegments`:
+    W, theta_0 + phi at the segment's start, and the direction; none without gravity."""
+    if c.gravity_amplitude is None or c.gravity_angle is None:
+        return {}
+    return {
+        "gravity_amplitude": c.gravity_amplitude[cases],
+        "gravity_phase": c.gravity_angle[cases] + s.phi[cases],
+        "gravity_direction": direction,
+    }
 
 
 def _housing_segments(c: _Cases, s: _State, cases: NDArray[np.intp]) -> dict[str, Any]:
