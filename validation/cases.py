@@ -743,8 +743,9 @@ def stribeck() -> CaseResult:
 
 
 def gravity_ground_test() -> CaseResult:
-    """A 1 g ground test with offload (issue 16 item 2) by the exact and paper methods."""
-    source = EXAMPLES / "paper_cc16.toml"
+    """A 1 g ground test with offload (issue 16 item 2) by the exact, paper and dynamic
+    methods."""
+    source = EXAMPLES / "paper_cc16_dynamic.toml"
     g = GRAVITY
     section = (
         f'\n[load.gravity]\nmass = "{g["mass"]} kg"\ncg_radius = "{g["cg_radius"]} m"\n'
@@ -752,7 +753,10 @@ def gravity_ground_test() -> CaseResult:
     )
     config = parse_config(source.read_text() + section, str(source) + " + [load.gravity]")
     temps = [-40.0, 25.0, 100.0]
-    found = predict(config.system, temps, ["paper", "exact"])
+    dynamics = config.spec.dynamics()
+    assert dynamics is not None
+    found = predict(config.system, temps, ["paper", "exact", "dynamic"], dynamics=dynamics)
+    inertia = 5.0 + 2e-7 * 380.0**2  # as in paper_example_methods
     system = GroundTestPaperSystem()
     checks: list[Check] = []
     for i, temp in enumerate(temps):
@@ -781,6 +785,18 @@ def gravity_ground_test() -> CaseResult:
                 "1e-12 relative: the same arithmetic in another order",
             )
         )
+        dyn_time, _speed = system.dynamic_time(temp, inertia)
+        checks.append(
+            Check(
+                f"dynamic time in the ground test, J = {inertia:.4g} kg*m^2, {at}",
+                "s",
+                dyn_time,
+                "scipy Radau rtol 1e-12",
+                float(found.solutions["dynamic"].deployment_time[i]),
+                _relative(dyn_time, INTEGRATED_RTOL),
+                INTEGRATED_REASON,
+            )
+        )
     return CaseResult(
         name="gravity_ground_test",
         title="A 1 g ground test with 90 % offload on the paper's example",
@@ -790,8 +806,8 @@ def gravity_ground_test() -> CaseResult:
             "(`validation/scipy_reference.py`, GroundTestPaperSystem), integrated with scipy"
         ),
         mapping=(
-            "`examples/paper_cc16.toml` with `[load.gravity]` mass 1.2 kg, cg_radius 0.3 m, "
-            "release_angle -60 deg, offload 0.9 (ILLUSTRATIVE values: gravity aids at "
+            "`examples/paper_cc16_dynamic.toml` with `[load.gravity]` mass 1.2 kg, cg_radius "
+            "0.3 m, release_angle -60 deg, offload 0.9 (ILLUSTRATIVE values: gravity aids at "
             "release and opposes at the latch)."
         ),
         checks=tuple(checks),
