@@ -148,3 +148,20 @@ def test_without_numba_the_per_piece_path_runs(monkeypatch: pytest.MonkeyPatch) 
     per_piece = predict(system, [25.0], ["dynamic"], dynamics=params).solutions["dynamic"]
     assert numpy_path.deployment_time[0] == per_piece.deployment_time[0]
     assert numpy_path.end_speed[0] == per_piece.end_speed[0]
+
+
+def test_a_larger_batch_keeps_the_vectorised_pass_per_breakpoint(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Above TABLE_CASES qualifying cases in a pass, one vectorised pass per breakpoint is
+    # cheaper than a compiled call per case: three temperatures with TABLE_CASES = 2 must
+    # give the per-piece path's results bit for bit (closed form, not integrated).
+    system = _table(80)
+    params = DynamicParameters(load_inertia=5.0)
+    monkeypatch.setattr(solver, "TABLE_CASES", 2)
+    batch = predict(system, [-40.0, 25.0, 100.0], ["dynamic"], dynamics=params)
+    monkeypatch.setattr(solver, "TABLE_PIECES", 10**9)
+    per_piece = predict(system, [-40.0, 25.0, 100.0], ["dynamic"], dynamics=params)
+    a, b = batch.solutions["dynamic"], per_piece.solutions["dynamic"]
+    assert np.array_equal(a.deployment_time, b.deployment_time)
+    assert np.array_equal(a.end_speed, b.end_speed)
