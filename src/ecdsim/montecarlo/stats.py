@@ -502,15 +502,23 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
         stalled = np.asarray(data[output_column("stalled", temperature)], dtype=bool)
         speeds = np.asarray(data[output_column("end_speed_rad_s", temperature)], dtype=float)
         nominal_case = reference[temperature]
-        # The repeatability reads the samples in order (its first campaign): before the
-        # percentiles, which may reorder the columns (this summary's own) in place.
+        # The columns are this summary's own: the percentiles reorder the times in place,
+        # then the repeatability turns them into deviations in place (its first campaign
+        # taken in sample order before), so no column-sized temporary is allocated.
+        first = times[: plan.repeat_runs].copy()
+        times_described = describe(times, overwrite=True, known=moments[temperature][0])
         repeat = repeatability.study(
-            times, nominal_case["deployment_time_s"], plan.repeat_within, plan.repeat_runs
+            times,
+            nominal_case["deployment_time_s"],
+            plan.repeat_within,
+            plan.repeat_runs,
+            overwrite=True,
+            first=first,
         )
         case = {
             "temperature_C": temperature,
             "nominal": nominal_case,
-            "deployment_time_s": describe(times, overwrite=True, known=moments[temperature][0]),
+            "deployment_time_s": times_described,
             "end_speed_rad_s": describe(
                 speeds[~stalled] if stalled.any() else speeds,
                 overwrite=True,
