@@ -204,6 +204,7 @@ def test_help_and_version(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> No
         "compare-fluid",
         "montecarlo",
         "sweep",
+        "repeat",
         "export-fmu",
         "report",
         "app",

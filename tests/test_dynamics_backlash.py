@@ -626,3 +626,31 @@ def test_the_damper_side_overruns_the_latched_load_by_hand() -> None:
         0.5 * jl * float(result.arrival_speed) ** 2, rel=1e-12
     )
     assert_energy_closes(result)
+
+
+@pytest.mark.parametrize(
+    ("extra", "what"),
+    [
+        (
+            '[load.gravity]\nmass = "2.4 kg"\ncg_radius = "0.35 m"\nrelease_angle = "30 deg"\n'
+            'offload = "90 %"\n',
+            "load.gravity",
+        ),
+        ("", "gearbox\\] efficiency"),
+    ],
+)
+def test_lossy_gear_and_gravity_are_refused_by_name(tmp_path: Path, extra: str, what: str) -> None:
+    text = EXAMPLE.read_text().replace(
+        'lost_motion = "0 deg"', 'lost_motion = "0 deg"\nstiffness = "2e3 N*m/rad"', 1
+    )
+    if not extra:  # the lossy gear replaces FG
+        text = text.replace(
+            'coulomb_friction = "4.5e-4 N*m"',
+            'coulomb_friction = "0 N*m"\nefficiency = { forward = 0.8 }',
+            1,
+        )
+    path = tmp_path / "combined.toml"
+    path.write_text(text + "\n" + extra)
+    config = load_config(path)
+    with pytest.raises(ModelDomainError, match=f"gearbox.stiffness.*{what}"):
+        predict(config.system, 25.0, ["dynamic"], dynamics=config.spec.dynamics())

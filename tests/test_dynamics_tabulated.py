@@ -2,7 +2,9 @@
 
 Each breakpoint is an event of the dynamic solver, so a deployment over a spring table of
 P points has about P events; the lookup of the current piece costs O(1) per event (it
-moves by one piece at a time), not O(P) (counting the breakpoints below the angle).
+moves by one piece at a time), not O(P) (counting the breakpoints below the angle). Long
+forward runs over a table are crossed in one compiled call
+(tests/test_dynamics_table_kernel.py).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ecdsim.deployment import predict
-from ecdsim.dynamics import DynamicParameters
+from ecdsim.dynamics import DynamicParameters, solver
 from ecdsim.dynamics.solver import _Cases, _first_piece, _piece
 from ecdsim.model import DeploymentSystem, TabulatedSpring
 from tests import hand
@@ -52,7 +54,6 @@ def test_walking_lookup_equals_counting_from_any_start() -> None:
     assert np.array_equal(_first_piece(cases, phi), _counted(angles, phi, np.ones(n, bool)))
 
 
-@pytest.mark.slow  # 10,000 events of the Python event loop: about 40 s on a shared 2-core VM
 def test_ten_thousand_point_spring_against_scipy() -> None:
     # The paper's hinge (J = 5 kg*m^2, +25 degC) with a spring tabulated at P = 10,000
     # points of a curved law. The reference integrates the same piecewise-linear torque
@@ -85,8 +86,10 @@ def test_ten_thousand_point_spring_against_scipy() -> None:
     )
     assert result.status_names() == ["latched"]
     assert result.events.count("breakpoint") == points - 2
-    # ecdsim's pieces are exact (closed form); Radau at rtol 1e-10 over 10,000 kinks of
-    # the torque's slope keeps ~1e-9 on the arrival time: 1e-8 bounds the comparison.
+    # With numba the table is crossed in one compiled call (RODAS4 at rtol 1e-8, about
+    # 1e-11 on the time); without it every piece is exact (closed form). Radau at rtol
+    # 1e-10 over 10,000 kinks of the torque's slope keeps ~1e-9 on the arrival time:
+    # 1e-8 bounds the comparison (1e-7 for the speed).
     assert result.deployment_time[0] == pytest.approx(float(sol.t_events[0][0]), rel=1e-8)
     assert result.arrival_speed[0] == pytest.approx(float(sol.y_events[0][0][1]), rel=1e-7)
     assert_energy_closes(result)
@@ -106,12 +109,16 @@ def _solve(system: DeploymentSystem, **params: float) -> Any:
     return solution.result  # type: ignore[attr-defined]
 
 
-def test_spring_breakpoints_do_not_count_against_the_event_limit() -> None:
+def test_spring_breakpoints_do_not_count_against_the_event_limit(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     # A table of 60 points is 58 breakpoint events: with an event limit of 1 the run must
     # still reach the latch (its one pass that is not a breakpoint), and bit for bit as
     # with the default limit, which it never approaches. Before, every breakpoint was a
     # pass of the limit, and a table longer than max_events rows stopped short.
     system = _table_system(60)
+    # The per-piece path (one event-loop pass per breakpoint), not the compiled crossing.
+    monkeypatch.setattr(solver, "TABLE_PIECES", 10**9)
     limited = _solve(system, max_events=1)
     free = _solve(system)
     assert limited.status_names() == ["latched"]

@@ -281,18 +281,25 @@ def test_bad_gravity_keys_are_refused_by_name(
     assert "Traceback" not in result.output
 
 
-def test_the_dynamic_method_refuses_gravity_by_name(tmp_path: Path) -> None:
-    # Not implemented for the dynamic method: a one-line refusal naming the key, never
-    # a silent flight answer for a ground test.
-    text = _gravity("2 kg", "0.3 m", "30 deg", "0.9").replace(
-        'travel = "1.57 rad"', 'travel = "1.57 rad"\ninertia = "5 kg*m^2"'
-    )
+def test_the_dynamic_method_takes_gravity_and_shows_flight_beside_it(tmp_path: Path) -> None:
+    # Flight and test by the dynamic method too: the flight time equals the dynamic
+    # method's on the config without [load.gravity].
+    import json
+
+    inertia = 'travel = "1.57 rad"\ninertia = "5 kg*m^2"'
+    text = _gravity("2 kg", "0.3 m", "30 deg", "0.9").replace('travel = "1.57 rad"', inertia)
     path = tmp_path / "ground.toml"
     path.write_text(text)
-    result = CliRunner().invoke(app, ["deploy", str(path), "-m", "dynamic"])
-    assert result.exit_code == 2
-    assert "load.gravity" in result.output
-    assert "Traceback" not in result.output
+    result = CliRunner().invoke(app, ["deploy", str(path), "-m", "dynamic", "--json"])
+    assert result.exit_code == 0, result.output
+    ground = json.loads(result.stdout)["ground_test"]
+    plain = parse_config(TEXT.replace('travel = "1.57 rad"', inertia))
+    temps = np.array(plain.temperatures)
+    flight = predict(plain.system, temps, ("dynamic",), dynamics=plain.spec.dynamics())
+    for i, case in enumerate(ground["cases"]):
+        time = float(flight.solutions["dynamic"].deployment_time[i])
+        expected = time if math.isfinite(time) else None
+        assert case["dynamic"]["flight_deployment_time_s"] == expected
 
 
 def test_deploy_shows_flight_and_ground_test_side_by_side(tmp_path: Path) -> None:
@@ -328,6 +335,7 @@ def test_deploy_shows_flight_and_ground_test_side_by_side(tmp_path: Path) -> Non
     wide = runner.invoke(app, ["deploy", str(path)], env={"COLUMNS": "80"})
     assert wide.exit_code == 0
     assert "Flight (0 g) against ground test (1 g, 90 % offloaded)" in wide.stdout
+    assert "Deployment (ground test, 1 g)" in wide.stdout
     assert all(len(line) <= 80 for line in wide.stdout.splitlines())
     plain = tmp_path / "flight.toml"
     plain.write_text(TEXT)
@@ -444,3 +452,37 @@ def test_the_torque_margin_counts_opposing_gravity_as_its_own_kind() -> None:
     ).at_minimum()
     assert float(aided.margin) == pytest.approx(2.0, rel=1e-12)
     assert float(aided.resistive["gravity"]) == 0.0
+
+
+def test_monte_carlo_torque_margin_counts_gravity(tmp_path: Path) -> None:
+    # Fixed damping speed 0, factor 2 on gravity; theta_0 = -60 deg, so gravity opposes
+    # only past phi = 60 deg and grows to W sin(30 deg) at the latch while the spring
+    # falls: the margin is lowest at the end of travel, Te / (F + 2 W sin(30 deg)) - 1 by
+    # hand (the sampled mass has a tiny spread; the nominal case is checked).
+    from ecdsim.config import load_config
+    from ecdsim.montecarlo import build_plan, run
+    from ecdsim.montecarlo.stats import summarize
+    from tests.test_montecarlo_config import write_config
+
+    requirements = (
+        '\n[requirements]\ntemperatures = ["25 degC"]\nmin_torque_margin = 0.1\n'
+        '[requirements.torque_margin]\ndamping_speed = "0 rad/s"\n'
+        "factors = { gravity = 2.0 }\n"
+    )
+    base = _gravity("1.2 kg", "0.3 m", "-60 deg", "0.9") + requirements
+    config = load_config(
+        write_config(
+            tmp_path,
+            '"load.gravity.mass" = { distribution = "uniform", plus_minus = "0.1 %" }',
+            'sampling = "random"\nseed = 7\nchunk_size = 64',
+            base=base,
+        )
+    )
+    plan = build_plan(config, 64, temperatures=[25.0])
+    run(plan, tmp_path / "run")
+    case = summarize(plan, tmp_path / "run")["cases"][0]
+    w = 1.2 * G * 0.3 * 0.1
+    f = hand.fecd(25.0) + hand.fs(25.0)
+    expected = hand.TE / (f + 2.0 * w * math.sin(math.radians(-60.0) + hand.TRAVEL)) - 1.0
+    # 1e-12: the same arithmetic at the last breakpoint
+    assert case["nominal"]["min_torque_margin"] == pytest.approx(expected, rel=1e-12)

@@ -18,7 +18,10 @@ from typer.testing import CliRunner
 from ecdsim.cli.app import app
 from ecdsim.config import ConfigError, parse_config
 from ecdsim.deployment import predict
+from ecdsim.montecarlo.apply import NotTolerable, Parameters, apply, nominal
+from ecdsim.montecarlo.tolerances import resolve
 from ecdsim.physics import gearing
+from ecdsim.sizing.margin import MarginSettings, margin_over_travel
 from tests import hand
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "paper_cc16.toml"
@@ -164,3 +167,78 @@ def test_bad_efficiencies_are_refused_by_name(
     assert result.exit_code == 2
     assert "Traceback" not in result.output
     assert message in result.output
+
+
+def test_the_torque_margin_counts_the_mesh_loss_as_its_own_kind() -> None:
+    # FECD = 0.5 and BECD = 10 include 1/eta_f with eta_f = 0.8; damping taken at 0.1 rad/s.
+    # By hand: ideal-gear parts 0.8 * 0.5 = 0.4 (friction) and 0.8 * 1.0 = 0.8 (damping),
+    # mesh loss 0.2 * (0.5 + 1.0) = 0.3; with factor 2 on it and FS = 0.3, the resistance
+    # is 0.4 + 0.3 + 0.8 + 0.6 = 2.1 and TM = 4.2 / 2.1 - 1 = 1 at the first point.
+    terms = margin_over_travel(
+        np.array([0.0, 1.0]),
+        np.array([4.2, 2.1]),
+        ecd_friction=0.5,
+        system_friction=0.3,
+        damping_rate=10.0,
+        stalled=False,
+        stall_angle=math.nan,
+        settings=MarginSettings(factors={"gear_loss": 2.0}, damping_speed=0.1),
+        forward_efficiency=0.8,
+    )
+    assert terms.resistive["ecd_friction"][0] == pytest.approx(0.4, rel=1e-15)
+    assert terms.resistive["damping"][0] == pytest.approx(0.8, rel=1e-15)
+    assert terms.resistive["gear_loss"][0] == pytest.approx(0.3, rel=1e-14)
+    assert terms.margin[:2].tolist() == pytest.approx([1.0, 0.0], abs=1e-14)
+    # Unit factors: the kinds add up to FECD + BECD w, the margin of an ideal split.
+    plain = margin_over_travel(
+        np.array([0.0, 1.0]),
+        np.array([4.2, 2.1]),
+        ecd_friction=0.5,
+        system_friction=0.3,
+        damping_rate=10.0,
+        stalled=False,
+        stall_angle=math.nan,
+        settings=MarginSettings(damping_speed=0.1),
+    )
+    split = margin_over_travel(
+        np.array([0.0, 1.0]),
+        np.array([4.2, 2.1]),
+        ecd_friction=0.5,
+        system_friction=0.3,
+        damping_rate=10.0,
+        stalled=False,
+        stall_angle=math.nan,
+        settings=MarginSettings(damping_speed=0.1),
+        forward_efficiency=0.8,
+    )
+    # 1e-14: the same sum in another order
+    np.testing.assert_allclose(split.margin, plain.margin, rtol=1e-14)
+
+
+def test_monte_carlo_takes_tolerances_on_the_efficiencies() -> None:
+    config = parse_config(_lossy("{ forward = 0.85, backward = 0.7 }"))
+    assert nominal(Parameters(config.system), "gearbox.efficiency.forward") == 0.85
+    assert nominal(Parameters(config.system), "gearbox.efficiency.backward") == 0.7
+    with pytest.raises(NotTolerable, match="efficiency, which this config does not give"):
+        nominal(Parameters(parse_config(TEXT).system), "gearbox.efficiency.forward")
+    sampled = apply(Parameters(config.system), {"gearbox.efficiency.forward": np.array([0.8, 0.9])})
+    state = sampled.system.ecd.at(25.0)
+    # BECD at +25 degC by hand: 1.638e-4 * 380^2 / eta_f
+    np.testing.assert_allclose(state.ecd_damping_rate, [23.65272 / 0.8, 23.65272 / 0.9], rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("spread", "message"),
+    [
+        ('{ distribution = "uniform", plus_minus = "0.2" }', "must stay <= 1"),
+        ('{ distribution = "uniform", plus_minus = "0.9" }', "must stay > 0"),
+    ],
+)
+def test_an_efficiency_spread_must_stay_within_0_and_1(spread: str, message: str) -> None:
+    text = _lossy("{ forward = 0.85 }") + (
+        f'\n[tolerances]\n[tolerances.quantities]\n"gearbox.efficiency.forward" = {spread}\n'
+    )
+    with pytest.raises(ConfigError) as caught:
+        resolve(parse_config(text))
+    assert message in str(caught.value)
+    assert "gearbox.efficiency.forward" in str(caught.value)

@@ -166,3 +166,45 @@ def test_a_chunk_file_with_the_wrong_samples_is_refused(tmp_path: Path) -> None:
     pq.write_table(table, path)  # same tag (identity, index, rows): only the indices differ
     with pytest.raises(ValueError, match="chunk-000001.parquet: does not hold samples 1024..2047"):
         summarize(plan, out)
+
+
+def test_merged_chunk_moments_equal_one_pass_over_all_samples() -> None:
+    """Moments merged chunk by chunk (inf, an all-stalled chunk, one-sample chunks) give
+    the mean and standard deviation (n - 1) of all finite values, the extremes of all."""
+    rng = np.random.default_rng(11)
+    chunks = [rng.normal(30.0, 2.0, n) for n in (1000, 1, 2500, 37, 800)]
+    chunks[2][rng.random(2500) < 0.05] = np.inf
+    chunks.append(np.full(40, np.inf))  # every sample of this chunk stalls
+    chunks.append(np.array([31.5]))
+    merged = streaming.Moments.empty()
+    for values in chunks:
+        merged = merged.merge(streaming.Moments.of(values))
+    everything = np.concatenate(chunks)
+    finite = everything[np.isfinite(everything)]
+    mean, std = merged.mean_and_std()
+    assert merged.size == everything.size
+    assert merged.count == finite.size
+    # Rounding only: each chunk's pairwise sums and the exact pairwise update.
+    assert mean == pytest.approx(np.mean(finite), rel=MERGED)
+    assert std == pytest.approx(np.std(finite, ddof=1), rel=MERGED)
+    assert (merged.lowest, merged.highest) == (np.min(everything), np.inf)
+    again = streaming.decode_moments(streaming.encode_moments([(merged, merged)]), 1)
+    assert again == [(merged, merged)]
+    with pytest.raises(ValueError, match="wrong length"):
+        streaming.decode_moments(streaming.encode_moments([(merged, merged)]), 2)
+
+
+def test_summary_of_files_without_moments_is_the_same(tmp_path: Path) -> None:
+    """A chunk file written before the moments existed gets them from its own rows."""
+    plan = build_plan(load_config(EXAMPLE), 3000, "exact", chunk_size=1024)
+    out = tmp_path / "study"
+    run(plan, out)
+    with_moments = summarize(plan, out)
+    path = store.chunk_path(out, 2)
+    table = pq.read_table(path)
+    tag = json.loads(table.schema.metadata[store.METADATA_KEY])
+    del tag[streaming.MOMENTS_KEY]
+    pq.write_table(
+        table.replace_schema_metadata({store.METADATA_KEY: json.dumps(tag).encode()}), path
+    )
+    assert summarize(plan, out) == with_moments

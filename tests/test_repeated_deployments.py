@@ -9,19 +9,25 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
+from typer.testing import CliRunner
 
+from ecdsim.cli.app import app
+from ecdsim.config import load_config
 from ecdsim.deployment import predict
 from ecdsim.dynamics import DynamicParameters, DynamicResult, Thermal
 from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.dynamics.sequence import Cycle, run_sequence
-from tests.conftest import paper_system
+from tests.conftest import ROOT, paper_system
+from tests.helptext import assert_options, read_help, run_example
 from tests.test_two_node_heating import two_node_deploy
 
 C_R, R_RH, C_H, R_HE = 0.002, 40.0, 0.2, 200.0  # rotor, rotor-housing, housing, mount
 TEMPS = np.array([25.0, -40.0])
+runner = CliRunner()
 
 
 def _solve(params: DynamicParameters) -> DynamicResult:
@@ -128,3 +134,102 @@ def test_a_short_cool_down_drifts_to_a_periodic_state() -> None:
 def test_bad_cycle(count: int, cool_down: float, stow: float, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         Cycle(count, cool_down, stow)
+
+
+# --- the command line ------------------------------------------------------------------
+
+
+def _two_node_config(folder: Path) -> Path:
+    """The paper's dynamic example with the two-node heating of the tests above."""
+    text = (ROOT / "examples" / "paper_cc16_dynamic.toml").read_text("utf-8")
+    text = text.replace(
+        "[gearbox]",
+        '[damper.thermal]\nheat_capacity = "0.002 J/K"\nthermal_resistance = "40 K/W"\n'
+        'housing_heat_capacity = "0.2 J/K"\nhousing_thermal_resistance = "200 K/W"\n\n'
+        "[gearbox]",
+    )
+    text = text.replace('inertia = "5 kg*m^2"', 'inertia = "1 kg*m^2"')
+    path = folder / "life.toml"
+    path.write_text(text, "utf-8")
+    return path
+
+
+def test_repeat_command(tmp_path: Path) -> None:
+    config = _two_node_config(tmp_path)
+    args = ["repeat", str(config), "-n", "6", "--cool-down", "5", "--stow-time", "3 s"]
+    document = runner.invoke(app, [*args, "-T", "25", "-T", "-40", "--json"])
+    assert document.exit_code == 0, document.output
+    cases = json.loads(document.stdout)["cases"]
+    # The same sequence through the library: the command adds nothing of its own.
+    loaded = load_config(config)
+    params = loaded.spec.dynamics()
+    assert params is not None
+    assert params.thermal == Thermal(C_R, R_RH, C_H, R_HE)
+
+    def solve(run: DynamicParameters) -> DynamicResult:
+        solution = predict(loaded.system, TEMPS, ["dynamic"], dynamics=run).solutions["dynamic"]
+        assert isinstance(solution, DynamicSolution)
+        return solution.result
+
+    direct = run_sequence(solve, params, TEMPS, Cycle(6, 5.0, 3.0))
+    for j in range(2):
+        assert cases[j]["deployments"]["deployment_time_s"] == direct.deployment_time[:, j].tolist()
+    table = runner.invoke(app, [*args, "--plot", str(tmp_path / "life.png")])
+    assert table.exit_code == 0, table.output
+    assert max(len(line) for line in table.stdout.splitlines()) <= 80
+    assert "housing" in table.stdout  # the two-node column (its header may wrap)
+    assert "[degC]" in table.stdout
+    assert "drift 1 to 6" in table.stdout
+    assert (tmp_path / "life.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--cool-down", "5 m"], "--cool-down"),
+        (["--cool-down", "-5"], "--cool-down"),
+        (["--cool-down", "5", "--stow-time", "x"], "--stow-time"),
+        (["--cool-down", "5", "-n", "0"], "--count 0"),
+    ],
+)
+def test_repeat_bad_options(tmp_path: Path, extra: list[str], message: str) -> None:
+    result = runner.invoke(app, ["repeat", str(_two_node_config(tmp_path)), *extra])
+    assert result.exit_code == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith("error: ")
+    assert message in lines[0]
+
+
+def test_repeat_help(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    screen = read_help(runner, app, ["repeat"])
+    assert_options(
+        screen,
+        {
+            "--cool-down": None,
+            "--count": "-n",
+            "--stow-time": None,
+            "--temperature": "-T",
+            "--json": None,
+            "--plot": None,
+            "--wide": None,
+            "--plain": None,
+            "--help": None,
+        },
+    )
+    run_example(runner, app, screen, tmp_path, monkeypatch)
+
+
+@pytest.mark.parametrize("resistance", [40.0, math.inf])
+def test_one_node_cools_by_one_exponential(resistance: float) -> None:
+    # One node: the rise decays as exp(-t / (R C)) over cool-down + stow; adiabatic
+    # (R = inf) it does not decay at all, and each deployment starts where the last ended.
+    thermal = Thermal(0.05, resistance)
+    result = run_sequence(_solve, _params(thermal), TEMPS, Cycle(3, 2.0, 1.0))
+    assert result.start_housing_temperature is None
+    decay = math.exp(-3.0 / (resistance * 0.05))
+    for k in (1, 2):
+        expected = TEMPS + (result.end_rotor_temperature[k - 1] - TEMPS) * decay
+        # exp and one product: rounding of the ~K rises only.
+        np.testing.assert_allclose(result.start_rotor_temperature[k], expected, rtol=0, atol=1e-12)
+    assert np.all(result.start_rotor_temperature[1] > TEMPS)  # heat carried over

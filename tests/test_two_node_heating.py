@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
 from ecdsim.config.schema import ThermalSpec
-from ecdsim.deployment import predict
+from ecdsim.deployment import ModelDomainError, predict
 from ecdsim.dynamics import DynamicParameters, DynamicResult, Thermal, integrate
 from ecdsim.dynamics.damping import LinearEddy
 from ecdsim.dynamics.method import DynamicSolution
@@ -33,7 +34,7 @@ from ecdsim.model import (
     Load,
 )
 from tests import hand
-from tests.conftest import paper_system
+from tests.conftest import ROOT, paper_system
 from tests.dynamics_reference import assert_energy_closes
 
 T_ZERO = 25.0 + 1.0 / 0.004  # Eq. 1's BD_T = 0 [degC]
@@ -314,3 +315,54 @@ def test_compiled_and_numpy_rodas4_agree(monkeypatch: pytest.MonkeyPatch, numba:
     assert result.deployment_time[0] == pytest.approx(ref.time, rel=1e-8)
     assert result.final_housing_temperature[0] == pytest.approx(ref.housing, abs=1e-7)
     assert result.max_damper_temperature[0] == pytest.approx(ref.max_rotor, abs=1e-7)
+
+
+def test_a_warm_start_beyond_the_zero_of_the_damping_law_is_refused() -> None:
+    # Eq. 1 reaches zero damping at 275 degC: a rotor started 260 K above 25 degC would be
+    # beyond it. A domain error naming the field, not a NaN from the log state.
+    thermal = Thermal(C_R, R_RH, C_H, R_HE, initial_rotor_rise=260.0)
+    with pytest.raises(ModelDomainError, match="initial_rotor_rise"):
+        predict(
+            paper_system(), [25.0], ["dynamic"], dynamics=DynamicParameters(1.0, thermal=thermal)
+        )
+
+
+def test_the_housing_temperature_is_reported_only_with_a_housing() -> None:
+    # The JSON case of the dynamic method gains final_housing_temperature_C with two nodes,
+    # equal to the result's; without a housing the document keeps its old keys.
+    for thermal, has_housing in ((Thermal(C_R, R_RH, C_H, R_HE), True), (Thermal(C_R), False)):
+        params = DynamicParameters(load_inertia=1.0, thermal=thermal)
+        prediction = predict(paper_system(), [25.0], ["dynamic"], dynamics=params)
+        case = prediction.to_dict()["cases"][0]["dynamic"]
+        assert ("final_housing_temperature_C" in case) == has_housing
+        solution = prediction.solutions["dynamic"]
+        assert isinstance(solution, DynamicSolution)
+        housing = solution.result.final_housing_temperature
+        if has_housing:
+            assert housing is not None
+            assert case["final_housing_temperature_C"] == float(housing[0])
+
+
+def test_the_fmu_refuses_two_node_heating(tmp_path: Path) -> None:
+    # The FMU's damper has one temperature: a housing would be silently dropped and the
+    # rotor-to-housing resistance read as rotor to ambient. One line, exit status 2.
+    from typer.testing import CliRunner
+
+    from ecdsim.cli.app import app
+
+    text = (
+        (ROOT / "examples" / "paper_cc16_dynamic.toml")
+        .read_text("utf-8")
+        .replace(
+            "[gearbox]",
+            '[damper.thermal]\nheat_capacity = "4 J/K"\nthermal_resistance = "5 K/W"\n'
+            'housing_heat_capacity = "90 J/K"\n\n[gearbox]',
+        )
+    )
+    config = tmp_path / "two_node.toml"
+    config.write_text(text, "utf-8")
+    result = CliRunner().invoke(app, ["export-fmu", str(config), "-o", str(tmp_path / "d.fmu")])
+    assert result.exit_code == 2
+    assert result.stderr.count("\n") == 1
+    assert "damper.thermal.housing_heat_capacity" in result.stderr
+    assert not (tmp_path / "d.fmu").exists()

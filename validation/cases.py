@@ -38,11 +38,18 @@ from ecdsim.model import (
 )
 from validation.checks import CaseResult, Check
 from validation.scipy_reference import (
+    GRAVITY,
+    LOSSY_ROWS,
     RESISTIVE_ROWS,
+    TWO_NODE,
+    GroundTestPaperSystem,
+    LossyGearTrain,
     PaperSystem,
     ResistedPaperSystem,
     SpinDown,
     damped_mass,
+    two_node_relaxed,
+    two_node_time,
 )
 
 HERE = Path(__file__).resolve().parent
@@ -73,6 +80,12 @@ INTEGRATED_REASON = (
 # Linear segments are solved in closed form, exact to rounding; the scipy reference at
 # rtol 1e-12 carries about 1e-11 relative error of its own.
 CLOSED_FORM_RTOL = 1e-9
+# The exact method with gravity integrates by adaptive Gauss-Kronrod to a stated 1e-9.
+GRAVITY_RTOL = 1e-9
+GRAVITY_REASON = (
+    "1e-9 relative: the stated accuracy of ecdsim's adaptive quadrature "
+    "(solvers/exact_gravity.py); the scipy reference is integrated at rtol 1e-12"
+)
 CLOSED_FORM_REASON = (
     "1e-9 relative: ecdsim's closed form is exact to rounding, the scipy reference is "
     "integrated at rtol 1e-12"
@@ -730,6 +743,229 @@ def stribeck() -> CaseResult:
     )
 
 
+def gravity_ground_test() -> CaseResult:
+    """A 1 g ground test with offload (issue 16 item 2) by the exact, paper and dynamic
+    methods."""
+    source = EXAMPLES / "paper_cc16_dynamic.toml"
+    g = GRAVITY
+    section = (
+        f'\n[load.gravity]\nmass = "{g["mass"]} kg"\ncg_radius = "{g["cg_radius"]} m"\n'
+        f'release_angle = "{g["release_angle"]!r} rad"\noffload = "{g["offload"]}"\n'
+    )
+    config = parse_config(source.read_text() + section, str(source) + " + [load.gravity]")
+    temps = [-40.0, 25.0, 100.0]
+    dynamics = config.spec.dynamics()
+    assert dynamics is not None
+    found = predict(config.system, temps, ["paper", "exact", "dynamic"], dynamics=dynamics)
+    inertia = 5.0 + 2e-7 * 380.0**2  # as in paper_example_methods
+    system = GroundTestPaperSystem()
+    checks: list[Check] = []
+    for i, temp in enumerate(temps):
+        at = f"at {temp:+g} degC"
+        exact_time = system.quasi_static_time(temp)
+        checks.append(
+            Check(
+                f"exact-method time in the ground test {at}",
+                "s",
+                exact_time,
+                "scipy DOP853 rtol 1e-12 of Eq. 5, spring less gravity",
+                float(found.solutions["exact"].deployment_time[i]),
+                _relative(exact_time, GRAVITY_RTOL),
+                GRAVITY_REASON,
+            )
+        )
+        paper_time = system.paper_time(temp)
+        checks.append(
+            Check(
+                f"paper-method time in the ground test {at}",
+                "s",
+                paper_time,
+                "Eq. 8-11 with the end torques less gravity, in plain floats",
+                float(found.solutions["paper"].deployment_time[i]),
+                _relative(paper_time, 1e-12),
+                "1e-12 relative: the same arithmetic in another order",
+            )
+        )
+        dyn_time, _speed = system.dynamic_time(temp, inertia)
+        checks.append(
+            Check(
+                f"dynamic time in the ground test, J = {inertia:.4g} kg*m^2, {at}",
+                "s",
+                dyn_time,
+                "scipy Radau rtol 1e-12",
+                float(found.solutions["dynamic"].deployment_time[i]),
+                _relative(dyn_time, INTEGRATED_RTOL),
+                INTEGRATED_REASON,
+            )
+        )
+    return CaseResult(
+        name="gravity_ground_test",
+        title="A 1 g ground test with 90 % offload on the paper's example",
+        source=(
+            "the paper's constants typed in plain Python with the gravity torque "
+            "m g r (1 - offload) sin(theta_0 + phi) written out "
+            "(`validation/scipy_reference.py`, GroundTestPaperSystem), integrated with scipy"
+        ),
+        mapping=(
+            "`examples/paper_cc16_dynamic.toml` with `[load.gravity]` mass 1.2 kg, cg_radius "
+            "0.3 m, release_angle -60 deg, offload 0.9 (ILLUSTRATIVE values: gravity aids at "
+            "release and opposes at the latch)."
+        ),
+        checks=tuple(checks),
+    )
+
+
+def two_node_heating() -> CaseResult:
+    """Two-node heating (issue 16 item 6) and a second deployment after a cool-down."""
+    from ecdsim.dynamics.sequence import Cycle, run_sequence
+
+    source = EXAMPLES / "paper_cc16_dynamic.toml"
+    n = TWO_NODE
+    section = (
+        f'\n[damper.thermal]\nheat_capacity = "{n["c_r"]} J/K"\nthermal_resistance = '
+        f'"{n["r_rh"]} K/W"\nhousing_heat_capacity = "{n["c_h"]} J/K"\n'
+        f'housing_thermal_resistance = "{n["r_he"]} K/W"\n'
+    )
+    text = source.read_text().replace("\n[gearbox]", section + "\n[gearbox]", 1)
+    config = parse_config(text, str(source) + " + [damper.thermal] with a housing")
+    dynamics = config.spec.dynamics()
+    assert dynamics is not None
+    temps = [-40.0, 25.0, 100.0]
+    cool_down, stow = 20.0, 10.0
+
+    def solve(params: DynamicParameters) -> DynamicResult:
+        return _dynamic_result(predict(config.system, temps, ["dynamic"], dynamics=params))
+
+    sequence = run_sequence(solve, dynamics, temps, Cycle(2, cool_down, stow))
+    assert sequence.end_housing_temperature is not None
+    inertia = 5.0 + 2e-7 * 380.0**2  # as in paper_example_methods
+    system = PaperSystem()
+    label = "scipy Radau rtol 1e-12"
+    checks: list[Check] = []
+    for i, temp in enumerate(temps):
+        at = f"at {temp:+g} degC"
+        time, rotor, housing = two_node_time(system, temp, inertia)
+        start = two_node_relaxed(rotor - temp, housing - temp, cool_down + stow)
+        time2, _, _ = two_node_time(system, temp, inertia, start)
+        for quantity, unit, reference, value, tolerance in (
+            ("deployment time", "s", time, sequence.deployment_time[0, i], None),
+            ("rotor temperature at arrival", "degC", rotor, sequence.end_rotor_temperature[0, i],
+             rotor - temp),
+            ("housing temperature at arrival", "degC", housing,
+             sequence.end_housing_temperature[0, i], housing - temp),
+            ("deployment 2 time after 20 s cool-down + 10 s stow", "s", time2,
+             sequence.deployment_time[1, i], None),
+        ):  # fmt: skip
+            # Temperatures: rtol 1e-7 of the rise, the integrated quantity.
+            bound = _relative(reference, INTEGRATED_RTOL) if tolerance is None else (
+                INTEGRATED_RTOL * tolerance
+            )  # fmt: skip
+            checks.append(
+                Check(f"{quantity} {at}", unit, reference, label, float(value), bound,
+                      INTEGRATED_REASON + ("" if tolerance is None else " (of the rise)"))
+            )  # fmt: skip
+    return CaseResult(
+        name="two_node_heating",
+        title="Rotor and housing heating on the paper's example, and a second deployment",
+        source=(
+            "the paper's Eq. 1-4 and constants typed in plain Python with two lumped "
+            "capacitances, C_r T_r' = BD(T_r) N^2 w^2 - (T_r - T_h)/R_rh and "
+            "C_h T_h' = (T_r - T_h)/R_rh - (T_h - T)/R_he (Incropera et al., sections 3.1.3 "
+            "and 5.2), integrated with scipy; the cool-down and stow by scipy.linalg.expm "
+            "(`validation/scipy_reference.py`, two_node_time, two_node_relaxed)"
+        ),
+        mapping=(
+            "`examples/paper_cc16_dynamic.toml` with `[damper.thermal]` heat_capacity "
+            f"{n['c_r']} J/K, thermal_resistance {n['r_rh']} K/W (rotor to housing), "
+            f"housing_heat_capacity {n['c_h']} J/K, housing_thermal_resistance {n['r_he']} K/W "
+            "(ILLUSTRATIVE values, a light rotor that warms by kelvins); deployment 2 of "
+            "`ecdsim.dynamics.sequence.run_sequence` starts from deployment 1's end relaxed "
+            "over 30 s without heat input."
+        ),
+        checks=tuple(checks),
+    )
+
+
+def lossy_gear() -> CaseResult:
+    """A lossy gear (issue 16 item 5): a braked load back-driven by its rotor."""
+    source = EXAMPLES / "paper_cc16_dynamic.toml"
+    train = LossyGearTrain()
+    rows = ", ".join(f'["{a} rad", "{r} N*m"]' for a, r in LOSSY_ROWS)
+    text = (
+        source.read_text()
+        .replace(
+            'coulomb_friction = "4.5e-4 N*m"',
+            f'coulomb_friction = "0 N*m"\nefficiency = {{ forward = {train.eta_f}, '
+            f"backward = {train.eta_b} }}",
+            1,
+        )
+        .replace('rotor_inertia = "2e-7 kg*m^2"', f'rotor_inertia = "{train.rotor} kg*m^2"', 1)
+        .replace(
+            'damping_rate = "1.3e-4 N*m*s/rad"',
+            f'damping_rate = "{train.damper_rate} N*m*s/rad"',
+            1,
+        )
+        .replace('travel = "1.57 rad"', f'travel = "1.57 rad"\nresistive_table = [{rows}]', 1)
+    )
+    config = parse_config(text, str(source) + " + efficiency")
+    dynamics = config.spec.dynamics()
+    assert dynamics is not None
+    temps = [-40.0, 25.0, 100.0]
+    result = _dynamic_result(predict(config.system, temps, ["dynamic"], dynamics=dynamics))
+    checks: list[Check] = []
+    for i, temp in enumerate(temps):
+        at = f"at {temp:+g} degC"
+        expected = train.run(temp)
+        switch = [e["time_s"] for e in result.events.for_case(i) if e["kind"] == "power_flow"]
+        for quantity, unit, reference, value in (
+            ("power flow reverses (forward to back-driven)", "s", expected["switch"], switch[0]),
+            ("stick time", "s", expected["stick_time"], result.stuck_time[i]),
+            ("stick angle", "rad", expected["stick_angle"], result.stuck_angle[i]),
+            ("gear (mesh) loss", "J", expected["gear_loss"], result.energy.gear_loss[i]),
+        ):
+            checks.append(
+                Check(
+                    f"{quantity} {at}",
+                    unit,
+                    reference,
+                    "scipy DOP853 rtol 1e-12, stopped at every switch",
+                    float(value),
+                    _relative(reference, CLOSED_FORM_RTOL),
+                    CLOSED_FORM_REASON,
+                )
+            )
+        checks.append(
+            Check(
+                f"energy balance error {at}",
+                "-",
+                0.0,
+                "energy conservation",
+                float(np.ravel(result.energy.error)[i]),
+                1e-12,
+                "1e-12 of the spring work: every term is a closed form of its own",
+            )
+        )
+    return CaseResult(
+        name="lossy_gear",
+        title="A lossy gear, forward and back-driven, on a braked load (dynamic method)",
+        source=(
+            "the equations of Modelica.Mechanics.Rotational.Components.LossyGear (no bearing "
+            "friction) between the load and the damper side, typed in plain Python with the "
+            "paper's constants and integrated with scipy (`validation/scipy_reference.py`, "
+            "LossyGearTrain)"
+        ),
+        mapping=(
+            "`examples/paper_cc16_dynamic.toml` with FG = 0 and `[gearbox] efficiency = "
+            f"{{ forward = {train.eta_f}, backward = {train.eta_b} }}`, a rotor of "
+            f"{train.rotor} kg*m^2, BD = {train.damper_rate} N*m*s/rad and `[load] "
+            f"resistive_table` = {[list(r) for r in LOSSY_ROWS]} (rad, N*m): ILLUSTRATIVE "
+            "values chosen so that the rising resistance brakes the load harder than the "
+            "damper slows its rotor, which then drives the load (back-driven) until it stops."
+        ),
+        checks=tuple(checks),
+    )
+
+
 # Compliant backlash of validation case "compliant_backlash" (issue 16 item 3): the
 # paper's 0.25 deg lost motion (section 3.4's upper bound) behind a gear train of 2e3
 # N*m/rad and 0.5 N*m*s/rad at the input shaft. ILLUSTRATIVE values, not data.
@@ -843,6 +1079,9 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     paper_heating_limit,
     resistive_table,
     stribeck,
+    gravity_ground_test,
+    two_node_heating,
+    lossy_gear,
     compliant_backlash,
 )
 

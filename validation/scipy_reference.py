@@ -340,3 +340,195 @@ class ResistedPaperSystem(PaperSystem):
         angles = [a for a, _ in RESISTIVE_ROWS]
         torques = [r for _, r in RESISTIVE_ROWS]
         return super().spring(angle) - float(np.interp(angle, angles, torques))
+
+
+# The ground test of validation case "gravity_ground_test" (ILLUSTRATIVE values): the
+# deployed mass [kg], its CG radius from the hinge [m], the release angle from the
+# downward vertical [rad] and the offloaded fraction of the weight [-].
+GRAVITY = {"mass": 1.2, "cg_radius": 0.3, "release_angle": -math.pi / 3, "offload": 0.9}
+STANDARD_GRAVITY = 9.80665  # m/s^2 (CGPM 1901), typed here on its own
+
+
+@dataclass(frozen=True)
+class GroundTestPaperSystem(PaperSystem):
+    """The paper's system in a 1 g ground test: Eq. 7 less m g r (1 - offload) sin(theta_0 + phi)
+    (rigid-body statics: the weight's moment about the hinge, opposing deployment positive)."""
+
+    def gravity(self, angle: float) -> float:
+        """The gravity torque about the hinge [N*m], opposing deployment positive."""
+        g = GRAVITY
+        weight = g["mass"] * STANDARD_GRAVITY * g["cg_radius"] * (1.0 - g["offload"])
+        return weight * math.sin(g["release_angle"] + angle)
+
+    def spring(self, angle: float) -> float:
+        """Eq. 7 less the gravity torque."""
+        return super().spring(angle) - self.gravity(angle)
+
+    def paper_time(self, temperature: float) -> float:
+        """Eq. 8-11 with the end-point torques less gravity there [s]."""
+        b, f = self.becd(temperature), self.friction(temperature)
+        start = (self.spring(0.0) - f) / b
+        end = (self.spring(self.travel) - f) / b
+        return self.travel / ((start + end) / 2.0)
+
+
+# Two-node heating of validation case "two_node_heating" (issue 16 item 6): rotor C_r
+# [J/K], rotor to housing R_rh [K/W], housing C_h [J/K], housing to mount R_he [K/W].
+# ILLUSTRATIVE values, light enough for the rotor to warm by kelvins in one deployment.
+TWO_NODE = {"c_r": 0.05, "r_rh": 20.0, "c_h": 0.5, "r_he": 100.0}
+
+
+def two_node_time(
+    system: PaperSystem,
+    temperature: float,
+    inertia: float,
+    start: tuple[float, float] = (0.0, 0.0),
+) -> tuple[float, float, float]:
+    """Time [s], rotor and housing temperatures at arrival [degC] with two-node heating.
+
+    ``C_r T_r' = BD(T_r) (N w)^2 - (T_r - T_h) / R_rh`` and
+    ``C_h T_h' = (T_r - T_h) / R_rh - (T_h - T) / R_he`` (two lumped capacitances,
+    Incropera et al., Fundamentals of Heat and Mass Transfer, sections 3.1.3 and 5.2);
+    the damping follows Eq. 1 at T_r, BG and the frictions stay at T. ``start``: the
+    rotor's and housing's rises above T at release [K].
+    """
+    c_r, r_rh, c_h, r_he = (TWO_NODE[k] for k in ("c_r", "r_rh", "c_h", "r_he"))
+    f = system.friction(temperature)
+    bg = system.bg_fraction * system.bd * system.ratio**2
+
+    def rhs(_t: float, y: FloatArray) -> list[float]:
+        phi, w, tr, th = y
+        eddy = system.damper_rate(tr) * system.ratio**2
+        flow = (tr - th) / r_rh
+        return [
+            w,
+            (system.spring(phi) - f - (eddy + bg) * w) / inertia,
+            (eddy * w * w - flow) / c_r,
+            (flow - (th - temperature) / r_he) / c_h,
+        ]
+
+    y0 = [0.0, 0.0, temperature + start[0], temperature + start[1]]
+    time, state = _arrival(rhs, y0, system.travel, "Radau")
+    return time, float(state[2]), float(state[3])
+
+
+def two_node_relaxed(rotor: float, housing: float, time: float) -> tuple[float, float]:
+    """The rises [K] after ``time`` [s] without heat input: scipy's matrix exponential of
+    ``[[-1/(R_rh C_r), 1/(R_rh C_r)], [1/(R_rh C_h), -(1/R_rh + 1/R_he)/C_h]]``."""
+    from scipy.linalg import expm
+
+    c_r, r_rh, c_h, r_he = (TWO_NODE[k] for k in ("c_r", "r_rh", "c_h", "r_he"))
+    a = np.array(
+        [
+            [-1.0 / (r_rh * c_r), 1.0 / (r_rh * c_r)],
+            [1.0 / (r_rh * c_h), -(1.0 / r_rh + 1.0 / r_he) / c_h],
+        ]
+    )
+    out = expm(a * time) @ np.array([rotor, housing])
+    return float(out[0]), float(out[1])
+
+
+# Validation case "lossy_gear" (issue 16 item 5): a load braked by a rising resistance
+# (ILLUSTRATIVE rows, rad and N*m) behind a lossy mesh and a heavy rotor.
+LOSSY_ROWS: tuple[tuple[float, float], ...] = ((0.0, 0.0), (0.3, 0.0), (0.6, 5.0), (1.6, 5.0))
+
+
+def _crossing(row: float) -> Callable[[float, FloatArray], float]:
+    """A terminal event: the angle passes a table row."""
+
+    def event(_s: float, y: FloatArray) -> float:
+        return float(y[0]) - row
+
+    return event
+
+
+@dataclass(frozen=True)
+class LossyGearTrain:
+    """The paper's spring and frictions driving a damper through a lossy mesh (LossyGear).
+
+    The equations of Modelica.Mechanics.Rotational.Components.LossyGear without bearing
+    friction, between the load J_L (with the spring, the table and FS_T) and the damper side
+    J_D (rotor at the fast shaft times N^2, needing D = B_q w + F_q sign(w) through an ideal
+    gear). M the mesh torque N tau_out; forward (M w >= 0) the load supplies M / eta_f,
+    back-driven M eta_b:
+
+        J_L w' = A - m M,  J_D w' = M - D   =>  w' = (A - m D) / (J_L + m J_D),
+
+    m = 1/eta_f or eta_b, the mode that of the sign of (J_L D + J_D A) w. Integrated piece
+    by piece between mode switches, zero speeds and table rows (terminal events).
+    """
+
+    damper_rate: float = 1.3e-5  # BD [N*m*s/rad]: a tenth of the paper's
+    rotor: float = 1e-4  # [kg*m^2] at the fast shaft
+    load_inertia: float = 5.0
+    eta_f: float = 0.8
+    eta_b: float = 0.6
+
+    def run(self, temperature: float) -> dict[str, float]:
+        """Until it sticks: first switch time, stick time [s] and angle [rad], gear loss [J]."""
+        n = 380.0
+        t = temperature
+        bq = (self.damper_rate * (1.0 - 0.004 * (t - 25.0)) + 0.26 * self.damper_rate) * n**2
+        fq = (7.9e-4 + (-2.12e-6 * t + 2.2e-4)) * n  # FD + FL_T, no FG
+        fs = -0.0044 * t + 0.58
+        j_l, j_d = self.load_inertia, self.rotor * n**2
+        rows = [a for a, _ in LOSSY_ROWS]
+        values = [r for _, r in LOSSY_ROWS]
+
+        def net(phi: float) -> float:
+            return 3.73 + (1.58 - 3.73) * phi / 1.57 - float(np.interp(phi, rows, values))
+
+        state = np.array([0.0, 0.0, 0.0])
+        time, sign, forward, switched = 0.0, 1.0, True, False
+        switches: list[float] = []
+        for _ in range(100):
+            phi, w = float(state[0]), float(state[1])
+            if w == 0.0:
+                if abs(net(phi)) <= fs + fq / self.eta_f:
+                    return {
+                        "switch": switches[0] if switches else math.inf,
+                        "stick_time": time,
+                        "stick_angle": phi,
+                        "gear_loss": float(state[2]),
+                    }
+                sign = math.copysign(1.0, net(phi))
+            if not switched:
+                forward = (j_l * (bq * w + fq * sign) + j_d * (net(phi) - fs * sign)) * sign >= 0
+            switched = False
+            m = 1.0 / self.eta_f if forward else self.eta_b
+
+            def rhs(_s: float, y: FloatArray, m: float = m, sg: float = sign) -> list[float]:
+                d = bq * y[1] + fq * sg
+                acc = (net(float(y[0])) - fs * sg - m * d) / (j_l + m * j_d)
+                return [float(y[1]), acc, (m - 1.0) * (d + j_d * acc) * float(y[1])]
+
+            def stop(_s: float, y: FloatArray, sg: float = sign) -> float:
+                return float(y[1]) * sg
+
+            def flow(_s: float, y: FloatArray, sg: float = sign) -> float:
+                d = bq * float(y[1]) + fq * sg
+                return (j_l * d + j_d * (net(float(y[0])) - fs * sg)) * sg
+
+            stop.direction = -1  # type: ignore[attr-defined]
+            flow.direction = -1 if forward else 1  # type: ignore[attr-defined]
+            events: list[Callable[[float, FloatArray], float]] = [stop, flow]
+            for row in rows[1:-1]:
+                if abs(row - phi) > 1e-12:
+                    events.append(_crossing(row))
+            for event in events:
+                event.terminal = True  # type: ignore[attr-defined]
+            sol = solve_ivp(
+                rhs, (0.0, 1e3), state, method="DOP853", rtol=RTOL, atol=ATOL, events=events
+            )
+            k = min(
+                (j for j, te in enumerate(sol.t_events) if len(te)),
+                key=lambda j: float(sol.t_events[j][0]),
+            )
+            time += float(sol.t_events[k][0])
+            state = np.array(sol.y_events[k][0], dtype=float)
+            if k == 0:
+                state[1] = 0.0
+            elif k == 1:
+                switches.append(time)
+                forward, switched = not forward, True
+        raise RuntimeError("the lossy gear train did not come to rest")

@@ -288,18 +288,18 @@ def predict(
     _check_finite(ecd)
     _check_damping_positive(ecd)
     problem, fs = build_problem(system, ecd, temps)
-    if problem.has_gravity and (needing := [m for m in methods if SOLVERS[m].needs_dynamics]):
-        # The dynamic method's segments do not carry the gravity torque yet (docs/model.md).
-        raise ModelDomainError(
-            "load.gravity",
-            f"the {needing[0]} method does not take gravity yet; predict the ground test "
-            "with the paper and exact methods, or remove [load.gravity] for flight",
-        )
     if dynamics is not None:
         try:
+            base = problem
             problem = dynamic_problem(system, ecd, temps, problem, fs, dynamics)
         except DynamicDomainError as exc:
             raise ModelDomainError(exc.key, exc.message) from None
+        if base.has_gravity:  # a ground test: the dynamic method integrates gravity too
+            problem = replace(
+                problem,
+                gravity_amplitude=base.gravity_amplitude,
+                gravity_angle=base.gravity_angle,
+            )
     elif needing := [m for m in methods if SOLVERS[m].needs_dynamics]:
         raise ModelDomainError(
             "load.inertia",

@@ -21,6 +21,7 @@ import numpy as np
 from ecdsim._types import FloatArray
 from ecdsim.deployment import Prediction
 from ecdsim.dynamics.result import EVENT_KINDS, DynamicResult, TimeSeries
+from ecdsim.dynamics.sequence import SequenceResult
 from ecdsim.plotting import _figure, plot_title, save_figure, temperature_colors
 from ecdsim.units_display import Shown, UnitSystem
 
@@ -225,3 +226,41 @@ def write_dynamic_plots(
         figure = plot_damper_temperature(prediction, units, result=result)
         written.append(save_figure(figure, out / "dynamic_damper_temperature.png"))
     return written
+
+
+def plot_sequence(result: SequenceResult, system: str, units: UnitSystem = "si") -> Figure:
+    """Repeated deployments against the deployment number: the deployment time's change
+    from the first deployment (top) and the rotor's start and peak temperatures above the
+    deployment temperature (bottom), one colour per temperature. Drifts are fractions of
+    a percent and of a kelvin beside tens of seconds and degrees, so both panels show
+    changes; the axis is logarithmic from 20 deployments on (the drift settles early)."""
+    u = Shown(units)
+    temps = result.temperatures
+    colors = temperature_colors(len(temps))
+    number = np.arange(1, result.cycle.count + 1)
+    fig = _figure(7.5, 6.4)
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    kelvin = u.value(1.0, "temperature_difference")
+    for j, temp in enumerate(temps):
+        label = f"T = {u.text(float(temp), 'temperature')}"
+        change = 100.0 * (result.deployment_time[:, j] / result.deployment_time[0, j] - 1.0)
+        top.plot(number, change, color=colors[j], label=label)
+        for values, style, what in (
+            (result.peak_rotor_temperature, "-", "peak"),
+            (result.start_rotor_temperature, "--", "start"),
+        ):
+            rise = (values[:, j] - temp) * kelvin
+            bottom.plot(number, rise, style, color=colors[j], label=f"{what}, {label}")
+    cycle = result.cycle
+    schedule = f"cool-down {cycle.cool_down:g} s, stow {cycle.stow_time:g} s"
+    top.set_title(plot_title(system, f"{cycle.count} deployments, {schedule}"))
+    top.set_ylabel("deployment time change\nfrom deployment 1 [%]")
+    bottom.set_ylabel(u.head("rotor temperature above T", "temperature_difference", sep="\n"))
+    bottom.set_xlabel("deployment number [-]")
+    if cycle.count >= 20:
+        bottom.set_xscale("log")
+    bottom.set_xlim(1, max(int(number[-1]), 2))
+    for ax in (top, bottom):
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize="small")
+    return fig

@@ -32,6 +32,8 @@ from ecdsim.cli.fmu import EPILOG as FMU_EPILOG
 from ecdsim.cli.fmu import export_fmu
 from ecdsim.cli.montecarlo import EPILOG as MONTECARLO_EPILOG
 from ecdsim.cli.montecarlo import montecarlo
+from ecdsim.cli.repeat import EPILOG as REPEAT_EPILOG
+from ecdsim.cli.repeat import repeat
 from ecdsim.cli.report import APP_EPILOG, REPORT_EPILOG, explore, report
 from ecdsim.cli.size import FLUID_EPILOG, SIZE_EPILOG, compare_fluid, size
 from ecdsim.cli.sweep import EPILOG as SWEEP_EPILOG
@@ -226,6 +228,7 @@ app.command(cls=HelpCommand, epilog=SIZE_EPILOG)(size)
 app.command(cls=HelpCommand, name="compare-fluid", epilog=FLUID_EPILOG)(compare_fluid)
 app.command(cls=HelpCommand, epilog=MONTECARLO_EPILOG)(montecarlo)
 app.command(cls=HelpCommand, epilog=SWEEP_EPILOG)(sweep)
+app.command(cls=HelpCommand, epilog=REPEAT_EPILOG)(repeat)
 app.command(cls=HelpCommand, name="export-fmu", epilog=FMU_EPILOG)(export_fmu)
 app.command(cls=HelpCommand, epilog=REPORT_EPILOG)(report)
 app.command(cls=HelpCommand, name="app", epilog=APP_EPILOG)(explore)

@@ -59,7 +59,9 @@ def print_tables(prediction: Prediction, units: UnitSystem = "si") -> None:
     # The summary (BECD, FECD, FS) stays; the components behind it go first at 80 columns.
     display.show(console, ecd, drop=("BD_T", "BT_T", "FT_T"))
 
-    table = Table(title="Deployment", title_justify="left")
+    # With [load.gravity] the configured system is the ground test; flight follows below.
+    title = "Deployment (ground test, 1 g)" if "ground_test" in document else "Deployment"
+    table = Table(title=title, title_justify="left")
     table.add_column(escape(u.head("T", "temperature")), justify="right")
     methods = document["methods"]
     for name in methods:
@@ -229,11 +231,14 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | No
         headers = [u.head("T", "temperature", "\n")]
         headers += ["engaged at\n[s]"] if engage else []
         headers += [u.head("peak damper\nT", "temperature", "\n")] if heated else []
+        housing = heated and "final_housing_temperature_C" in dyn[0]  # two-node heating
+        headers += [u.head("housing T\nat end", "temperature", "\n")] if housing else []
         rows = []
         for d, t in zip(dyn, temps, strict=True):
             row = [u.num(t, "temperature")]
             row += [_fmt(d["engagement_time_s"])] if engage else []
             row += [u.num(d["max_damper_temperature_C"], "temperature")] if heated else []
+            row += [u.num(d["final_housing_temperature_C"], "temperature")] if housing else []
             rows.append(row)
         _simple_table(console, "Dynamic method: damper", headers, rows)
     said = ["latch: speed and kinetic energy on arrival at the end of travel"]

@@ -126,6 +126,8 @@ class FactorsSpec(_Section):
     resistive_table: Factor = 1.0
     # [load.gravity]: a ground test's gravity torque where it opposes, its own kind.
     gravity: Factor = 1.0
+    # [gearbox] efficiency: the mesh loss at the input, its own kind (issue 16 item 5).
+    gear_loss: Factor = 1.0
 
 
 class AllowancesSpec(_Section):

@@ -123,6 +123,25 @@ TOLERABLE: dict[str, TolerableQuantity] = {
         _q("gearbox.damping_fraction", NUMBER, "ecd.gearbox.damping_fraction", lower_bound=0.0),
         _q("gearbox.damping_rate", DAMPING, "ecd.gearbox.damping_rate", lower_bound=0.0),
         _q("gearbox.coulomb_friction", TORQUE, "ecd.gearbox.coulomb_friction", lower_bound=0.0),
+        # A lossy mesh's efficiencies (issue 16 item 5), in (0, 1].
+        _q(
+            "gearbox.efficiency.forward",
+            NUMBER,
+            "ecd.gearbox.efficiency.forward",
+            "GearEfficiency",
+            lower_bound=0.0,
+            strict=True,
+            upper_bound=1.0,
+        ),
+        _q(
+            "gearbox.efficiency.backward",
+            NUMBER,
+            "ecd.gearbox.efficiency.backward",
+            "GearEfficiency",
+            lower_bound=0.0,
+            strict=True,
+            upper_bound=1.0,
+        ),
         _q(
             "load.start_torque",
             TORQUE,

@@ -921,6 +921,7 @@ def solve_compliant(problem: DynamicProblem, record: bool = True) -> DynamicResu
         engagement_loss=arr([0.0] * len(runs)),
         impact_loss=arr([r.impact_loss for r in runs]),
         final_kinetic_energy=arr(final_ke),
+        gear_loss=arr([0.0] * len(runs)),
         mesh_dissipation=arr([float(r.y[5]) for r in runs]),
         elastic_energy=arr(
             [

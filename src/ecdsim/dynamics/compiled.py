@@ -264,22 +264,24 @@ def _step(
     p10 = hg * j10 * inv1
     p12 = hg * j12 * inv2 * inv1
     p21 = hg * j21 * inv2
+    # The row loops run over the four one-node rows with a constant bound (as before the
+    # housing row existed: the compiler unrolls them), the housing row after them.
     for i in range(6):
         if i == 0:
-            for r in range(m):
+            for r in range(4):
                 value[r] = f0[r] * hg
+            if two_node:
+                value[4] = f0[4] * hg
         else:
-            for r in range(m):
-                acc = y[r]
-                for jj in range(min(i, 5)):
-                    acc += _A_TABLE[i, jj] * k[jj, r]
-                stage[r] = acc
+            for r in range(4):
+                stage[r] = _stage_row(y, k, i, r)
+            if two_node:
+                stage[4] = _stage_row(y, k, i, 4)
             _rhs(par, kind, heating, stage, value)
-            for r in range(m):
-                coupling = 0.0
-                for jj in range(i):
-                    coupling += _GC_TABLE[i, jj] * k[jj, r]
-                value[r] = value[r] * hg + coupling
+            for r in range(4):
+                value[r] = value[r] * hg + _coupling_row(k, i, r)
+            if two_node:
+                value[4] = value[4] * hg + _coupling_row(k, i, 4)
         v2 = value[2] + p24 * value[4] if two_node else value[2]
         z1 = value[1] * inv1 + p10 * value[0]
         if heating:
@@ -295,12 +297,29 @@ def _step(
         else:
             k[i, 2] = value[2]
             k[i, 3] = value[3] + hg * j31 * z1
-    for r in range(m):
-        acc = y[r]
-        for jj in range(5):
-            acc += _A_TABLE[5, jj] * k[jj, r]
-        y1[r] = acc + k[5, r]
+    for r in range(4):
+        y1[r] = _stage_row(y, k, 5, r) + k[5, r]
+    if two_node:
+        y1[4] = _stage_row(y, k, 5, 4) + k[5, 4]
     return sound
+
+
+@_jit
+def _stage_row(y: FloatArray, k: FloatArray, i: int, r: int) -> float:
+    """Row r of stage i's state, ``y + sum_j A_ij K_j`` (stage 5's for i = 5)."""
+    acc: float = y[r]
+    for jj in range(min(i, 5)):
+        acc += _A_TABLE[i, jj] * k[jj, r]
+    return acc
+
+
+@_jit
+def _coupling_row(k: FloatArray, i: int, r: int) -> float:
+    """Row r of ``GAMMA * sum_j C_ij K_j`` for stage i."""
+    coupling = 0.0
+    for jj in range(i):
+        coupling += _GC_TABLE[i, jj] * k[jj, r]
+    return coupling
 
 
 @_jit
@@ -441,10 +460,14 @@ def _segment(
         sound = _step(par, kind, heating, y, f, h, k, stage, value, y1)
         err = 0.0
         total = 0.0
-        for r in range(rows):
+        for r in range(4):
             scale = max(abs(y[r]), abs(y1[r])) * rtol + atol[r]
             err = max(err, abs(k[5, r]) / scale)
             total += y1[r]
+        if rows > 4:  # the housing row (two-node heating)
+            scale = max(abs(y[4]), abs(y1[4])) * rtol + atol[4]
+            err = max(err, abs(k[5, 4]) / scale)
+            total += y1[4]
         finite = math.isfinite(err + total)
         if finite and sound:
             factor = min(max(0.9 / math.sqrt(math.sqrt(max(err, 1e-10))), 0.2), 5.0)

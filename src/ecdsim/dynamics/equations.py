@@ -60,6 +60,7 @@ from numpy.typing import NDArray
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.damping import EddyLaw
 from ecdsim.physics import thermal
+from ecdsim.physics.gravity import gravity_torque, gravity_torque_slope
 
 
 def stribeck_excess(
@@ -117,6 +118,10 @@ class Model:
     stribeck_speed : w_St [rad/s] of each segment (with ``stribeck_excess``)
     housing_heat_capacity : C_h [J/K] of each segment, or None for one-node heating
     housing_resistance : R_he, housing to ambient [K/W] (with ``housing_heat_capacity``)
+    gravity_amplitude : W = m g r (1 - offload) of a ground test [N*m] per segment, or
+        None for no gravity (docs/model.md, gravity in ground tests)
+    gravity_phase : theta_0 + phi at the segment's start [rad] (with ``gravity_amplitude``)
+    gravity_direction : +1 forward, -1 backward: the segment's frame (with the amplitude)
     """
 
     inertia: FloatArray
@@ -134,6 +139,9 @@ class Model:
     stribeck_speed: FloatArray | None = None
     housing_heat_capacity: FloatArray | None = None
     housing_resistance: FloatArray | None = None
+    gravity_amplitude: FloatArray | None = None
+    gravity_phase: FloatArray | None = None
+    gravity_direction: FloatArray | None = None
 
     @property
     def two_node(self) -> bool:
@@ -182,7 +190,29 @@ class Model:
             housing_resistance=None
             if self.housing_resistance is None
             else self.housing_resistance[index],
+            gravity_amplitude=None
+            if self.gravity_amplitude is None
+            else self.gravity_amplitude[index],
+            gravity_phase=None if self.gravity_phase is None else self.gravity_phase[index],
+            gravity_direction=None
+            if self.gravity_direction is None
+            else self.gravity_direction[index],
         )
+
+    def gravity(self, x: FloatArray) -> tuple[FloatArray, FloatArray] | None:
+        """The gravity torque against the motion in the forward frame, and its slope in x.
+
+        ``G(x) = d W sin(theta_0 + phi_0 + d x)`` with d the direction (the torque
+        opposing deployment, :func:`ecdsim.physics.gravity.gravity_torque`, seen along the
+        motion), ``dG/dx = W cos(theta_0 + phi_0 + d x)``; None without gravity.
+        """
+        if self.gravity_amplitude is None:
+            return None
+        assert self.gravity_phase is not None
+        assert self.gravity_direction is not None
+        angle = self.gravity_phase + self.gravity_direction * x
+        torque = self.gravity_direction * gravity_torque(0.0, self.gravity_amplitude, angle)
+        return torque, gravity_torque_slope(0.0, self.gravity_amplitude, angle)
 
     def _stribeck(self, u: FloatArray) -> tuple[FloatArray, FloatArray] | None:
         if self.stribeck_excess is None or self.stribeck_speed is None:
@@ -224,6 +254,9 @@ class Model:
         stribeck = self._stribeck(u)
         if stribeck is not None:
             accel -= stribeck[0]
+        weight = self.gravity(x)
+        if weight is not None:
+            accel -= weight[0]
         accel /= self.inertia
         if self.heating:
             dy[2] = thermal.factor_log_rate(
@@ -258,6 +291,9 @@ class Model:
         d_torque_du = n * n * (d_speed + self.gearbox_damping)
         d_torque_ds = n * d_factor * (c * factor)  # df/ds = c f
         j10 = -self.stiffness / self.inertia
+        weight = self.gravity(y[0])
+        if weight is not None:
+            j10 = -(self.stiffness + weight[1]) / self.inertia
         j11 = -d_torque_du / self.inertia
         j12 = -d_torque_ds / self.inertia
         if self.heating:

@@ -597,3 +597,16 @@ def advance(seg: Segment, length: FloatArray, cap: FloatArray) -> Advance:
         speed_squared_integral=v2,
         max_speed=max_speed,
     )
+
+
+def homogeneous_zero_time(
+    seg: Segment, y0: FloatArray, dy0: FloatArray, m1: ComplexArray, m2: ComplexArray
+) -> FloatArray:
+    """First t > 0 where a solution of the segment's homogeneous equation vanishes [s].
+
+    ``y = m1 e^{r1 t} + m2 e^{r2 t}`` with ``y(0) = y0``, ``y'(0) = dy0`` (any linear
+    combination of the speed and its derivatives is one); inf if it never vanishes. The
+    lossy gear's power-flow search (:mod:`ecdsim.dynamics.gearflow`) uses it to split a
+    segment where its switching function is monotone.
+    """
+    return _first_zero(y0, dy0 + seg.p * y0, m1, m2, seg)

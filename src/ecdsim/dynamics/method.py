@@ -88,6 +88,8 @@ class DynamicSolution(DeploymentSolution):
             "energy_J",
         )
         fields = {key: summary[key] for key in keys}
+        if "final_housing_temperature_C" in summary:  # two-node heating
+            fields["final_housing_temperature_C"] = summary["final_housing_temperature_C"]
         for key in ("max_mesh_torque_Nm", "latch_mesh_torque_Nm"):  # compliant backlash only
             if key in summary:
                 fields[key] = summary[key]

@@ -47,6 +47,8 @@ _CASE_FIELDS = (
     "housing_thermal_resistance",
     "initial_rotor_rise",
     "initial_housing_rise",
+    "forward_efficiency",
+    "backward_efficiency",
 )
 
 
@@ -100,6 +102,9 @@ class DynamicProblem(QuasiStaticProblem):
     housing_thermal_resistance : R_he, housing to the environment [K/W]; inf adiabatic
     initial_rotor_rise : damper (rotor) temperature above T at release [K]
     initial_housing_rise : housing temperature above T at release [K]
+    forward_efficiency : eta_f of a lossy mesh [-]; 1 (the default) for an ideal gear.
+        ``damping_rate`` and ``ecd_friction`` already include it (Eq. 3-4 / eta_f)
+    backward_efficiency : eta_b of a lossy mesh, while the damper side drives [-]; 1
     eddy : the damper's eddy-current law (linear Eq. 1 or roll-off)
     thermal : True when self-heating is modelled
     two_node : True when the housing is a heat capacity of its own
@@ -132,6 +137,8 @@ class DynamicProblem(QuasiStaticProblem):
     housing_thermal_resistance: FloatArray = field(default_factory=lambda: np.asarray(math.inf))
     initial_rotor_rise: FloatArray = field(default_factory=lambda: np.asarray(0.0))
     initial_housing_rise: FloatArray = field(default_factory=lambda: np.asarray(0.0))
+    forward_efficiency: FloatArray = field(default_factory=lambda: np.asarray(1.0))
+    backward_efficiency: FloatArray = field(default_factory=lambda: np.asarray(1.0))
     thermal: bool = False
     two_node: bool = False
     stop_time: float = math.inf
@@ -165,6 +172,13 @@ class DynamicProblem(QuasiStaticProblem):
     def nonlinear(self) -> bool:
         """True when engaged segments need numerical integration."""
         return self.thermal or self.eddy.name != "linear"
+
+    @property
+    def lossy(self) -> bool:
+        """True when some case's gear has a mesh efficiency below 1 (issue 16 item 5)."""
+        return bool(
+            np.any(self.forward_efficiency != 1.0) or np.any(self.backward_efficiency != 1.0)
+        )
 
     @property
     def stribeck(self) -> bool:
@@ -253,8 +267,25 @@ def dynamic_problem(
             f"{float(np.max(start)):.6g} rad",
         )
     thermal = params.thermal
+    if thermal is not None and np.any(np.asarray(thermal.initial_rotor_rise) != 0.0):
+        # A warm start (repeated deployments) must lie below the damping law's zero.
+        warm = eddy.factor(np.asarray(temperatures, float) + thermal.initial_rotor_rise)
+        if np.any(warm <= 0.0):
+            raise DynamicDomainError(
+                "damper.thermal.initial_rotor_rise",
+                "puts the damper at or beyond the temperature where its damping law reaches zero",
+            )
+    lossy = bool(np.any(ecd.forward_efficiency != 1.0) or np.any(ecd.backward_efficiency != 1.0))
+    nonlinear = thermal is not None or params.rolloff is not None
+    if lossy and (nonlinear or params.stribeck_speed is not None):
+        # The power-flow switch is found on closed-form segments only (docs/dynamics.md).
+        raise DynamicDomainError(
+            "gearbox.efficiency",
+            "the dynamic method takes a lossy gear with linear damping only, not yet with "
+            "[damper.rolloff], [damper.thermal] or damper.stribeck_speed",
+        )
     if params.gear_stiffness is not None:
-        _check_compliant(params, reflected)
+        _check_compliant(params, reflected, lossy=lossy, gravity=base.has_gravity)
     return DynamicProblem(
         angles=base.angles,
         torques=base.torques,
@@ -300,11 +331,28 @@ def dynamic_problem(
         rtol=params.rtol,
         integrator=params.integrator,
         max_events=params.max_events,
+        forward_efficiency=np.asarray(ecd.forward_efficiency, dtype=float),
+        backward_efficiency=np.asarray(ecd.backward_efficiency, dtype=float),
     )
 
 
-def _check_compliant(params: DynamicParameters, damper_inertia: FloatArray) -> None:
+def _check_compliant(
+    params: DynamicParameters, damper_inertia: FloatArray, lossy: bool, gravity: bool
+) -> None:
     """What the compliant backlash (two degrees of freedom) does not model yet."""
+    for absent, what in (
+        (
+            lossy,
+            "[gearbox] efficiency (the lossy gear's power-flow switch is modelled for "
+            "the rigid mesh only)",
+        ),
+        (
+            gravity,
+            "[load.gravity] (a ground test's gravity torque is modelled for the rigid mesh only)",
+        ),
+    ):
+        if absent:
+            raise DynamicDomainError("gearbox.stiffness", f"cannot be combined with {what} yet")
     if params.thermal is not None:
         raise DynamicDomainError(
             "gearbox.stiffness",

@@ -44,6 +44,7 @@ EVENT_KINDS = (
     "horizon",  # the integrator reached its time horizon without an event
     "separate",  # compliant backlash: the mesh's flanks part (contact lost)
     "contact",  # compliant backlash: the flanks meet again (contact regained)
+    "power_flow",  # the power through a lossy gear reversed (forward <-> back-driven)
 )
 STATUSES = (
     "running",
@@ -85,6 +86,11 @@ class EnergyBalance:
     impact_loss : kinetic energy lost in impacts on the stops (rebounds, settling) [J]
     final_kinetic_energy : kinetic energy at the end of the run (absorbed by the latch
         when the run ends latched) [J]
+    gear_loss : energy lost in a lossy gear's mesh, forward and back-driven [J] (0 for an
+        ideal gear; issue 16 item 5)
+    gravity_work : work done against a ground test's gravity, the rise of the CG's
+        potential energy ``W (cos(theta_0 + phi_0) - cos(theta_0 + phi_end))`` [J]
+        (gravity is conservative: start and end angles suffice); None without gravity
     mesh_dissipation : compliant backlash only: energy dissipated in the gear mesh (its
         damping, and the stored energy lost when the flanks part faster than the mesh
         relaxes) [J]; None for a rigid mesh
@@ -98,24 +104,29 @@ class EnergyBalance:
     engagement_loss: FloatArray
     impact_loss: FloatArray
     final_kinetic_energy: FloatArray
+    gear_loss: FloatArray
+    gravity_work: FloatArray | None = None
     # Compliant backlash only (None otherwise, so the rigid account is unchanged).
     mesh_dissipation: FloatArray | None = None
     elastic_energy: FloatArray | None = None
 
     def reshaped(self, shape: tuple[int, ...]) -> EnergyBalance:
         """The same balance with arrays of the given shape."""
-
-        def shaped(value: FloatArray | None) -> FloatArray | None:
-            return None if value is None else np.asarray(value).reshape(shape)
-
-        return EnergyBalance(
-            **{f.name: shaped(getattr(self, f.name)) for f in fields(self)}  # type: ignore[arg-type]
-        )
+        values: dict[str, Any] = {
+            f.name: None
+            if getattr(self, f.name) is None
+            else np.asarray(getattr(self, f.name)).reshape(shape)
+            for f in fields(self)
+        }
+        return EnergyBalance(**values)
 
     @property
     def supplied(self) -> FloatArray:
-        """Spring work plus initial kinetic energy [J]."""
-        return np.asarray(self.spring_work + self.initial_kinetic_energy)
+        """Spring work plus initial kinetic energy, less the work against gravity [J]."""
+        supplied = self.spring_work + self.initial_kinetic_energy
+        if self.gravity_work is not None:
+            supplied = supplied - self.gravity_work
+        return np.asarray(supplied)
 
     @property
     def accounted(self) -> FloatArray:
@@ -126,6 +137,7 @@ class EnergyBalance:
             + self.engagement_loss
             + self.impact_loss
             + self.final_kinetic_energy
+            + self.gear_loss
             + (0.0 if self.mesh_dissipation is None else self.mesh_dissipation)
             + (0.0 if self.elastic_energy is None else self.elastic_energy)
         )
@@ -402,7 +414,10 @@ class DynamicResult:
 
         e = self.energy
         stuck = bool(np.ravel(self.stuck)[case])
-        return {
+        housing = self.final_housing_temperature
+        # Two-node heating only: without a housing node the dictionary is as before.
+        extra = {} if housing is None else {"final_housing_temperature_C": at(housing)}
+        return extra | {
             "temperature_C": at(self.temperature),
             "status": STATUSES[int(np.ravel(self.status)[case])],
             "deployment_time_s": _json_float(at(self.deployment_time)),
@@ -426,6 +441,8 @@ class DynamicResult:
                 "engagement_loss": at(e.engagement_loss),
                 "impact_loss": at(e.impact_loss),
                 "final_kinetic": at(e.final_kinetic_energy),
+                "gear_loss": at(e.gear_loss),
+                **({} if e.gravity_work is None else {"gravity_work": at(e.gravity_work)}),
                 **(
                     {}
                     if e.mesh_dissipation is None or e.elastic_energy is None

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim._types import FloatArray
+from ecdsim._types import ArrayLike, FloatArray
 from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.dynamics.result import DynamicResult
 from ecdsim.physics import thermal as heat
@@ -180,7 +180,7 @@ def relax(
 def run_sequence(
     solve: Solve,
     params: DynamicParameters,
-    temperatures: FloatArray,
+    temperatures: ArrayLike,
     cycle: Cycle,
     tolerance: float = PERIODIC_TOLERANCE,
 ) -> SequenceResult:
@@ -263,3 +263,20 @@ def _periodic_after(rotor: FloatArray, housing: FloatArray, tolerance: float) ->
         first = 1 if moving.size == 0 else int(moving[-1]) + 2  # the row after the last move
         out.append(first if first <= n else None)
     return out
+
+
+def stow_heat(damping_rate: ArrayLike, travel: ArrayLike, stow_time: float) -> FloatArray:
+    """Heat a stow would put into the damper if it back-drove it [J] (not modelled).
+
+    Re-arming at the constant speed ``w = travel / t_stow`` against the eddy damping
+    ``B`` (BD_T N^2 at the input shaft, Eq. 1 and 3) dissipates ``P = B w^2`` for
+    ``t_stow``: ``E = B travel^2 / t_stow`` (inf for an instant stow).
+
+    >>> float(stow_heat(20.0, 1.5, 45.0))
+    1.0
+    """
+    b = np.asarray(damping_rate, dtype=float)
+    theta = np.asarray(travel, dtype=float)
+    if stow_time <= 0.0:
+        return np.full(np.broadcast(b, theta).shape, math.inf)
+    return np.asarray(b * theta * theta / stow_time)

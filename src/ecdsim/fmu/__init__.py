@@ -57,6 +57,18 @@ def build_fmu(config_path: str | Path, out: str | Path, deployment: bool = False
             ],
             config.source,
         )
+    thermal = config.spec.damper.thermal
+    if thermal is not None and thermal.housing_heat_capacity is not None:
+        # The FMU's damper has one temperature state: a housing node would be ignored and
+        # thermal_resistance (rotor to housing) misread as rotor to ambient.
+        raise ConfigError(
+            [
+                "damper.thermal.housing_heat_capacity: two-node heating (rotor and housing) "
+                "is not in the FMU, whose damper is one heat capacity; remove the housing "
+                "keys to export the one-node model"
+            ],
+            config.source,
+        )
     try:
         from pythonfmu.builder import FmuBuilder
     except ImportError:

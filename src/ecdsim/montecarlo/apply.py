@@ -49,6 +49,7 @@ _OWNERS = {
     "spring_table)",
     "ResistiveTable": "[load] resistive_table, which this config does not give",
     "Gravity": "[load.gravity], which this config does not give",
+    "GearEfficiency": "[gearbox] efficiency, which this config does not give",
 }
 
 

@@ -69,7 +69,15 @@ def required_std(within: float, runs: int) -> float:
     return within / -statistics.NormalDist().inv_cdf(tail)
 
 
-def study(times: ArrayLike, nominal: float | None, within: float, runs: int) -> dict[str, Any]:
+def study(
+    times: ArrayLike,
+    nominal: float | None,
+    within: float,
+    runs: int,
+    *,
+    overwrite: bool = False,
+    first: ArrayLike | None = None,
+) -> dict[str, Any]:
     """The repeatability figures for one temperature (module docstring), JSON-ready.
 
     Parameters
@@ -78,6 +86,11 @@ def study(times: ArrayLike, nominal: float | None, within: float, runs: int) -> 
     nominal : deployment time of the configured system [s]; None if it stalls
     within : the stated spread, a deviation either way [s]
     runs : deployments in one campaign [-]
+    overwrite : the deviations may be computed in place of ``times`` (no column-sized
+        temporary; ``times`` then holds them, reordered)
+    first : the first ``runs`` samples in sample order [s], where ``times`` is no longer
+        in sample order (the summary's percentiles reorder it in place); ``times[:runs]``
+        if None
     """
     t = as_float(times).reshape(-1)
     base = {
@@ -88,24 +101,29 @@ def study(times: ArrayLike, nominal: float | None, within: float, runs: int) -> 
     }
     if nominal is None or t.size == 0:
         return {**base, "note": "the nominal system stalls: no deviation can be measured"}
-    deviation = np.abs(t - nominal)  # inf where stalled; nominal is finite here
-    inside = deviation <= within
-    hits = int(np.count_nonzero(inside))
-    p = hits / t.size
-    low, high = proportion_interval(hits, t.size)
     campaign: dict[str, Any] | None = None
     if t.size >= runs:
-        first = t[:runs]
-        arrived = first[np.isfinite(first)]
-        worst = float(np.max(deviation[:runs]))
+        head = as_float(first).reshape(-1)[:runs] if first is not None else t[:runs]
+        arrived = head[np.isfinite(head)]
+        head_deviation = np.abs(head - nominal)
+        worst = float(np.max(head_deviation))
         campaign = {
             "runs": runs,
             "max_deviation_s": worst if math.isfinite(worst) else None,
             "range_s": float(np.ptp(arrived)) if arrived.size == runs else None,
             "std_s": float(np.std(arrived, ddof=1)) if arrived.size == runs else None,
             "stalled": int(runs - arrived.size),
-            "all_within": bool(np.all(inside[:runs])),
+            "all_within": bool(np.all(head_deviation <= within)),
         }
+    # |t - nominal|, inf where stalled (nominal is finite here), computed in one buffer
+    # (or in place of the times): the same numbers as np.abs(t - nominal) without its
+    # column-sized temporaries. Fresh memory is dear: on this project's virtual machine a
+    # first touch of 480 MB cost 1.1 s of system time, against 0.05 s for memory reused.
+    deviation = np.subtract(t, nominal, out=t if overwrite else None)
+    np.abs(deviation, out=deviation)
+    hits = int(np.count_nonzero(deviation <= within))
+    p = hits / t.size
+    low, high = proportion_interval(hits, t.size)
     typical = typical_max_deviation(deviation, runs, overwrite=True)  # reorders deviation
     return {
         **base,

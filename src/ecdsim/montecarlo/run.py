@@ -291,6 +291,8 @@ class ChunkResult:
     written : True if the worker already wrote the chunk file (columns then empty)
     sensitivity_sums : the chunk's sums for the sensitivity statistics, encoded
         (:mod:`ecdsim.montecarlo.streaming`), stored in the chunk file's metadata
+    moments : the chunk's moments of the times and speeds, encoded
+        (:func:`ecdsim.montecarlo.streaming.encode_moments`), stored beside them
     """
 
     index: int
@@ -299,6 +301,7 @@ class ChunkResult:
     version: str
     written: bool = False
     sensitivity_sums: str = ""
+    moments: str = ""
 
 
 def chunk_values(plan: Plan, index: int) -> np.ndarray[Any, np.dtype[np.float64]]:
@@ -344,6 +347,14 @@ def outputs_of(plan: Plan, prediction: Prediction) -> dict[str, np.ndarray[Any, 
             stall_angle=solution.stall_angle,
             settings=plan.margin,
             resistance=prediction.resistance,
+            # A ground test's gravity (docs/sizing.md); None in flight, as before.
+            gravity_amplitude=problem.gravity_amplitude if problem.has_gravity else None,
+            gravity_angle=problem.gravity_angle if problem.has_gravity else None,
+            forward_efficiency=(
+                None
+                if prediction.system.ecd.gearbox.efficiency is None
+                else prediction.ecd.forward_efficiency
+            ),
         ).minimum()
         found[MARGIN] = np.broadcast_to(lowest, shape)
     return found
@@ -385,12 +396,19 @@ def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
     ]
     ordered = {name: columns[name] for name in plan.columns}
     sums = streaming.encode(streaming.chunk_sums(plan, ordered, scores))
-    return ChunkResult(index, ordered, warnings, __version__, sensitivity_sums=sums)
+    moments = streaming.encode_moments(streaming.chunk_moments(plan, ordered))
+    return ChunkResult(
+        index, ordered, warnings, __version__, sensitivity_sums=sums, moments=moments
+    )
 
 
 def write_result(plan: Plan, out: Path, result: ChunkResult) -> Path:
     """Write an evaluated chunk as its Parquet file, atomically, stamped with the plan."""
-    extra = {"warnings": result.warnings, streaming.KEY: result.sensitivity_sums}
+    extra = {
+        "warnings": result.warnings,
+        streaming.KEY: result.sensitivity_sums,
+        streaming.MOMENTS_KEY: result.moments,
+    }
     return store.write_chunk(out, result.index, result.columns, plan.identity_sha256, extra)
 
 
@@ -402,7 +420,9 @@ def evaluate_and_write(plan: Plan, index: int, out: Path) -> ChunkResult:
     """
     result = evaluate_chunk(plan, index)
     write_result(plan, out, result)
-    return ChunkResult(index, {}, result.warnings, result.version, True, result.sensitivity_sums)
+    return ChunkResult(
+        index, {}, result.warnings, result.version, True, result.sensitivity_sums, result.moments
+    )
 
 
 class Executor(Protocol):

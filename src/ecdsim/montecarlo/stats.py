@@ -58,7 +58,7 @@ from ecdsim.montecarlo.intervals import (
     proportion_interval,
     rank_of,
 )
-from ecdsim.montecarlo.streaming import Sums
+from ecdsim.montecarlo.streaming import Moments, Sums
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -106,12 +106,31 @@ def percentiles(
     }
 
 
-def describe(values: ArrayLike, *, overwrite: bool = False) -> dict[str, Any]:
+def describe(
+    values: ArrayLike, *, overwrite: bool = False, known: Moments | None = None
+) -> dict[str, Any]:
     """Percentiles over all values (inf allowed), moments over all and over finite ones.
 
     ``overwrite``: the values may be reordered in place once the moments are taken.
+    ``known``: the values' moments merged chunk by chunk (:class:`.streaming.Moments`),
+    used instead of a pass over the values where they are finite.
     """
     x = as_float(values).reshape(-1)
+    if known is not None and known.size == x.size:
+        mean, std = known.mean_and_std()
+        if (mean is None or math.isfinite(mean)) and (std is None or math.isfinite(std)):
+            all_finite = known.count == known.size
+            return {
+                "samples": int(x.size),
+                "arriving": int(known.count),
+                "percentiles": percentiles(x, overwrite=overwrite),
+                "mean": mean if all_finite else None,
+                "std": std if all_finite else None,
+                "mean_arriving": mean,
+                "std_arriving": std,
+                "min": _number(known.lowest) if x.size else None,
+                "max": _number(known.highest) if x.size else None,
+            }
     is_finite = np.isfinite(x)
     finite = x if is_finite.all() else x[is_finite]  # no copy when every sample arrives
     arriving = finite.size
@@ -431,6 +450,30 @@ def _merged_sums(
     return merged
 
 
+def _merged_moments(
+    plan: Plan, tags: list[dict[str, Any]], data: Mapping[str, np.ndarray[Any, Any]]
+) -> dict[float, tuple[Moments, Moments]]:
+    """Each temperature's moments of the times and speeds, merged in chunk order.
+
+    A chunk file without them (written before they existed) gets them from its rows of
+    the whole columns, by the same function that computed the others.
+    """
+    merged = [(Moments.empty(), Moments.empty()) for _ in plan.temperatures]
+    for k, tag in enumerate(tags):
+        text = tag.get(streaming.MOMENTS_KEY)
+        try:
+            found = None if text is None else streaming.decode_moments(text, len(merged))
+        except ValueError:
+            found = None
+        if found is None:
+            start, stop = plan.bounds(k)
+            found = streaming.chunk_moments(
+                plan, {name: column[start:stop] for name, column in data.items()}
+            )
+        merged = [(a.merge(c), b.merge(d)) for (a, b), (c, d) in zip(merged, found, strict=True)]
+    return dict(zip(plan.temperatures, merged, strict=True))
+
+
 def summarize(plan: Plan, out: Path) -> dict[str, Any]:
     """The study's statistics per temperature, read from its chunk files (JSON-ready)."""
     from ecdsim.montecarlo.store import ChunkReader, take_kept
@@ -452,22 +495,34 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
     merged = _merged_sums(plan, reader, tags, bins)
     reference = nominal(plan)
 
+    moments = _merged_moments(plan, tags, data)
+
     def case_of(temperature: float, sums: Sums) -> dict[str, Any]:
         times = np.asarray(data[output_column("deployment_time_s", temperature)], dtype=float)
         stalled = np.asarray(data[output_column("stalled", temperature)], dtype=bool)
         speeds = np.asarray(data[output_column("end_speed_rad_s", temperature)], dtype=float)
         nominal_case = reference[temperature]
-        # The repeatability reads the samples in order (its first campaign): before the
-        # percentiles, which may reorder the columns (this summary's own) in place.
+        # The columns are this summary's own: the percentiles reorder the times in place,
+        # then the repeatability turns them into deviations in place (its first campaign
+        # taken in sample order before), so no column-sized temporary is allocated.
+        first = times[: plan.repeat_runs].copy()
+        times_described = describe(times, overwrite=True, known=moments[temperature][0])
         repeat = repeatability.study(
-            times, nominal_case["deployment_time_s"], plan.repeat_within, plan.repeat_runs
+            times,
+            nominal_case["deployment_time_s"],
+            plan.repeat_within,
+            plan.repeat_runs,
+            overwrite=True,
+            first=first,
         )
         case = {
             "temperature_C": temperature,
             "nominal": nominal_case,
-            "deployment_time_s": describe(times, overwrite=True),
+            "deployment_time_s": times_described,
             "end_speed_rad_s": describe(
-                speeds[~stalled] if stalled.any() else speeds, overwrite=True
+                speeds[~stalled] if stalled.any() else speeds,
+                overwrite=True,
+                known=moments[temperature][1],
             ),
             "stall": stall(stalled),
             "sensitivity": sensitivity_from_sums(keys, sums, bins),

@@ -20,7 +20,7 @@ import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 
@@ -122,12 +122,20 @@ def write_chunk(
     table = table.replace_schema_metadata({METADATA_KEY: tag.encode("utf-8")})
     # Sampled floats do not repeat and do not compress: dictionary encoding cost 4x the
     # write time, snappy 1.5x and per-page min/max statistics 2.5x, for files 3 % smaller
-    # at best. The file is built in memory and written in one call (pyarrow writing to a
-    # Python stream makes many small writes).
-    buffer = pa.BufferOutputStream()
-    pq.write_table(table, buffer, use_dictionary=False, compression="none", write_statistics=False)
-    data = buffer.getvalue()
-    return atomic.write_with(chunk_path(out, index), lambda stream: stream.write(data))
+    # at best.
+
+    def write(stream: IO[bytes]) -> None:
+        # pyarrow writes the temporary file itself, by its path (its own file, no Python
+        # in between), page by page; write_with then fsyncs the file through ``stream``
+        # (the same inode) and renames it. Building the file in an Arrow buffer and
+        # writing that in one call cost 3 to 4 times the system time (11 to 12 ms against
+        # 2.6 to 3.5 ms per 65,536-sample chunk, measured alternately).
+        with pa.OSFile(stream.name, "wb") as sink:
+            pq.write_table(
+                table, sink, use_dictionary=False, compression="none", write_statistics=False
+            )
+
+    return atomic.write_with(chunk_path(out, index), write)
 
 
 def _arrow_array(pa: Any, values: np.ndarray[Any, Any]) -> Any:

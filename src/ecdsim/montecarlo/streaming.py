@@ -22,6 +22,7 @@ by rounding only (relative ~1e-13).
 from __future__ import annotations
 
 import base64
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
@@ -269,3 +270,109 @@ def decode(text: str, temperatures: int, d: int, bins: int) -> list[Sums]:
     if parts[0].size != 3 + 2 * d + d * d + 2 * d * bins:
         raise ValueError("sensitivity sums of the wrong length")
     return [Sums.from_vector(p, d, bins) for p in parts]
+
+
+MOMENTS_KEY = "moments"
+
+
+@dataclass(frozen=True)
+class Moments:
+    """Mergeable moments of one output over a set of samples (inf allowed).
+
+    Attributes
+    ----------
+    size : number of values, infinite ones included [-]
+    count : number of finite values [-]
+    mean : mean of the finite values
+    m2 : sum of the squared deviations of the finite values from their mean
+    lowest : smallest value (may be -inf; NaN if any is NaN)
+    highest : largest value (may be +inf; NaN if any is NaN)
+    """
+
+    size: float
+    count: float
+    mean: float
+    m2: float
+    lowest: float
+    highest: float
+
+    @classmethod
+    def empty(cls) -> Moments:
+        """The moments of no value."""
+        return cls(0.0, 0.0, 0.0, 0.0, np.inf, -np.inf)
+
+    @classmethod
+    def of(cls, values: FloatArray) -> Moments:
+        """The moments of the values (NumPy's pairwise sums over them)."""
+        x = np.asarray(values, dtype=float).reshape(-1)
+        if x.size == 0:
+            return cls.empty()
+        is_finite = np.isfinite(x)
+        finite = x if is_finite.all() else x[is_finite]
+        mean = float(np.mean(finite)) if finite.size else 0.0
+        with np.errstate(over="ignore", invalid="ignore"):
+            deviation = finite - mean
+            m2 = float(np.add.reduce(deviation * deviation))
+        return cls(float(x.size), float(finite.size), mean, m2, float(x.min()), float(x.max()))
+
+    def merge(self, other: Moments) -> Moments:
+        """The moments of both sets (Chan, Golub and LeVeque's pairwise update)."""
+        lowest = float(np.minimum(self.lowest, other.lowest))  # NaN propagates
+        highest = float(np.maximum(self.highest, other.highest))
+        size = self.size + other.size
+        if other.count == 0.0 or self.count == 0.0:
+            kept = self if other.count == 0.0 else other
+            return Moments(size, kept.count, kept.mean, kept.m2, lowest, highest)
+        n = self.count + other.count
+        with np.errstate(over="ignore", invalid="ignore"):
+            delta = other.mean - self.mean
+            mean = self.mean + delta * (other.count / n)
+            m2 = self.m2 + other.m2 + delta * delta * (self.count * other.count / n)
+        return Moments(size, n, mean, m2, lowest, highest)
+
+    def mean_and_std(self) -> tuple[float | None, float | None]:
+        """Mean and standard deviation (n - 1) of the finite values; None if undefined."""
+        if self.count == 0.0:
+            return None, None
+        std = math.sqrt(self.m2 / (self.count - 1.0)) if self.count > 1.0 else None
+        return self.mean, std
+
+    def to_vector(self) -> FloatArray:
+        """The six numbers in the layout :meth:`from_vector` reads."""
+        return np.array([self.size, self.count, self.mean, self.m2, self.lowest, self.highest])
+
+    @classmethod
+    def from_vector(cls, vector: FloatArray) -> Moments:
+        """The inverse of :meth:`to_vector`."""
+        size, count, mean, m2, lowest, highest = (float(v) for v in vector)
+        return cls(size, count, mean, m2, lowest, highest)
+
+
+def chunk_moments(
+    plan: Study, columns: Mapping[str, np.ndarray[Any, Any]]
+) -> list[tuple[Moments, Moments]]:
+    """A chunk's moments at each temperature: of the deployment times (all samples) and of
+    the end speeds of the samples that do not stall (as the summary describes them)."""
+    found = []
+    for t in plan.temperatures:
+        times = np.asarray(columns[output_column("deployment_time_s", t)], dtype=float)
+        stalled = np.asarray(columns[output_column("stalled", t)], dtype=bool)
+        speeds = np.asarray(columns[output_column("end_speed_rad_s", t)], dtype=float)
+        found.append((Moments.of(times), Moments.of(speeds[~stalled] if stalled.any() else speeds)))
+    return found
+
+
+def encode_moments(moments: Sequence[tuple[Moments, Moments]]) -> str:
+    """The moments as text for a chunk file's metadata (base64 of little-endian float64)."""
+    parts = [m.to_vector() for pair in moments for m in pair]
+    vector = np.concatenate(parts).astype("<f8") if parts else np.zeros(0, "<f8")
+    return base64.b64encode(vector.tobytes()).decode("ascii")
+
+
+def decode_moments(text: str, temperatures: int) -> list[tuple[Moments, Moments]]:
+    """The inverse of :func:`encode_moments`; ValueError if the text does not fit."""
+    vector = np.frombuffer(base64.b64decode(text.encode("ascii")), dtype="<f8").astype(float)
+    if vector.size != 12 * temperatures:
+        raise ValueError("moments of the wrong length")
+    six = vector.reshape(temperatures, 2, 6)
+    return [(Moments.from_vector(a), Moments.from_vector(b)) for a, b in six]

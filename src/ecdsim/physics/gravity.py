@@ -32,6 +32,9 @@ def gravity_amplitude(
 ) -> FloatArray:
     """Peak gravity torque about the hinge, ``W = m g r (1 - offload)`` [N*m].
 
+    The moment of the offloaded weight at the CG's radius (rigid-body statics, Meriam &
+    Kraige, Statics, section on the moment of a force; docs/model.md).
+
     Parameters
     ----------
     mass : deployed mass m [kg]
@@ -48,14 +51,15 @@ def gravity_amplitude(
 def gravity_torque(angle: ArrayLike, amplitude: ArrayLike, release_angle: ArrayLike) -> FloatArray:
     """Gravity torque about the hinge, opposing deployment positive [N*m].
 
-    ``T_g(phi) = W sin(theta_0 + phi)`` (rigid-body statics, module docstring).
+    ``T_g(phi) = W sin(theta_0 + phi)`` (rigid-body statics, Meriam & Kraige, Statics,
+    section on the moment of a force; sign convention in the module docstring).
 
     Parameters
     ----------
     angle : deployed angle phi, 0 at release [rad]
     amplitude : W = m g r (1 - offload) [N*m] (:func:`gravity_amplitude`)
-    release_angle : theta_0, angle from the downward vertical to the hinge-to-CG line at
-        release, positive in the direction of deployment [rad]
+    release_angle : theta_0, from gravity to the hinge-CG line at release [rad]
+        (measured from the downward vertical, positive in the direction of deployment)
 
     >>> round(float(gravity_torque(np.pi / 2, 2.0, 0.0)), 12)  # arm horizontal: full W
     2.0
@@ -67,6 +71,9 @@ def gravity_torque_slope(
     angle: ArrayLike, amplitude: ArrayLike, release_angle: ArrayLike
 ) -> FloatArray:
     """``dT_g/dphi = W cos(theta_0 + phi)`` [N*m/rad], for Jacobians and extremes.
+
+    The derivative of :func:`gravity_torque` (rigid-body statics, section on the moment
+    of a force; docs/model.md).
 
     Parameters
     ----------
@@ -83,11 +90,13 @@ def gravity_work(
     """Work done *against* gravity from phi = start to end, ``int T_g dphi`` [J].
 
     ``W (cos(theta_0 + start) - cos(theta_0 + end))``: the rise of the CG's potential
-    energy ``-m g r (1 - offload) cos(beta)``.
+    energy ``-m g r (1 - offload) cos(beta)`` (rigid-body mechanics, Meriam & Kraige,
+    Dynamics, section on potential energy; docs/model.md).
 
     Parameters
     ----------
-    start, end : deployed angles [rad]
+    start : deployed angle at the start [rad]
+    end : deployed angle at the end [rad]
     amplitude : W [N*m]
     release_angle : theta_0 [rad]
     """

@@ -26,6 +26,10 @@ The resistive torques of an ECD deployment, by kind (:data:`RESISTIVE_TYPES`):
 * ``gravity``: a ground test's gravity torque ``m g r (1 - offload) sin(theta_0 + phi)``
   where it opposes deployment (``[load.gravity]``; an aiding gravity torque is not
   credited to the drive), its own kind with its own factor.
+* ``gear_loss``: with ``[gearbox] efficiency``, the mesh loss ``(1 - eta_f) (FECD_T +
+  BECD_T omega)`` (issue 16 item 5): FECD_T and BECD_T include 1/eta_f, so the
+  ``ecd_friction`` and ``damping`` kinds keep their ideal-gear parts ``eta_f`` times them
+  and the loss is its own kind with its own factor.
 """
 
 from __future__ import annotations
@@ -49,6 +53,7 @@ RESISTIVE_TYPES = (
     "harness",
     "resistive_table",
     "gravity",
+    "gear_loss",
 )
 # ECSS-E-ST-33-01C has one kind for friction; ``friction`` is the factor of both Coulomb
 # kinds unless ``ecd_friction`` or ``system_friction`` is given on its own.
@@ -254,6 +259,7 @@ def margin_over_travel(
     resistance: ArrayLike | None = None,
     gravity_amplitude: ArrayLike | None = None,
     gravity_angle: ArrayLike | None = None,
+    forward_efficiency: ArrayLike | None = None,
 ) -> MarginOverTravel:
     """Torque margin at every spring breakpoint and at the stall point (docs/sizing.md).
 
@@ -279,6 +285,8 @@ def margin_over_travel(
         gravity; the margin is then also taken on :data:`GRAVITY_GRID` equal steps of the
         travel (the sine is not piecewise linear), the spring interpolated there
     gravity_angle : theta_0, the gravity term's release angle [rad]
+    forward_efficiency : eta_f of a lossy mesh, which FECD_T and BECD_T include [-];
+        None for an ideal gear (no ``gear_loss`` kind)
     """
     angles = as_float(breakpoint_angles)
     torques = as_float(spring_torques)
@@ -325,6 +333,13 @@ def margin_over_travel(
         resistive["resistive_table"] = as_float(np.broadcast_to(resist, drive.shape))
     if gravity_amplitude is not None:
         resistive["gravity"] = as_float(np.broadcast_to(np.maximum(weight, 0.0), drive.shape))
+    if forward_efficiency is not None:
+        # The mesh loss apart: (1 - eta_f) of the ECD's torque at the input.
+        eta = as_float(forward_efficiency)
+        ecd_torque = resistive["ecd_friction"] + resistive["damping"]
+        resistive["ecd_friction"] = as_float(resistive["ecd_friction"] * eta)
+        resistive["damping"] = as_float(resistive["damping"] * eta)
+        resistive["gear_loss"] = as_float(np.broadcast_to((1.0 - eta) * ecd_torque, drive.shape))
     for kind, torque in settings.allowances.items():
         resistive[kind] = as_float(np.full(drive.shape, torque))
     margin = torque_margin(drive, resistive, settings.factors)

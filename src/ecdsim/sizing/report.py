@@ -250,6 +250,7 @@ _KIND_HEADERS = {
     "harness": "harness",
     "resistive_table": "resist.",
     "gravity": "gravity",
+    "gear_loss": "gear loss",
 }
 
 

@@ -143,6 +143,7 @@ class Requirements:
             "harness": given.harness,
             "resistive_table": given.resistive_table,
             "gravity": given.gravity,
+            "gear_loss": given.gear_loss,
         }
         return cls(
             temperatures=spec.all_temperatures(),

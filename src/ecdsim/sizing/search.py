@@ -272,6 +272,7 @@ def evaluate(
         # A ground test's gravity (docs/sizing.md); None in flight, as before.
         gravity_amplitude=problem.gravity_amplitude if problem.has_gravity else None,
         gravity_angle=problem.gravity_angle if problem.has_gravity else None,
+        forward_efficiency=(None if ecd.gearbox.efficiency is None else state.forward_efficiency),
     ).at_minimum()
     terms = TorqueMarginTerms(
         margin=full(terms.margin),

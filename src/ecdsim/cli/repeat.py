@@ -1,0 +1,221 @@
+"""``ecdsim repeat``: a life test's repeated deployments with cool-down and stow.
+
+Only typer is imported at start-up; the library (:mod:`ecdsim.dynamics.sequence`) inside
+the command.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from ecdsim.cli.common import fail
+from ecdsim.cli.display import PlainOpt, WideOpt
+
+if TYPE_CHECKING:
+    from ecdsim.dynamics.sequence import SequenceResult
+
+EPILOG = (
+    "Example: [bold]ecdsim repeat examples/paper_cc16_dynamic.toml --count 500 "
+    '--cool-down "60 s" --stow-time "30 s" --plot life.png[/bold]'
+)
+
+
+def _duration(option: str, text: str) -> float:
+    """A time option [s]; a bare number is seconds."""
+    from ecdsim.config.units import TIME, QuantityError
+
+    try:
+        value = TIME.parse(text if any(c.isalpha() for c in text) else f"{text} s")
+    except QuantityError as exc:
+        fail([f"{option}: {exc}"])
+    if not (math.isfinite(value) and value >= 0.0):
+        fail([f"{option}: {text!r} must be a finite time >= 0 (e.g. '60 s')"])
+    return value
+
+
+def _shown_rows(result: SequenceResult) -> list[int]:
+    """Deployment numbers (1-based) for the table: 1, 2, 3, 5, 10, 20, 50, 100, ... and N,
+    with the first periodic one."""
+    n = result.cycle.count
+    picks = {1, 2, 3, n}
+    decade = 1
+    while decade <= n:
+        picks.update(m * decade for m in (1, 2, 5))
+        decade *= 10
+    picks.update(k for k in result.periodic_after if k is not None)
+    return sorted(k for k in picks if 1 <= k <= n)
+
+
+def _print(result: SequenceResult, heat_per_stow: list[float], heated: bool) -> None:
+    from rich.markup import escape
+    from rich.table import Table
+
+    from ecdsim.cli import display
+    from ecdsim.formatting import format_number
+
+    def short(value: float) -> str:
+        return format_number(float(value), 6)
+
+    console = display.make_console()
+    housing = result.start_housing_temperature
+    drift = result.drift()
+    for j, temp in enumerate(result.temperatures):
+        table = Table(title=f"Repeated deployments at T = {temp:g} degC", title_justify="left")
+        headers = ["deployment", "start rotor [degC]"]
+        if housing is not None:
+            headers.append("start housing [degC]")
+        headers += ["peak rotor [degC]", "time [s]", "time change [%]"]
+        for header in headers:
+            table.add_column(escape(header), justify="right")
+        first = result.deployment_time[0, j]
+        for k in _shown_rows(result):
+            i = k - 1
+            time = result.deployment_time[i, j]
+            change = 100.0 * (time / first - 1.0) if math.isfinite(time / first) else math.nan
+            row = [str(k), short(result.start_rotor_temperature[i, j])]
+            if housing is not None:
+                row.append(short(housing[i, j]))
+            row += [short(result.peak_rotor_temperature[i, j]), short(time), f"{change:+.3f}"]
+            table.add_row(*row)
+        display.show(console, table)
+        periodic = result.periodic_after[j]
+        state = (
+            f"periodic from deployment {periodic} (start temperatures within "
+            f"{result.tolerance:g} K of the one before)"
+            if periodic is not None
+            else f"not periodic within {result.cycle.count} deployments"
+        )
+        display.note(
+            console,
+            f"drift 1 to {result.cycle.count}: time {drift['deployment_time_s'][j]:+.4g} s, "
+            f"peak rotor {drift['peak_rotor_temperature_K'][j]:+.4g} K, start rotor "
+            f"{drift['start_rotor_temperature_K'][j]:+.4g} K; {state}",
+        )
+    if not heated:
+        display.note(console, "no [damper.thermal]: the damper does not heat, nothing drifts")
+    display.note(
+        console,
+        "the stow generates no heat here; back-driving an engaged damper at travel / stow "
+        "time would add about "
+        + ", ".join(f"{format_number(e, 3)} J" for e in heat_per_stow)
+        + " per stow (BD_T N^2 travel^2 / t_stow)",
+    )
+
+
+def repeat(
+    config: Annotated[
+        Path, typer.Argument(help="TOML configuration file (see docs/config.md).", metavar="CONFIG")
+    ],
+    cool_down: Annotated[
+        str,
+        typer.Option(
+            "--cool-down",
+            help="Time from the end of a deployment to the start of the stow (bare numbers "
+            "are seconds).",
+            metavar="TIME",
+        ),
+    ],
+    count: Annotated[
+        int,
+        typer.Option(
+            "--count", "-n", help="Number of deployments (the paper's life test: 500).", metavar="N"
+        ),
+    ] = 500,  # fmt: skip
+    stow_time: Annotated[
+        str,
+        typer.Option(
+            "--stow-time",
+            help="Time to re-arm the spring, up to the next release; no heat is generated.",
+            metavar="TIME",
+        ),
+    ] = "0 s",
+    temperature: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--temperature",
+            "-T",
+            help="Deployment temperature, repeatable; overrides \\[analysis] (bare numbers "
+            "are degC).",
+            metavar="TEMP",
+        ),
+    ] = None,
+    as_json: Annotated[
+        bool, typer.Option("--json", help="Print the per-deployment results as JSON.")
+    ] = False,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            "--plot",
+            help="Write a PNG of the deployment time and rotor temperatures.",
+            metavar="FILE.png",
+        ),
+    ] = None,  # fmt: skip
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
+) -> None:
+    """Deploy N times in a row: how the deployment time drifts as the damper warms."""
+    import json
+
+    from ecdsim.cli import display
+    from ecdsim.cli.common import echo_warnings, load_run
+    from ecdsim.deployment import ModelDomainError, Prediction, predict
+    from ecdsim.dynamics import DynamicParameters, DynamicResult
+    from ecdsim.dynamics.method import DynamicSolution
+    from ecdsim.dynamics.sequence import Cycle, run_sequence, stow_heat
+
+    display.configure(wide=wide, plain=plain)
+    problems = []
+    if count < 1:
+        problems.append(f"--count {count}: expected a number of deployments >= 1")
+    cool = _duration("--cool-down", cool_down)
+    stow = _duration("--stow-time", stow_time)
+    loaded = load_run(config, temperature, ["dynamic"])
+    params = loaded.spec.dynamics()
+    if params is None:
+        problems.append(
+            f"{config}: repeated deployments need the dynamic method's [load] inertia (kg*m^2)"
+        )
+    if problems:
+        fail(problems)
+    assert params is not None
+    temps = loaded.temperatures
+    first: list[Prediction] = []
+
+    def solve(run: DynamicParameters) -> DynamicResult:
+        prediction = predict(loaded.system, temps, ["dynamic"], dynamics=run)
+        if not first:
+            first.append(prediction)
+        solution = prediction.solutions["dynamic"]
+        assert isinstance(solution, DynamicSolution)
+        return solution.result
+
+    try:
+        result = run_sequence(solve, params, temps, Cycle(count, cool, stow))
+    except ModelDomainError as exc:
+        fail([f"{config}: {exc}"])
+    echo_warnings(first[0])
+    state = loaded.system.ecd.at(list(temps))
+    heat = stow_heat(state.damper_damping_rate * state.gear_ratio**2, loaded.system.load.travel,
+                     stow)  # fmt: skip
+    if as_json:
+        document = result.to_dict()
+        document["stow_heat_not_modelled_J"] = [
+            float(e) if math.isfinite(e) else None for e in heat.ravel()
+        ]
+        typer.echo(json.dumps(document, indent=2))
+    else:
+        _print(result, [float(e) for e in heat.ravel()], params.thermal is not None)
+    if plot is not None:
+        from ecdsim.plotting import save_figure
+        from ecdsim.plotting_dynamic import plot_sequence
+
+        try:
+            save_figure(plot_sequence(result, loaded.system.name), plot)
+        except OSError as exc:
+            fail([f"--plot {plot}: cannot write ({exc.strerror or exc})"])
+        if not as_json:
+            typer.echo(f"wrote {plot}")
