@@ -198,6 +198,7 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | No
     stuck = any(d["stuck"] for d in dyn)
     engage = any((d["engagement_time_s"] or 0.0) > 0.0 for d in dyn)
     heated = any(d["max_damper_temperature_C"] != t for d, t in zip(dyn, temps, strict=True))
+    mesh = "max_mesh_torque_Nm" in dyn[0]  # a compliant gear mesh (compliant backlash)
     headers = [
         u.head("T", "temperature", "\n"),
         "outcome",
@@ -227,18 +228,24 @@ def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | No
             ]
         rows.append(row)
     _simple_table(console, "Dynamic method: end of travel", headers, rows)
-    if engage or heated:
+    if engage or heated or mesh:
         headers = [u.head("T", "temperature", "\n")]
         headers += ["engaged at\n[s]"] if engage else []
         headers += [u.head("peak damper\nT", "temperature", "\n")] if heated else []
         housing = heated and "final_housing_temperature_C" in dyn[0]  # two-node heating
         headers += [u.head("housing T\nat end", "temperature", "\n")] if housing else []
+        if mesh:
+            headers += [u.head("mesh\ntorque\npeak", "torque", "\n")]
+            headers += [u.head("mesh\ntorque\nlatched", "torque", "\n")]
         rows = []
         for d, t in zip(dyn, temps, strict=True):
             row = [u.num(t, "temperature")]
             row += [_fmt(d["engagement_time_s"])] if engage else []
             row += [u.num(d["max_damper_temperature_C"], "temperature")] if heated else []
             row += [u.num(d["final_housing_temperature_C"], "temperature")] if housing else []
+            if mesh:
+                row += [u.num(d["max_mesh_torque_Nm"], "torque")]
+                row += [u.num(d["latch_mesh_torque_Nm"], "torque")]
             rows.append(row)
         _simple_table(console, "Dynamic method: damper", headers, rows)
     said = ["latch: speed and kinetic energy on arrival at the end of travel"]
