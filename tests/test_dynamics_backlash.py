@@ -129,6 +129,7 @@ class _Reference:
     parts: int
     mesh_loss: float
     damper_loss: float
+    max_torque: float = math.nan  # largest mesh torque before the arrival [N*m]
 
 
 def _radau_reference(until: float = math.inf) -> _Reference:
@@ -169,6 +170,13 @@ def _radau_reference(until: float = math.inf) -> _Reference:
         return func
 
     arrive = event(lambda _t, y: y[0] - travel, 1.0)
+
+    def rate(t: float, y: np.ndarray) -> float:
+        dy = rhs_of("press")(t, y)
+        return float(_C * dy[2] + _D * (dy[1] - dy[3]))
+
+    rate.direction = -1.0  # type: ignore[attr-defined]
+    peaks: list[float] = []
     y = np.array([0.0, 0.0, -b, 0.0, 0.0, 0.0])
     t, mode = 0.0, "gap"
     engage, contacts, parts = math.nan, 0, 0
@@ -180,7 +188,8 @@ def _radau_reference(until: float = math.inf) -> _Reference:
                 event(lambda _t, y: y[2] + b, -1.0),
             ]
         elif mode == "press":
-            events = [arrive, event(lambda _t, y: raw(y), -1.0)]
+            # The last, not terminal: the torque's maxima (d tau / dt = 0, falling).
+            events = [arrive, event(lambda _t, y: raw(y), -1.0), rate]
         else:
             events = [arrive, event(lambda _t, y: raw(y), 1.0), event(lambda _t, y: y[2] - b, -1.0)]
         end = min(t + 100.0, until)
@@ -197,13 +206,19 @@ def _radau_reference(until: float = math.inf) -> _Reference:
                 float(sol.y[5, -1]),
                 float(sol.y[4, -1]),
             )
+        if mode == "press":
+            peaks += [raw(p) for p in sol.y_events[2]]
         assert sol.status == 1
-        hit = next(i for i, te_ in enumerate(sol.t_events) if len(te_))
+        hit = next(
+            i for i, te_ in enumerate(sol.t_events) if len(te_) and i < 2 + (mode != "press")
+        )
         t, y = float(sol.t_events[hit][0]), sol.y_events[hit][0].copy()
         assert y[1] > 0.0
         assert y[3] >= 0.0
         if hit == 0:
-            return _Reference(t, float(y[1]), engage, contacts, parts, float(y[5]), float(y[4]))
+            return _Reference(
+                t, float(y[1]), engage, contacts, parts, float(y[5]), float(y[4]), max(peaks)
+            )
         if mode == "gap":
             assert hit == 1, "the damper side reached the backward flank"
             if math.isnan(engage):
@@ -246,6 +261,18 @@ def test_contact_lost_and_regained_against_radau(bouncing: DynamicResult) -> Non
     assert _times(result, "engage") == pytest.approx([ref.engage], rel=1e-9)
     assert arrival == pytest.approx(ref.time, rel=1e-8)
     assert float(result.arrival_speed) == pytest.approx(ref.speed, rel=1e-7)
+    # The largest mesh torque before the arrival (the engagement's), at a located maximum.
+    part_max = _solve(
+        _SYSTEM,
+        load_inertia=_JL,
+        rotor_inertia=_JD,
+        gear_stiffness=_C,
+        gear_mesh_damping=_D,
+        rtol=1e-10,
+        stop_time=ref.time * (1.0 - 1e-9),
+    ).max_mesh_torque
+    assert part_max is not None
+    assert float(part_max) == pytest.approx(ref.max_torque, rel=1e-8)
     # The energies up to a time before the arrival (the run goes on after the latch).
     part = _solve(
         _SYSTEM,

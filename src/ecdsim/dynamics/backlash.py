@@ -426,19 +426,32 @@ def _locate(
     The Illinois variant of regula falsi on ``g(step(y, s))``: every trial is a full
     RODAS4 step from the step's start, so the event state has the integrator's accuracy.
     """
+    return _root(case, mode, y, f0, h, lambda ys: float(_events(case, mode, ys)[code]), g0)
+
+
+def _root(
+    case: _Case,
+    mode: _Mode,
+    y: FloatArray,
+    f0: FloatArray,
+    h: float,
+    g: Callable[[FloatArray], float],
+    g0: float,
+) -> tuple[float, FloatArray]:
+    """Where ``g`` (> 0 at the step's start) reaches 0 within the step (see _locate)."""
     if g0 <= 0.0:
         return 0.0, y.copy()
     a, ga = 0.0, g0
     b = h
     yb = _step(case, mode, y, f0, h)[0]
-    gb = float(_events(case, mode, yb)[code])
+    gb = g(yb)
     side = 0
     for _ in range(100):
         s = (a * gb - b * ga) / (gb - ga) if gb != ga else 0.5 * (a + b)
         if not a < s < b:
             s = 0.5 * (a + b)
         ys = _step(case, mode, y, f0, s)[0]
-        gs = float(_events(case, mode, ys)[code])
+        gs = g(ys)
         if gs > 0.0:
             a, ga = s, gs
             if side == 1:
@@ -545,6 +558,7 @@ def _solve_case(case: _Case, record: bool) -> _Run:
             run.states.append(y1.copy())
             run.slopes.append(f1.copy())
         _account_part(case, mode, run, y, y1)
+        _torque_peak(case, mode, y, f, h_taken, f1, run)
         y[:] = y1
         run.y = y
         f = f1
@@ -570,6 +584,33 @@ def _solve_case(case: _Case, record: bool) -> _Run:
                 run.states.append(y.copy())
                 run.slopes.append(f.copy())
     return run
+
+
+def _torque_rate(case: _Case, mode: _Mode, f: FloatArray) -> float:
+    """d tau / dt of a pressing mesh, from the state's derivative f, times the flank side."""
+    return mode.side * (case.stiffness * float(f[2]) + case.mesh_damping * float(f[1] - f[3]))
+
+
+def _torque_peak(
+    case: _Case,
+    mode: _Mode,
+    y: FloatArray,
+    f0: FloatArray,
+    h: float,
+    f1: FloatArray,
+    run: _Run,
+) -> None:
+    """A peak of the pressing mesh's torque inside the step: located (its rate's zero, by
+    re-stepping as the events are) and counted in the maxima."""
+    if mode.mesh != PRESS or h <= 0.0:
+        return
+    rate0, rate1 = _torque_rate(case, mode, f0), _torque_rate(case, mode, f1)
+    if not (rate0 > 0.0 and rate1 < 0.0):
+        return
+    _, ys = _root(
+        case, mode, y, f0, h, lambda yy: _torque_rate(case, mode, _rhs(case, mode, yy)), rate0
+    )
+    _track_torque(case, mode, ys, run)
 
 
 def _track_torque(case: _Case, mode: _Mode, y: FloatArray, run: _Run) -> None:
