@@ -97,13 +97,15 @@ def _print(result: SequenceResult, heat_per_stow: list[float], heated: bool) -> 
         )
     if not heated:
         display.note(console, "no [damper.thermal]: the damper does not heat, nothing drifts")
-    display.note(
-        console,
-        "the stow generates no heat here; back-driving an engaged damper at travel / stow "
-        "time would add about "
-        + ", ".join(f"{format_number(e, 3)} J" for e in heat_per_stow)
-        + " per stow (BD_T N^2 travel^2 / t_stow)",
-    )
+    if all(math.isfinite(e) for e in heat_per_stow):
+        estimate = (
+            "back-driving an engaged damper at travel / stow time would add about "
+            + ", ".join(f"{format_number(e, 3)} J" for e in heat_per_stow)
+            + " per stow (BD_T N^2 travel^2 / t_stow)"
+        )
+    else:  # --stow-time 0: no speed to estimate it from
+        estimate = "give --stow-time for the heat a back-driven damper would add"
+    display.note(console, f"the stow generates no heat here; {estimate}")
 
 
 def repeat(
