@@ -221,3 +221,47 @@ def test_the_dynamic_method_stalls_where_gravity_holds_the_load() -> None:
     # 1e-6 rad: the dynamic method's creep threshold stops it a hair before the
     # asymptote it approaches
     assert float(dynamic.stall_angle[0]) == pytest.approx(float(exact.stall_angle[0]), abs=1e-6)
+
+
+def test_the_compiled_kernel_carries_gravity_as_numpy_does(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The same ground-test deployment by the compiled RODAS4 (numba) and the NumPy one:
+    # one algorithm in two implementations (docs/architecture.md), with the gravity
+    # columns of the compiled parameter table.
+    assert integrate.compiled_kernel() is not None, "numba is part of the test extra"
+    config = parse_config(DYNAMIC.read_text() + GROUND)
+    temps = np.array([-40.0, 25.0, 100.0])
+    compiled = predict(config.system, temps, ("dynamic",), dynamics=config.spec.dynamics())
+    monkeypatch.setenv("ECDSIM_NUMBA", "0")
+    assert integrate.compiled_kernel() is None
+    plain = predict(config.system, temps, ("dynamic",), dynamics=config.spec.dynamics())
+    for field in ("deployment_time", "end_speed", "max_speed"):
+        # 1e-10: the two implementations agree to about 1e-12 (tests/test_dynamics_compiled)
+        np.testing.assert_allclose(
+            getattr(compiled.solutions["dynamic"], field),
+            getattr(plain.solutions["dynamic"], field),
+            rtol=1e-10,
+            err_msg=field,
+        )
+
+
+def test_the_compiled_right_hand_side_and_jacobian_hold_the_gravity_term() -> None:
+    # compiled._rhs and _jacobian against Model.rhs and jacobian at a state, gravity on:
+    # the parameter table's gravity columns reach the kernels (a backward segment, so
+    # that the direction's sign matters too).
+    from ecdsim.dynamics import compiled
+
+    segs = _segment(-0.7, 0.4, 0.01, 0.3, 1.0, math.pi / 2, -1.0)
+    model = integrate._model(segs)
+    par, law = compiled._parameters(model)
+    # The factor _segment stores from the start state (s = 0: the ambient factor).
+    par[0, compiled._FIXED] = par[0, compiled._FA]
+    y = np.array([0.2, 0.05, 0.0, 0.0])
+    out = np.empty(4)
+    compiled._rhs(par[0], law, False, y, out)
+    expected = model.rhs(y.reshape(4, 1))[:, 0]
+    # 1e-14: the same arithmetic, compiled (sin from the C library)
+    np.testing.assert_allclose(out, expected, rtol=1e-14, atol=1e-300)
+    j10 = compiled._jacobian(par[0], law, False, y)[0]
+    assert j10 == pytest.approx(float(model.jacobian(y.reshape(4, 1))[0][0]), rel=1e-14)
+    # and the gravity term is in both: -(k + W cos(pi/2 - 0.2)) / J by hand
+    assert j10 == pytest.approx(-(0.4 + math.cos(math.pi / 2 - 0.2)) / 5.0, rel=1e-14)

@@ -602,3 +602,41 @@ def test_chunk_columns_become_the_arrow_arrays_pa_array_builds(column: np.ndarra
     built = _arrow_array(pa, column)
     assert built.equals(pa.array(column))  # pyarrow's own conversion is the reference
     assert built.to_pylist() == column.tolist()
+
+
+def test_queued_writes_stop_at_a_failed_one(
+    study: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Chunks are computed ahead of a slow write (queued behind it); when a write fails,
+    the writes queued behind it are not made: exactly the chunks before it are on disk."""
+    import errno
+    import importlib
+    import threading
+
+    # The module (the package's ``run`` attribute is the function of that name).
+    run_module = importlib.import_module("ecdsim.montecarlo.run")
+
+    plan = build_plan(load_config(study[0]), 3_000, chunk_size=256)
+    ahead = threading.Event()
+    original_write, original_evaluate = run_module.write_result, run_module.evaluate_chunk
+
+    def evaluate(plan: Any, index: int) -> Any:
+        if index == 4:
+            ahead.set()  # chunk 4 computed while chunk 1's write is still under way
+        return original_evaluate(plan, index)
+
+    def write(plan: Any, out: Path, result: Any) -> Path:
+        if result.index == 1:
+            ahead.wait(timeout=10.0)
+        if result.index == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        written: Path = original_write(plan, out, result)
+        return written
+
+    monkeypatch.setattr(run_module, "evaluate_chunk", evaluate)
+    monkeypatch.setattr(run_module, "write_result", write)
+    out = tmp_path / "run"
+    with pytest.raises(OSError, match="No space left"):
+        run(plan, out, InProcess(threads=1))
+    assert ahead.is_set()
+    assert [p.name for p in chunk_files(out)] == ["chunk-000000.parquet", "chunk-000001.parquet"]

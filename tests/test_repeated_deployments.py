@@ -16,7 +16,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ecdsim.cli.app import app
-from ecdsim.config import load_config
+from ecdsim.config import load_config, parse_config
 from ecdsim.deployment import predict
 from ecdsim.dynamics import DynamicParameters, DynamicResult, Thermal
 from ecdsim.dynamics.method import DynamicSolution
@@ -233,3 +233,85 @@ def test_one_node_cools_by_one_exponential(resistance: float) -> None:
         # exp and one product: rounding of the ~K rises only.
         np.testing.assert_allclose(result.start_rotor_temperature[k], expected, rtol=0, atol=1e-12)
     assert np.all(result.start_rotor_temperature[1] > TEMPS)  # heat carried over
+
+
+# --- a deployment that never arrives ---------------------------------------------------
+
+# The paper's friction (section 6) with a 600:1 gear instead of 380:1, by hand at -40 degC:
+# FS_T = 0.58 + 0.0044 * 40 = 0.756 N*m, FL_T = 2.2e-4 + 2.12e-6 * 40 = 3.048e-4 N*m,
+# FECD_T = 600 * (7.9e-4 + 3.048e-4 + 4.5e-4) = 0.92688 N*m: 1.68288 N*m of friction
+# against a spring that falls linearly to 1.58 N*m, so the spring meets the friction at
+# (3.73 - 1.68288) / ((3.73 - 1.58) / 1.57) = 1.495 rad, short of the 1.57 rad travel.
+# At +25 degC: 0.47 + 600 * (7.9e-4 + 1.67e-4 + 4.5e-4) = 1.3142 N*m < 1.58: it arrives.
+STALL_FRICTION_M40 = 0.756 + 600 * (7.9e-4 + 2.2e-4 + 2.12e-6 * 40 + 4.5e-4)
+ARRIVE_FRICTION_25 = 0.58 - 0.0044 * 25 + 600 * (7.9e-4 + 2.2e-4 - 2.12e-6 * 25 + 4.5e-4)
+
+
+def _stalling_config(folder: Path) -> Path:
+    path = _two_node_config(folder)
+    text = path.read_text("utf-8")
+    assert "ratio = 380" in text
+    path.write_text(text.replace("ratio = 380", "ratio = 600"), "utf-8")
+    return path
+
+
+def test_a_stalled_deployment_shows_a_marker_never_nan(tmp_path: Path) -> None:
+    assert STALL_FRICTION_M40 > 1.58 > ARRIVE_FRICTION_25  # the hand calculation above
+    config = _stalling_config(tmp_path)
+    args = ["repeat", str(config), "-n", "3", "--cool-down", "5", "-T", "-40", "-T", "25"]
+    table = runner.invoke(app, args, env={"COLUMNS": "80"})
+    assert table.exit_code == 0, table.output
+    assert "nan" not in table.output.lower()
+    assert "RuntimeWarning" not in table.output
+    assert max(len(line) for line in table.stdout.splitlines()) <= 80
+    rows = [line for line in table.stdout.splitlines() if line.startswith("│")]
+    # Deployments 1, 2, 3 at -40 degC: the time cell and the change cell are markers.
+    for row in rows[:3]:
+        cells = [cell.strip() for cell in row.strip("│").split("│")]
+        assert cells[-2:] == ["stalled", "-"]
+    for row in rows[3:]:  # +25 degC arrives: a time and a change from deployment 1
+        cells = [cell.strip() for cell in row.strip("│").split("│")]
+        assert math.isfinite(float(cells[-2]))
+        assert math.isfinite(float(cells[-1]))  # "+0.000", "-0.019": a signed number
+    notes = " ".join(table.stdout.split())
+    assert "stalled: no deployment reaches the end of travel" in notes
+    assert "drift 1 to 3: time - (stalled)" in notes
+
+    document = runner.invoke(app, [*args, "--json"])
+    assert document.exit_code == 0, document.output
+    cold, warm = json.loads(document.stdout)["cases"]
+    assert cold["deployments"]["deployment_time_s"] == [None, None, None]
+    assert cold["deployments"]["stalled"] == [True, True, True]
+    assert cold["stalled_deployments"] == 3
+    assert cold["drift"]["deployment_time_s"] is None
+    assert warm["deployments"]["stalled"] == [False, False, False]
+    assert warm["stalled_deployments"] == 0
+    assert all(t is not None and t > 0.0 for t in warm["deployments"]["deployment_time_s"])
+
+
+def test_the_drift_of_a_stalled_sequence_is_nan_without_a_warning() -> None:
+    import warnings
+
+    from ecdsim.cli.repeat import _time_cells
+
+    text = (ROOT / "examples" / "paper_cc16_dynamic.toml").read_text("utf-8")
+    stalling = parse_config(text.replace("ratio = 380", "ratio = 600"))  # as above, no heating
+    params = stalling.spec.dynamics()
+    assert params is not None
+
+    def solve(run: DynamicParameters) -> DynamicResult:
+        found = predict(stalling.system, [-40.0], ["dynamic"], dynamics=run)
+        solution = found.solutions["dynamic"]
+        assert isinstance(solution, DynamicSolution)
+        return solution.result
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # inf - inf must not reach NumPy's RuntimeWarning
+        result = run_sequence(solve, params, [-40.0], Cycle(2, 5.0))
+        drift = result.drift()["deployment_time_s"]
+    assert result.stalled.tolist() == [[True], [True]]
+    assert math.isnan(float(drift[0]))
+    # A later deployment that arrives after a first that stalled: no change to show.
+    assert _time_cells(12.5, math.inf) == ["12.5", "-"]
+    assert _time_cells(math.inf, 12.5) == ["stalled", "-"]
+    assert _time_cells(12.5, 10.0) == ["12.5", "+25.000"]

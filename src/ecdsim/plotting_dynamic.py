@@ -243,8 +243,12 @@ def plot_sequence(result: SequenceResult, system: str, units: UnitSystem = "si")
     kelvin = u.value(1.0, "temperature_difference")
     for j, temp in enumerate(temps):
         label = f"T = {u.text(float(temp), 'temperature')}"
-        change = 100.0 * (result.deployment_time[:, j] / result.deployment_time[0, j] - 1.0)
-        top.plot(number, change, color=colors[j], label=label)
+        times = result.deployment_time[:, j]
+        arrived = np.isfinite(times) & np.isfinite(times[0])
+        with np.errstate(invalid="ignore", divide="ignore"):  # stalled (inf): masked below
+            change = np.where(arrived, 100.0 * (times / times[0] - 1.0), np.nan)  # a gap
+        stalls = "" if np.all(arrived) else " (stalls: no time change)"
+        top.plot(number, change, color=colors[j], label=label + stalls)
         for values, style, what in (
             (result.peak_rotor_temperature, "-", "peak"),
             (result.start_rotor_temperature, "--", "start"),

@@ -50,7 +50,34 @@ def _shown_rows(result: SequenceResult) -> list[int]:
     return sorted(k for k in picks if 1 <= k <= n)
 
 
+def _time_cells(time: float, first: float) -> list[str]:
+    """The time and its change from deployment 1 [%]: "stalled" and "-" where a deployment
+    never reaches the end of travel (no NaN is ever shown)."""
+    from ecdsim.formatting import format_number
+
+    if not math.isfinite(time):
+        return ["stalled", "-"]
+    if not math.isfinite(first):
+        return [format_number(time, 6), "-"]
+    return [format_number(time, 6), f"{100.0 * (time / first - 1.0):+.3f}"]
+
+
+def _stall_note(stalls: list[int], count: int) -> str:
+    """The note under a table with stalled deployments."""
+    if len(stalls) == count:
+        which = "no deployment reaches"
+    else:
+        listed = ", ".join(str(k) for k in stalls[:10]) + (", ..." if len(stalls) > 10 else "")
+        one = len(stalls) == 1
+        which = f"deployment{'' if one else 's'} {listed} never reach{'es' if one else ''}"
+    return (
+        f"stalled: {which} the end of travel (the spring torque falls to the friction "
+        "first; see the warning), so there is no time; '-': no time change to show"
+    )
+
+
 def _print(result: SequenceResult, heat_per_stow: list[float], heated: bool) -> None:
+    import numpy as np
     from rich.markup import escape
     from rich.table import Table
 
@@ -71,17 +98,19 @@ def _print(result: SequenceResult, heat_per_stow: list[float], heated: bool) -> 
         headers += ["peak rotor [degC]", "time [s]", "time change [%]"]
         for header in headers:
             table.add_column(escape(header), justify="right")
-        first = result.deployment_time[0, j]
+        first = float(result.deployment_time[0, j])
         for k in _shown_rows(result):
             i = k - 1
-            time = result.deployment_time[i, j]
-            change = 100.0 * (time / first - 1.0) if math.isfinite(time / first) else math.nan
+            time = float(result.deployment_time[i, j])
             row = [str(k), short(result.start_rotor_temperature[i, j])]
             if housing is not None:
                 row.append(short(housing[i, j]))
-            row += [short(result.peak_rotor_temperature[i, j]), short(time), f"{change:+.3f}"]
+            row += [short(result.peak_rotor_temperature[i, j]), *_time_cells(time, first)]
             table.add_row(*row)
         display.show(console, table)
+        stalls = [int(i) + 1 for i in np.flatnonzero(result.stalled[:, j])]
+        if stalls:
+            display.note(console, _stall_note(stalls, result.cycle.count))
         periodic = result.periodic_after[j]
         state = (
             f"periodic from deployment {periodic} (start temperatures within "
@@ -89,21 +118,25 @@ def _print(result: SequenceResult, heat_per_stow: list[float], heated: bool) -> 
             if periodic is not None
             else f"not periodic within {result.cycle.count} deployments"
         )
+        time_drift = float(drift["deployment_time_s"][j])
+        time_text = f"{time_drift:+.4g} s" if math.isfinite(time_drift) else "- (stalled)"
         display.note(
             console,
-            f"drift 1 to {result.cycle.count}: time {drift['deployment_time_s'][j]:+.4g} s, "
+            f"drift 1 to {result.cycle.count}: time {time_text}, "
             f"peak rotor {drift['peak_rotor_temperature_K'][j]:+.4g} K, start rotor "
             f"{drift['start_rotor_temperature_K'][j]:+.4g} K; {state}",
         )
     if not heated:
         display.note(console, "no [damper.thermal]: the damper does not heat, nothing drifts")
-    display.note(
-        console,
-        "the stow generates no heat here; back-driving an engaged damper at travel / stow "
-        "time would add about "
-        + ", ".join(f"{format_number(e, 3)} J" for e in heat_per_stow)
-        + " per stow (BD_T N^2 travel^2 / t_stow)",
-    )
+    if all(math.isfinite(e) for e in heat_per_stow):
+        estimate = (
+            "back-driving an engaged damper at travel / stow time would add about "
+            + ", ".join(f"{format_number(e, 3)} J" for e in heat_per_stow)
+            + " per stow (BD_T N^2 travel^2 / t_stow)"
+        )
+    else:  # --stow-time 0: no speed to estimate it from
+        estimate = "give --stow-time for the heat a back-driven damper would add"
+    display.note(console, f"the stow generates no heat here; {estimate}")
 
 
 def repeat(

@@ -32,6 +32,7 @@ from pydantic_core import PydanticCustomError
 from ecdsim.config.units import (
     ANGLE,
     DAMPING,
+    HEAT_CAPACITY,
     INERTIA,
     LENGTH,
     MASS,
@@ -40,6 +41,7 @@ from ecdsim.config.units import (
     NUMBER_PATTERN,
     PER_KELVIN,
     SPEED,
+    THERMAL_RESISTANCE,
     TORQUE,
     TORQUE_PER_KELVIN,
     TORSIONAL_STIFFNESS,
@@ -214,6 +216,55 @@ TOLERABLE: dict[str, TolerableQuantity] = {
             strict=True,
         ),
         _q("gearbox.mesh_damping", DAMPING, "dynamics.gear_mesh_damping", lower_bound=0.0),
+        # The roll-off law and the damper's heating (docs/dynamics.md); they need
+        # [damper.rolloff] or [damper.thermal] (and [load] inertia). A resistance must be
+        # finite to take a tolerance: an adiabatic (omitted) one is refused by name.
+        _q(
+            "damper.rolloff.peak_speed",
+            SPEED,
+            "dynamics.rolloff.peak_speed",
+            "Rolloff",
+            lower_bound=0.0,
+            strict=True,
+        ),
+        _q(
+            "damper.rolloff.resistivity_coefficient",
+            PER_KELVIN,
+            "dynamics.rolloff.resistivity_coefficient",
+            "Rolloff",
+        ),
+        _q(
+            "damper.thermal.heat_capacity",
+            HEAT_CAPACITY,
+            "dynamics.thermal.heat_capacity",
+            "Thermal",
+            lower_bound=0.0,
+            strict=True,
+        ),
+        _q(
+            "damper.thermal.thermal_resistance",
+            THERMAL_RESISTANCE,
+            "dynamics.thermal.thermal_resistance",
+            "Thermal",
+            lower_bound=0.0,
+            strict=True,
+        ),
+        _q(
+            "damper.thermal.housing_heat_capacity",
+            HEAT_CAPACITY,
+            "dynamics.thermal.housing_heat_capacity",
+            "Thermal",
+            lower_bound=0.0,
+            strict=True,
+        ),
+        _q(
+            "damper.thermal.housing_thermal_resistance",
+            THERMAL_RESISTANCE,
+            "dynamics.thermal.housing_thermal_resistance",
+            "Thermal",
+            lower_bound=0.0,
+            strict=True,
+        ),
     )
 }
 

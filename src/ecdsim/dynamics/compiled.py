@@ -63,7 +63,10 @@ _J, _K, _DRIVE, _N, _BG, _C, _R, _FA, _COEF, _LAW_A, _LAW_B, _FIXED, _DF, _WS = 
 # Two-node heating (issue 16 item 6): the housing's heat capacity and its resistance to
 # the mount, used only when the state has the housing row (5 rows).
 _CH, _RHE = 14, 15
-_COLUMNS = 16
+# A ground test's gravity (issue 16 item 2): W, theta_0 + phi at the segment's start and
+# the direction (Model.gravity); W = 0 for none (the kernels skip the term).
+_GW, _GP, _GD = 16, 17, 18
+_COLUMNS = 19
 LINEAR_LAW, KLOSS_LAW = 0, 1
 _REACH, _ZERO, _CAP, _REST = linear.REACH, linear.ZERO, linear.CAP, linear.REST
 
@@ -140,7 +143,11 @@ def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArr
     if par[_DF] > 0.0:
         # The Stribeck excess is a speed-dependent torque like the damping (Model.rhs).
         torque = torque + _stribeck(par, u)[0]
-    out[1] = ((par[_DRIVE] - par[_K] * y[0]) - torque) / par[_J]
+    accel = (par[_DRIVE] - par[_K] * y[0]) - torque
+    if par[_GW] != 0.0:
+        # The gravity torque against the motion (Model.gravity).
+        accel = accel - par[_GD] * par[_GW] * math.sin(par[_GP] + par[_GD] * y[0])
+    out[1] = accel / par[_J]
     if heating:
         r = par[_R]
         loss = s * _exprel(-par[_COEF] * s) / r if math.isfinite(r) else 0.0
@@ -212,8 +219,11 @@ def _jacobian(par: FloatArray, kind: int, heating: bool, y: FloatArray) -> tuple
             slope = slope - math.exp(-c * s) / r
         j22 = slope / par[_C]
     j = par[_J]
+    stiffness = par[_K]
+    if par[_GW] != 0.0:
+        stiffness = stiffness + par[_GW] * math.cos(par[_GP] + par[_GD] * y[0])
     return (
-        -par[_K] / j,
+        -stiffness / j,
         -d_torque_du / j,
         -d_torque_ds / j,
         j21,
@@ -612,6 +622,9 @@ def _parameters(model: Model) -> tuple[FloatArray, int]:
     # One node: C_h, R_he unused (the state has no housing row).
     table[:, _CH] = np.inf if model.housing_heat_capacity is None else model.housing_heat_capacity
     table[:, _RHE] = np.inf if model.housing_resistance is None else model.housing_resistance
+    table[:, _GW] = 0.0 if model.gravity_amplitude is None else model.gravity_amplitude
+    table[:, _GP] = 0.0 if model.gravity_phase is None else model.gravity_phase
+    table[:, _GD] = 1.0 if model.gravity_direction is None else model.gravity_direction
     if isinstance(eddy, LinearEddy):
         table[:, _LAW_A] = eddy.damping_rate
         table[:, _LAW_B] = 0.0

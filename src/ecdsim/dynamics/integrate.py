@@ -304,8 +304,7 @@ def _advance_batched(
     control = rosenbrock.Control(
         rtol=rtol, horizon=HORIZON_TIME, horizon_kind=HORIZON, record=record
     )
-    # The compiled kernel has no gravity term yet: such batches take the NumPy RODAS4.
-    kernel = compiled_kernel() if model.gravity_amplitude is None else None
+    kernel = compiled_kernel()
     integrate_batch = rosenbrock.integrate_batch if kernel is None else kernel.integrate_batch
     out = integrate_batch(model, segments, control)
     stopped = (out.kind == linear.ZERO) | (out.kind == linear.REST)

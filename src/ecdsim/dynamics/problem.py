@@ -11,7 +11,7 @@ physics functions as the quasi-static path.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -155,6 +155,8 @@ class DynamicProblem(QuasiStaticProblem):
             np.shape(self.friction),
             np.shape(self.damping_rate),
             *(value.shape for value in own.values()),
+            # The eddy law's own arrays (a Monte Carlo batch of roll-off peak speeds).
+            *(np.shape(getattr(self.eddy, f.name)) for f in fields(self.eddy)),  # type: ignore[arg-type]
         )
         # Widen the quasi-static fields to the joint batch first, then let the base class
         # align the breakpoint arrays with them.

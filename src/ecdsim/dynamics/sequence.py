@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, FloatArray
+from ecdsim._types import ArrayLike, BoolArray, FloatArray
 from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.dynamics.result import DynamicResult
 from ecdsim.physics import thermal as heat
@@ -103,10 +103,22 @@ class SequenceResult:
     periodic_after: list[int | None]
     tolerance: float
 
+    @property
+    def stalled(self) -> BoolArray:
+        """True where a deployment never reaches the end of travel (its time is inf), (N, m)."""
+        return ~np.isfinite(self.deployment_time)
+
     def drift(self) -> dict[str, FloatArray]:
-        """Deployment N minus deployment 1, per temperature: time [s], peak and start [K]."""
+        """Deployment N minus deployment 1, per temperature: time [s], peak and start [K].
+
+        The time's drift is NaN where deployment 1 or N stalls (no time to compare; see
+        :attr:`stalled`), computed without inf - inf.
+        """
+        first, last = self.deployment_time[0], self.deployment_time[-1]
+        with np.errstate(invalid="ignore"):  # inf - inf where both stall: NaN below anyway
+            change = last - first
         return {
-            "deployment_time_s": self.deployment_time[-1] - self.deployment_time[0],
+            "deployment_time_s": np.where(np.isfinite(first) & np.isfinite(last), change, math.nan),
             "peak_rotor_temperature_K": self.peak_rotor_temperature[-1]
             - self.peak_rotor_temperature[0],
             "start_rotor_temperature_K": self.start_rotor_temperature[-1]
@@ -122,12 +134,16 @@ class SequenceResult:
             return [float(v) if math.isfinite(v) else None for v in values[:, j]]
 
         drift = self.drift()
+        stalled = self.stalled
         cases = []
         for j, temp in enumerate(self.temperatures):
             cases.append(
                 {
                     "temperature_C": float(temp),
                     "periodic_after": self.periodic_after[j],
+                    # Deployments that never reach the end of travel: their time and the
+                    # time's drift (if deployment 1 or N is among them) are null.
+                    "stalled_deployments": int(np.count_nonzero(stalled[:, j])),
                     "drift": {
                         key: float(v[j]) if math.isfinite(v[j]) else None
                         for key, v in drift.items()
@@ -136,6 +152,7 @@ class SequenceResult:
                         "start_rotor_temperature_C": column(self.start_rotor_temperature, j),
                         "start_housing_temperature_C": column(self.start_housing_temperature, j),
                         "deployment_time_s": column(self.deployment_time, j),
+                        "stalled": [bool(v) for v in stalled[:, j]],
                         "peak_rotor_temperature_C": column(self.peak_rotor_temperature, j),
                         "end_rotor_temperature_C": column(self.end_rotor_temperature, j),
                         "end_housing_temperature_C": column(self.end_housing_temperature, j),

@@ -50,6 +50,19 @@ _OWNERS = {
     "ResistiveTable": "[load] resistive_table, which this config does not give",
     "Gravity": "[load.gravity], which this config does not give",
     "GearEfficiency": "[gearbox] efficiency, which this config does not give",
+    "Rolloff": "[damper.rolloff], which this config does not give",
+    "Thermal": "[damper.thermal], which this config does not give",
+}
+
+# Fields whose omission in the config means a value the tolerance cannot centre on.
+_OMITTED = {
+    "damper.thermal.thermal_resistance": "infinite here: [damper.thermal] gives no "
+    "thermal_resistance (adiabatic); give a finite one in K/W to take a tolerance",
+    "damper.thermal.housing_thermal_resistance": "infinite here: [damper.thermal] gives no "
+    "housing_thermal_resistance (adiabatic housing); give a finite one in K/W to take a "
+    "tolerance",
+    "damper.thermal.housing_heat_capacity": "not set in this config: [damper.thermal] gives no "
+    "housing_heat_capacity (one-node heating); give one in J/K for the housing node",
 }
 
 
@@ -84,6 +97,8 @@ def nominal(parameters: Parameters, key: str) -> float:
     """The configured value of ``key`` in SI units; NotTolerable if the config lacks it."""
     obj, field = _owner(parameters, key)
     value = getattr(obj, field)
+    if key in _OMITTED and (value is None or not np.all(np.isfinite(value))):
+        raise NotTolerable(_OMITTED[key])
     if value is None:
         section = key.rsplit(".", 1)[0]
         alternative = {

@@ -20,6 +20,7 @@ import datetime
 import logging
 import os
 import sys
+import threading
 import time
 from collections import Counter, deque
 from collections.abc import Callable, Generator, Iterator, Sequence
@@ -55,6 +56,10 @@ LARGE_RUN_CPUS = 2
 # sessions), run() of 40 chunks took 2.7 to 3.4 s on two threads against 3.3 to 4.0 s on
 # one (three alternating pairs); on a quiet machine the gain is larger.
 IN_PROCESS_THREADS = 2
+# Chunk writes waiting in line for the writer thread (run): a slow fsync then holds up
+# the computation only when this many are behind. Each holds its chunk's columns
+# (about 9 MB at 65,536 samples).
+WRITE_QUEUE = 4
 
 OUTPUTS = {
     "deployment_time_s": "deployment_time",
@@ -64,6 +69,10 @@ OUTPUTS = {
 # With [requirements] in the config: the minimum torque margin over the travel
 # (ecdsim.sizing.margin, docs/sizing.md section 5), per sample and temperature.
 MARGIN = "min_torque_margin"
+
+
+class _WriteSkipped(Exception):
+    """A queued chunk write not made because an earlier write failed (run)."""
 
 
 class RunError(Exception):
@@ -788,15 +797,25 @@ def run(
     if progress:
         progress(samples_done, plan.samples)
     computed = 0
-    # The chunk files are written by one writer thread, one file at a time, while this
-    # thread computes the next chunk: the Parquet encoding and the fsync release the GIL,
-    # so the disk's time overlaps the computation. At most one write is in flight (and one
-    # chunk waits for it), so the memory stays bounded and, when a write fails or Ctrl-C
-    # comes, every chunk before it is on disk and none after it.
+    # The chunk files are written by one writer thread, one file at a time and in chunk
+    # order, while this thread takes the next chunks: the Parquet encoding and the fsync
+    # release the GIL, so the disk's time overlaps the computation. Up to WRITE_QUEUE
+    # writes wait in line (their columns bound the memory), so that a slow fsync does not
+    # hold up the computation. A write that fails (ENOSPC, Ctrl-C) stops the line: the
+    # writes queued behind it see ``stopped`` and write nothing, so every chunk before the
+    # failed one is on disk and none after it.
     writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ecdsim-chunk-writer")
-    pending: Future[Any] | None = None
-    pending_result: ChunkResult | None = None
-    last_write: Future[Any] | None = None  # waited for on every way out, even mid-settle
+    stopped = threading.Event()
+    queued: deque[tuple[Future[Any], ChunkResult]] = deque()
+
+    def write_in_line(result: ChunkResult) -> None:
+        if stopped.is_set():
+            raise _WriteSkipped
+        try:
+            write_result(plan, out, result)
+        except BaseException:
+            stopped.set()
+            raise
 
     store.start_keeping(out, identity, plan.samples)
 
@@ -811,13 +830,16 @@ def run(
         if progress:
             progress(samples_done, plan.samples)
 
-    def settle() -> None:
-        nonlocal pending, pending_result
-        if pending is not None and pending_result is not None:
-            future, result = pending, pending_result
-            pending, pending_result = None, None
+    def settle(keep_waiting: int) -> None:
+        """Take the finished writes, in order, until at most ``keep_waiting`` are queued."""
+        while queued and (len(queued) > keep_waiting or queued[0][0].done()):
+            future, result = queued.popleft()
             future.result()  # re-raises the write's error (ENOSPC, Ctrl-C) here
             finished(result)
+
+    def stop_writing() -> None:
+        stopped.set()
+        wait([future for future, _ in queued])  # a write under way finishes or fails
 
     try:
         with contextlib.closing(chosen.results(plan, todo, out)) as results:
@@ -829,24 +851,21 @@ def run(
                             "install the same version on every worker"
                         ]
                     )
-                settle()
+                settle(WRITE_QUEUE - 1)
                 if result.written:
                     finished(result)
                 else:
-                    pending = last_write = writer.submit(write_result, plan, out, result)
-                    pending_result = result
-            settle()
+                    queued.append((writer.submit(write_in_line, result), result))
+            settle(0)
     except KeyboardInterrupt:
-        if last_write is not None:
-            wait([last_write])  # a write under way finishes (atomically) or fails
+        stop_writing()
         # ecdsim.atomic removes its temporary file when the write is interrupted, except
         # in the instant between creating it and entering its try block: sweep up.
         store.remove_partial_files(out)
         on_disk = sum(store.chunk_path(out, k).exists() for k in range(plan.chunks))
         raise RunInterrupted(out, on_disk, plan.chunks) from None
     except Exception:
-        if last_write is not None:
-            wait([last_write])
+        stop_writing()
         if created and computed == 0:
             # Nothing was computed (no scheduler, a missing package, a bad first chunk):
             # leave no half-started run behind, so that the same command can be repeated.
