@@ -256,3 +256,16 @@ def test_the_montecarlo_command_runs_with_thermal_tolerances(tmp_path: Path) -> 
     assert run.exit_code == 0, run.output
     assert "damper.thermal.heat_capacity" in run.output
     assert "nan" not in run.output.lower()
+
+
+def test_heating_without_inertia_is_refused_for_the_inertia() -> None:
+    # The config gives [damper.thermal] but no [load] inertia (quasi-static methods only):
+    # the message names what is missing, not the section it has.
+    text = _text(
+        TWO_NODE,
+        _quantities(**{"damper.thermal.heat_capacity": 'distribution = "normal", sigma = "5 %"'}),
+    )
+    text = text.replace('inertia = "5 kg*m^2"\n', "").replace('["dynamic"]', '["exact"]')
+    with pytest.raises(ConfigError, match=r"heat_capacity: .*need \[load\] inertia") as info:
+        resolve(parse_config(text))
+    assert "which this config does not give" not in str(info.value)
