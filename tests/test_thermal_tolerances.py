@@ -269,3 +269,23 @@ def test_heating_without_inertia_is_refused_for_the_inertia() -> None:
     with pytest.raises(ConfigError, match=r"heat_capacity: .*need \[load\] inertia") as info:
         resolve(parse_config(text))
     assert "which this config does not give" not in str(info.value)
+
+
+def test_a_quasi_static_study_says_which_tolerances_it_cannot_see() -> None:
+    # The exact method has no inertia or heat balance: a tolerance on the rotor's heat
+    # capacity changes nothing there, and the summary says so instead of letting a
+    # sensitivity of 0 read as "does not matter". With the dynamic method: no such note.
+    from ecdsim.montecarlo.stats import _notes
+
+    tolerances = _quantities(
+        **{"damper.thermal.heat_capacity": 'distribution = "normal", sigma = "10 %"'}
+    )
+    config = parse_config(_text(TWO_NODE, tolerances))
+    exact = [n for n in _notes(build_plan(config, 6, "exact", seed=7)) if "dynamic" in n]
+    assert exact == [
+        "damper.thermal.heat_capacity: only the dynamic method models this; with "
+        "--method exact the results do not depend on it (sensitivity 0); use "
+        "--method dynamic"
+    ]
+    dynamic = _notes(build_plan(config, 6, "dynamic", seed=7))
+    assert not [n for n in dynamic if "only the dynamic method" in n]
