@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 from typer.testing import CliRunner
@@ -25,7 +26,7 @@ runner = CliRunner()
 PAPER = PAPER_CONFIG.read_text()
 
 
-def _with_gearbox(**changes: float) -> DeploymentSystem:
+def _with_gearbox(**changes: Any) -> DeploymentSystem:
     """The paper example with gearbox fields replaced, built past the config's limits."""
     system = parse_config(PAPER).system
     gearbox = dataclasses.replace(system.ecd.gearbox, **changes)

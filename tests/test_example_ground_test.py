@@ -156,3 +156,15 @@ def document_at_25c() -> float:
         cwd=ROOT,
     )
     return float(json.loads(done.stdout)["cases"][0]["dynamic"]["deployment_time_s"])
+
+
+def test_the_notebook_api_gives_the_ground_test_and_its_flight_twin() -> None:
+    import ecdsim
+
+    result = ecdsim.deploy(EXAMPLE, temperatures=[25], methods="exact")
+    # The same hand-typed integrals as the command line's (rel 1e-9: the quadrature path).
+    assert result.deployment_time()[25.0] == pytest.approx(_time(25.0, True), rel=1e-9)
+    flight = result.flight_deployment_time()
+    assert flight is not None
+    assert flight[25.0] == pytest.approx(_time(25.0, False), rel=1e-12)
+    assert ecdsim.deploy(ROOT / "examples" / "paper_cc16.toml").flight_deployment_time() is None

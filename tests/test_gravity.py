@@ -9,6 +9,8 @@ B dphi/dt = T(phi) - F - m g r (1 - offload) sin(theta_0 + phi).
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +29,8 @@ from ecdsim.solvers.exact_gravity import (
     solve_flat,
 )
 from tests import hand
+
+ROOT = Path(__file__).resolve().parent.parent
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "paper_cc16.toml"
 TEXT = EXAMPLE.read_text()
@@ -486,3 +490,37 @@ def test_monte_carlo_torque_margin_counts_gravity(tmp_path: Path) -> None:
     expected = hand.TE / (f + 2.0 * w * math.sin(math.radians(-60.0) + hand.TRAVEL)) - 1.0
     # 1e-12: the same arithmetic at the last breakpoint
     assert case["nominal"]["min_torque_margin"] == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("command", "example"),
+    [
+        (["fit", "trace", "examples/deployment_trace.csv", "--config"], "paper_cc16.toml"),
+        (["compare-fluid"], "fluid.toml"),
+    ],
+)
+def test_commands_without_gravity_refuse_a_ground_test(
+    command: list[str], example: str, tmp_path: Path
+) -> None:
+    # Both build their own piecewise-linear problems: with a gravity torque they would
+    # fit or compare a load that is not the configured one. They refuse, naming the key.
+    text = (ROOT / "examples" / example).read_text(encoding="utf-8")
+    at = text.index("[analysis]")
+    gravity = (
+        '[load.gravity]\nmass = "1.2 kg"\ncg_radius = "0.3 m"\n'
+        'release_angle = "-60 deg"\noffload = 0.9\n\n'
+    )
+    config = tmp_path / "ground.toml"
+    config.write_text(text[:at] + gravity + text[at:], encoding="utf-8")
+    done = subprocess.run(
+        [sys.executable, "-m", "ecdsim", *command, str(config)],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=ROOT,
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert "load.gravity" in lines[0], done.stderr
+    assert "Traceback" not in done.stderr

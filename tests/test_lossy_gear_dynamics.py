@@ -221,13 +221,24 @@ def test_an_ideal_gear_changes_nothing_in_the_dynamic_method() -> None:
     np.testing.assert_array_equal(ra.energy.gear_loss, np.zeros(3))
 
 
-def test_the_dynamic_method_refuses_a_lossy_gear_with_nonlinear_damping() -> None:
+def test_the_dynamic_method_takes_a_lossy_gear_with_heating_but_not_with_stribeck() -> None:
+    # Once refused (the integrated segments had no power-flow switch): a heated damper
+    # through a lossy gear now runs (its accuracy: tests/test_lossy_gear_nonlinear.py).
     text = _config_text("{ forward = 0.9 }").replace(
         "[load]", '[damper.thermal]\nheat_capacity = "50 J/K"\n\n[load]', 1
     )
     config = parse_config(text)
-    with pytest.raises(ValueError, match="gearbox.efficiency: the dynamic method takes"):
+    result = _result(
         predict(config.system, np.array([25.0]), ("dynamic",), dynamics=config.spec.dynamics())
+    )
+    assert float(result.energy.gear_loss[0]) > 0.0
+    stribeck = parse_config(
+        _config_text("{ forward = 0.9 }").replace(
+            "[gearbox]", 'stribeck_speed = "5 rad/s"\n\n[gearbox]', 1
+        )
+    )
+    with pytest.raises(ValueError, match="gearbox.efficiency: the dynamic method takes"):
+        predict(stribeck.system, np.array([25.0]), ("dynamic",), dynamics=stribeck.spec.dynamics())
 
 
 def test_a_backward_breakaway_from_rest_runs_forward_in_time() -> None:

@@ -256,3 +256,36 @@ def test_the_montecarlo_command_runs_with_thermal_tolerances(tmp_path: Path) -> 
     assert run.exit_code == 0, run.output
     assert "damper.thermal.heat_capacity" in run.output
     assert "nan" not in run.output.lower()
+
+
+def test_heating_without_inertia_is_refused_for_the_inertia() -> None:
+    # The config gives [damper.thermal] but no [load] inertia (quasi-static methods only):
+    # the message names what is missing, not the section it has.
+    text = _text(
+        TWO_NODE,
+        _quantities(**{"damper.thermal.heat_capacity": 'distribution = "normal", sigma = "5 %"'}),
+    )
+    text = text.replace('inertia = "5 kg*m^2"\n', "").replace('["dynamic"]', '["exact"]')
+    with pytest.raises(ConfigError, match=r"heat_capacity: .*need \[load\] inertia") as info:
+        resolve(parse_config(text))
+    assert "which this config does not give" not in str(info.value)
+
+
+def test_a_quasi_static_study_says_which_tolerances_it_cannot_see() -> None:
+    # The exact method has no inertia or heat balance: a tolerance on the rotor's heat
+    # capacity changes nothing there, and the summary says so instead of letting a
+    # sensitivity of 0 read as "does not matter". With the dynamic method: no such note.
+    from ecdsim.montecarlo.stats import _notes
+
+    tolerances = _quantities(
+        **{"damper.thermal.heat_capacity": 'distribution = "normal", sigma = "10 %"'}
+    )
+    config = parse_config(_text(TWO_NODE, tolerances))
+    exact = [n for n in _notes(build_plan(config, 6, "exact", seed=7)) if "dynamic" in n]
+    assert exact == [
+        "damper.thermal.heat_capacity: only the dynamic method models this; with "
+        "--method exact the results do not depend on it (sensitivity 0); use "
+        "--method dynamic"
+    ]
+    dynamic = _notes(build_plan(config, 6, "dynamic", seed=7))
+    assert not [n for n in dynamic if "only the dynamic method" in n]

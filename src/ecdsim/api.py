@@ -288,10 +288,25 @@ class DeployResults(_Table):
         return prediction_rows(self.prediction)
 
     def deployment_time(self, method: str = "exact") -> dict[float, float]:
-        """Deployment time [s] by ``method`` at each temperature [degC] (inf: stalled)."""
+        """Deployment time [s] by ``method`` at each temperature [degC] (inf: stalled).
+
+        With ``[load.gravity]`` this is the ground test (1 g, offloaded as configured);
+        :meth:`flight_deployment_time` gives the same system in flight (0 g).
+        """
         times = self.prediction.solutions[method].deployment_time
         temps = self.prediction.temperatures
         return {float(t): float(x) for t, x in zip(temps, times, strict=True)}
+
+    def flight_deployment_time(self, method: str = "exact") -> dict[float, float] | None:
+        """The flight (0 g) twin's deployment time [s] at each temperature [degC].
+
+        None without ``[load.gravity]`` (the prediction is then the flight itself).
+        """
+        flight = self.prediction.flight
+        if flight is None:
+            return None
+        times = flight.solutions[method].deployment_time
+        return {float(t): float(x) for t, x in zip(flight.temperatures, times, strict=True)}
 
     def plot(self, units: UnitSystem = "si") -> list[Figure]:
         """Angle and speed against time, and ECD torque against speed (paper Fig. 4-6, 8).
@@ -343,12 +358,14 @@ def deploy(
     >>> round(r.deployment_time()[25.0], 2)
     26.86
     """
-    from ecdsim.deployment import predict
+    from ecdsim.deployment import predict, with_flight
 
     config = load(config_or_path, overrides)
     temps = config.temperatures if temperatures is None else _temperatures(temperatures)
     chosen = config.methods if methods is None else _methods(methods)
-    prediction = predict(config.system, temps, chosen, dynamics=config.spec.dynamics())
+    dynamics = config.spec.dynamics()
+    # With [load.gravity] the flight twin too, as `ecdsim deploy` shows it.
+    prediction = with_flight(predict(config.system, temps, chosen, dynamics=dynamics), dynamics)
     return DeployResults(config, prediction)
 
 

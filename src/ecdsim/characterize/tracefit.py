@@ -556,6 +556,20 @@ def fit_traces(
     temperature : temperature of a file without a temperature column [degC]
     reference_temperature : T_ref of the damping laws [degC]
     """
+    gravity = config.system.load.gravity
+    if gravity is not None and bool(np.any(gravity.amplitude > 0.0)):
+        from ecdsim.config.errors import ConfigError
+
+        # The trace model is the piecewise-linear exact solution; a sine drive would be
+        # fitted as if absent, and the damper would absorb gravity's torque unseen.
+        raise ConfigError(
+            [
+                "load.gravity: the trace fit does not model gravity; fit a trace of an "
+                "offloaded (flight-like) test with a config without [load.gravity], or "
+                "offload = 1"
+            ],
+            config.source,
+        )
     table, traces, warnings = read_traces(path, temperature)
     travel = float(np.max(config.system.load.travel))
     for trace in traces:

@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from ecdsim._types import FloatArray
 from ecdsim.dynamics import linear
 from ecdsim.dynamics.damping import KlossEddy, LinearEddy
-from ecdsim.dynamics.equations import Model
+from ecdsim.dynamics.equations import SWITCH, Model
 from ecdsim.dynamics.rosenbrock import (
     _GC,
     GAMMA,
@@ -66,7 +66,11 @@ _CH, _RHE = 14, 15
 # A ground test's gravity (issue 16 item 2): W, theta_0 + phi at the segment's start and
 # the direction (Model.gravity); W = 0 for none (the kernels skip the term).
 _GW, _GP, _GD = 16, 17, 18
-_COLUMNS = 19
+# A lossy gear (issue 16 item 5): the mesh factor m on the damper side's torque (1: ideal),
+# the power flow whose reversal ends the segment (0: none), J_L, J_D, F_q and a_L of the
+# indicator (Model.indicator).
+_MESH, _FLOW, _JL, _JD, _FQ, _AL = 19, 20, 21, 22, 23, 24
+_COLUMNS = 25
 LINEAR_LAW, KLOSS_LAW = 0, 1
 _REACH, _ZERO, _CAP, _REST = linear.REACH, linear.ZERO, linear.CAP, linear.REST
 
@@ -143,7 +147,7 @@ def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArr
     if par[_DF] > 0.0:
         # The Stribeck excess is a speed-dependent torque like the damping (Model.rhs).
         torque = torque + _stribeck(par, u)[0]
-    accel = (par[_DRIVE] - par[_K] * y[0]) - torque
+    accel = (par[_DRIVE] - par[_K] * y[0]) - (torque if par[_MESH] == 1.0 else par[_MESH] * torque)
     if par[_GW] != 0.0:
         # The gravity torque against the motion (Model.gravity).
         accel = accel - par[_GD] * par[_GW] * math.sin(par[_GP] + par[_GD] * y[0])
@@ -222,10 +226,11 @@ def _jacobian(par: FloatArray, kind: int, heating: bool, y: FloatArray) -> tuple
     stiffness = par[_K]
     if par[_GW] != 0.0:
         stiffness = stiffness + par[_GW] * math.cos(par[_GP] + par[_GD] * y[0])
+    mesh = par[_MESH]  # the lossy gear's m on the motion, not on E (Model.jacobian)
     return (
         -stiffness / j,
-        -d_torque_du / j,
-        -d_torque_ds / j,
+        -(d_torque_du if mesh == 1.0 else mesh * d_torque_du) / j,
+        -(d_torque_ds if mesh == 1.0 else mesh * d_torque_ds) / j,
         j21,
         j22,
         torque + d_torque_du * u,
@@ -411,6 +416,51 @@ def _interior_peak(ya: float, fa: float, yb: float, fb: float, h: float, stop: f
 
 
 @_jit
+def _indicator(par: FloatArray, kind: int, heating: bool, y: FloatArray) -> float:
+    """The power-flow indicator times the segment's flow (:meth:`Model.indicator`)."""
+    f = _factor(par, heating, y[2])
+    shaft = par[_N] * y[1]
+    eddy = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)[0]
+    damper = par[_N] * (eddy + par[_BG] * shaft) + par[_FQ]
+    load = par[_AL] - par[_K] * y[0]
+    if par[_GW] != 0.0:
+        load = load - par[_GD] * par[_GW] * math.sin(par[_GP] + par[_GD] * y[0])
+    value: float = par[_FLOW] * (par[_JL] * damper + par[_JD] * load)
+    return value
+
+
+@_jit
+def _switch(
+    par: FloatArray,
+    kind: int,
+    heating: bool,
+    y: FloatArray,
+    f: FloatArray,
+    y1: FloatArray,
+    fb: FloatArray,
+    h: float,
+    probe: FloatArray,
+) -> float:
+    """Fraction of the step where the power flow reverses, bisected on the interpolant
+    (``rosenbrock._find_switch``); inf where it does not."""
+    if par[_FLOW] == 0.0:
+        return math.inf
+    if not (_indicator(par, kind, heating, y) > 0.0 and _indicator(par, kind, heating, y1) <= 0.0):
+        return math.inf
+    lo = 0.0
+    hi = 1.0
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        for r in range(y.shape[0]):
+            probe[r] = _hermite(y[r], f[r], y1[r], fb[r], h, mid)
+        if _indicator(par, kind, heating, probe) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+@_jit
 def _grow(buffer: FloatArray, count: int) -> FloatArray:
     if count < buffer.shape[1]:
         return buffer
@@ -502,6 +552,10 @@ def _segment(
             s_hit = _crossing(y[1], f[1], y1[1], fb[1], h, creep)
             if s_hit < event_s:
                 event_s, event = s_hit, _REST
+        if par[_FLOW] != 0.0:
+            s_hit = _switch(par, kind, heating, y, f, y1, fb, h, stage)
+            if s_hit < event_s:
+                event_s, event = s_hit, SWITCH
         # Maxima of the speed and the temperature state: step ends and interior peaks.
         stop = min(event_s, 1.0)
         if event < 0:
@@ -625,6 +679,16 @@ def _parameters(model: Model) -> tuple[FloatArray, int]:
     table[:, _GW] = 0.0 if model.gravity_amplitude is None else model.gravity_amplitude
     table[:, _GP] = 0.0 if model.gravity_phase is None else model.gravity_phase
     table[:, _GD] = 1.0 if model.gravity_direction is None else model.gravity_direction
+    # An ideal gear: m = 1 (the kernels skip the product) and no power-flow event.
+    table[:, _MESH] = 1.0 if model.mesh is None else model.mesh
+    table[:, _FLOW] = 0.0 if model.flow is None else model.flow
+    for column, values in (
+        (_JL, model.load_inertia),
+        (_JD, model.damper_inertia),
+        (_FQ, model.mesh_friction),
+        (_AL, model.load_drive),
+    ):
+        table[:, column] = 0.0 if values is None else values
     if isinstance(eddy, LinearEddy):
         table[:, _LAW_A] = eddy.damping_rate
         table[:, _LAW_B] = 0.0

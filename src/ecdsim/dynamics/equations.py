@@ -47,6 +47,14 @@ row, the housing's rise over the ambient (environment) temperature ``h = T_h - T
 invariant above holds for it unchanged; the housing is never hotter than the rotor's
 bound in exact arithmetic (it is heated only by the rotor).
 
+Lossy gear (optional, docs/model.md): with a mesh factor ``m`` (1/eta_f while the load
+drives the damper side, eta_b while it is back-driven; constant over a segment) the
+damper side's torque reaches the input times m, ``J u' = a - k x - m M_d`` (J already
+holds ``J_L + m J_D``), while E and the heating keep the damper's own ``M_d`` (the mesh
+loss is booked apart). The segment ends where the power flow reverses: where the
+indicator ``J_L (M_d + F_q) + J_D (a_L - k x - G(x))`` (:meth:`Model.indicator`,
+:func:`ecdsim.physics.gearing.power_flow_indicator`) changes sign.
+
 Both integrators of :mod:`ecdsim.dynamics.integrate` use this one :class:`Model`.
 """
 
@@ -61,6 +69,10 @@ from ecdsim._types import FloatArray
 from ecdsim.dynamics.damping import EddyLaw
 from ecdsim.physics import thermal
 from ecdsim.physics.gravity import gravity_torque, gravity_torque_slope
+
+# Event code of a segment that ends where a lossy gear's power flow reverses (after
+# linear's REACH, ZERO, CAP, REST and integrate's HORIZON).
+SWITCH = 5
 
 
 def stribeck_excess(
@@ -122,6 +134,15 @@ class Model:
         None for no gravity (docs/model.md, gravity in ground tests)
     gravity_phase : theta_0 + phi at the segment's start [rad] (with ``gravity_amplitude``)
     gravity_direction : +1 forward, -1 backward: the segment's frame (with the amplitude)
+    mesh : m, a lossy gear's factor on the damper side's torque [-] per segment, or None
+        for an ideal gear (then the next five are None too)
+    flow : +1 forward, -1 back-driven: the power flow whose reversal ends the segment
+        (0: no such event, e.g. in free play)
+    load_inertia : J_L [kg*m^2]
+    damper_inertia : J_D, the damper side at the input [kg*m^2]
+    mesh_friction : F_q = FT_T N, the damper side's Coulomb friction through an ideal
+        gear [N*m]
+    load_drive : a_L, spring torque less the system friction at the start [N*m]
     """
 
     inertia: FloatArray
@@ -142,6 +163,12 @@ class Model:
     gravity_amplitude: FloatArray | None = None
     gravity_phase: FloatArray | None = None
     gravity_direction: FloatArray | None = None
+    mesh: FloatArray | None = None
+    flow: FloatArray | None = None
+    load_inertia: FloatArray | None = None
+    damper_inertia: FloatArray | None = None
+    mesh_friction: FloatArray | None = None
+    load_drive: FloatArray | None = None
 
     @property
     def two_node(self) -> bool:
@@ -197,7 +224,41 @@ class Model:
             gravity_direction=None
             if self.gravity_direction is None
             else self.gravity_direction[index],
+            **self._mesh_take(index),
         )
+
+    def _mesh_take(self, index: NDArray[np.intp]) -> dict[str, FloatArray]:
+        """The lossy gear's fields of a subset of the segments (none for an ideal gear)."""
+        names = ("mesh", "flow", "load_inertia", "damper_inertia", "mesh_friction", "load_drive")
+        taken: dict[str, FloatArray] = {}
+        for name in names:
+            value = getattr(self, name)
+            if value is not None:
+                taken[name] = value[index]
+        return taken
+
+    def indicator(self, y: FloatArray) -> FloatArray:
+        """``flow * (J_L (M_d + F_q) + J_D (a_L - k x - G(x)))`` at states y (rows, n).
+
+        Positive while the power flows as the segment assumes; the segment ends where it
+        falls to zero (docs/model.md, lossy gear). Zero everywhere without a mesh.
+        """
+        if self.mesh is None:
+            return np.zeros_like(y[1])
+        assert self.flow is not None
+        assert self.load_inertia is not None
+        assert self.damper_inertia is not None
+        assert self.mesh_friction is not None
+        assert self.load_drive is not None
+        x, u = y[0], y[1]
+        shaft = self.ratio * u
+        eddy = self.eddy.torque_at_factor(shaft, self.factor(y[2]))
+        damper = self.ratio * (eddy + self.gearbox_damping * shaft) + self.mesh_friction
+        load = self.load_drive - self.stiffness * x
+        weight = self.gravity(x)
+        if weight is not None:
+            load = load - weight[0]
+        return np.asarray(self.flow * (self.load_inertia * damper + self.damper_inertia * load))
 
     def gravity(self, x: FloatArray) -> tuple[FloatArray, FloatArray] | None:
         """The gravity torque against the motion in the forward frame, and its slope in x.
@@ -250,7 +311,7 @@ class Model:
         accel = dy[1]
         np.multiply(self.stiffness, x, out=accel)
         np.subtract(self.drive, accel, out=accel)
-        accel -= torque
+        accel -= torque if self.mesh is None else self.mesh * torque
         stribeck = self._stribeck(u)
         if stribeck is not None:
             accel -= stribeck[0]
@@ -294,8 +355,14 @@ class Model:
         weight = self.gravity(y[0])
         if weight is not None:
             j10 = -(self.stiffness + weight[1]) / self.inertia
-        j11 = -d_torque_du / self.inertia
-        j12 = -d_torque_ds / self.inertia
+        if self.mesh is None:
+            j11 = -d_torque_du / self.inertia
+            j12 = -d_torque_ds / self.inertia
+        else:
+            # The lossy gear's m on M_d in the motion, not in E (the damper's own work);
+            # Stribeck friction is not taken with a mesh.
+            j11 = -self.mesh * d_torque_du / self.inertia
+            j12 = -self.mesh * d_torque_ds / self.inertia
         if self.heating:
             by_speed, by_factor = self.eddy.power_per_factor_derivatives(shaft, factor)
             j21 = n * by_speed / self.heat_capacity

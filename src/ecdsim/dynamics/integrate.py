@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from ecdsim._types import FloatArray
 from ecdsim.dynamics import linear
 from ecdsim.dynamics.damping import EddyLaw
-from ecdsim.dynamics.equations import Model
+from ecdsim.dynamics.equations import SWITCH, Model
 
 HORIZON = 4  # event kind: the integration horizon passed without an event
 HORIZON_TIME = 1e9  # [s] integration horizon when there is no stop time
@@ -69,6 +69,13 @@ class NonlinearSegments:
         the next two are None too; :class:`~ecdsim.dynamics.equations.Model`)
     gravity_phase : theta_0 + phi at the segment's start [rad]
     gravity_direction : +1 forward, -1 backward
+    mesh : a lossy gear's factor m on the damper side's torque, or None for an ideal
+        gear (then the next five are None too; :class:`~ecdsim.dynamics.equations.Model`)
+    flow : the power flow whose reversal ends the segment (equations.SWITCH), 0 for none
+    load_inertia : J_L [kg*m^2]
+    damper_inertia : J_D at the input [kg*m^2]
+    mesh_friction : F_q = FT_T N through an ideal gear [N*m]
+    load_drive : spring torque less system friction at the start [N*m]
     """
 
     inertia: FloatArray
@@ -95,6 +102,12 @@ class NonlinearSegments:
     gravity_amplitude: FloatArray | None = None
     gravity_phase: FloatArray | None = None
     gravity_direction: FloatArray | None = None
+    mesh: FloatArray | None = None
+    flow: FloatArray | None = None
+    load_inertia: FloatArray | None = None
+    damper_inertia: FloatArray | None = None
+    mesh_friction: FloatArray | None = None
+    load_drive: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -225,6 +238,12 @@ def _model(segs: NonlinearSegments) -> Model:
         gravity_amplitude=segs.gravity_amplitude,
         gravity_phase=segs.gravity_phase,
         gravity_direction=segs.gravity_direction,
+        mesh=segs.mesh,
+        flow=segs.flow,
+        load_inertia=segs.load_inertia,
+        damper_inertia=segs.damper_inertia,
+        mesh_friction=segs.mesh_friction,
+        load_drive=segs.load_drive,
     )
 
 
@@ -364,6 +383,12 @@ def _integrate_one(
     ]
     if creeps:
         events.append(_Event(lambda _t, y: float(y[1]) - creep_speed, True, -1.0))
+    switches = one.flow is not None and float(one.flow[0]) != 0.0
+    if switches:
+        # A lossy gear's power flow reverses (equations.SWITCH), last in the list.
+        events.append(
+            _Event(lambda _t, y: float(one.indicator(np.reshape(y, (rows, 1)))[0]), True, -1.0)
+        )
     atol = scales.atol[:, j]
     t_end = cap if math.isfinite(cap) else HORIZON_TIME
     sol = solve_ivp(
@@ -384,6 +409,8 @@ def _integrate_one(
         outcomes: list[tuple[int, int]] = [(linear.REACH, 0), (linear.ZERO, 1)]
         if creeps:
             outcomes.append((linear.REST, 4))
+        if switches:
+            outcomes.append((SWITCH, len(events) - 1))
         for code, index in outcomes:
             if len(sol.t_events[index]):
                 kind = code

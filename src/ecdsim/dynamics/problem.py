@@ -278,13 +278,12 @@ def dynamic_problem(
                 "puts the damper at or beyond the temperature where its damping law reaches zero",
             )
     lossy = bool(np.any(ecd.forward_efficiency != 1.0) or np.any(ecd.backward_efficiency != 1.0))
-    nonlinear = thermal is not None or params.rolloff is not None
-    if lossy and (nonlinear or params.stribeck_speed is not None):
-        # The power-flow switch is found on closed-form segments only (docs/dynamics.md).
+    if lossy and params.stribeck_speed is not None:
+        # The Stribeck excess mixes the ECD's friction (through the mesh) with the
+        # system's (not): its mesh loss is not separated yet (docs/dynamics.md).
         raise DynamicDomainError(
             "gearbox.efficiency",
-            "the dynamic method takes a lossy gear with linear damping only, not yet with "
-            "[damper.rolloff], [damper.thermal] or damper.stribeck_speed",
+            "the dynamic method takes a lossy gear without damper.stribeck_speed only",
         )
     if params.gear_stiffness is not None:
         _check_compliant(params, reflected, lossy=lossy, gravity=base.has_gravity)

@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 
 from ecdsim._types import BoolArray, FloatArray
 from ecdsim.dynamics import linear
-from ecdsim.dynamics.equations import Model
+from ecdsim.dynamics.equations import SWITCH, Model
 
 __all__ = ["Control", "Model", "Outcome", "Segments", "Trajectory", "integrate_batch"]
 
@@ -502,7 +502,39 @@ def _find_events(
             if target is not None:
                 c0 = c0 - target[hit]
             _earliest(event_s, event_kind, hit, _root((c0, c1, c2, c3)), code)
+    if run.model.mesh is not None:
+        _find_switch(run, y1, f1, event_s, event_kind)
     return event_s, event_kind
+
+
+def _find_switch(
+    run: _Running,
+    y1: FloatArray,
+    f1: FloatArray,
+    event_s: FloatArray,
+    event_kind: NDArray[np.int8],
+) -> None:
+    """A lossy gear's power-flow reversal inside the step (equations.SWITCH).
+
+    The indicator (:meth:`Model.indicator`) is a function of the state: its sign change
+    is bisected on the step's interpolant, to 2^-48 of a step like the other events.
+    """
+    model = run.model
+    before = model.indicator(run.y)
+    after = model.indicator(y1)
+    hit = np.flatnonzero((before > 0.0) & (after <= 0.0) & (model.flow != 0.0))
+    if hit.size == 0:
+        return
+    sub = model.take(hit)
+    ya, fa, yb, fb, h = run.y[:, hit], run.f[:, hit], y1[:, hit], f1[:, hit], run.h[hit]
+    lo = np.zeros(hit.size)
+    hi = np.ones(hit.size)
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        positive = sub.indicator(_hermite(ya, fa, yb, fb, h, mid)) > 0.0
+        lo = np.where(positive, mid, lo)
+        hi = np.where(positive, hi, mid)
+    _earliest(event_s, event_kind, hit, hi, SWITCH)
 
 
 def _track_extremes(

@@ -26,6 +26,7 @@ from ecdsim._types import BoolArray, FloatArray
 from ecdsim.dynamics import gearflow, integrate, linear
 from ecdsim.dynamics.backlash import solve_compliant
 from ecdsim.dynamics.damping import EddyLaw
+from ecdsim.dynamics.equations import SWITCH
 from ecdsim.dynamics.problem import DynamicProblem
 from ecdsim.dynamics.records import ClosedFormRecord, IntegratedRecord
 from ecdsim.dynamics.result import (
@@ -669,7 +670,8 @@ def _lossy_segment(
     friction reach the input divided by eta_f (BECD_T and FECD_T already are),
     back-driven multiplied by eta_b (docs/dynamics.md, lossy gear). The flow is that of
     the sign of ``J_L D + J_D A`` (:func:`ecdsim.physics.gearing.power_flow_indicator`)
-    at the segment's start, or the one a power_flow event has just switched to.
+    at the segment's start (D with the law's torque where roll-off or heating is
+    modelled, A with gravity), or the one a power_flow event has just switched to.
     """
     eta_f, eta_b = c.eta_forward[run], c.eta_backward[run]
     # + 0.0: a backward breakaway from rest would give -0.0, whose atan2 in the zero-speed
@@ -679,12 +681,23 @@ def _lossy_segment(
     ideal_damping = c.damping[run] * eta_f  # BT_T N^2, through an ideal gear
     ideal_friction = c.ecd_friction[run] * eta_f  # FT_T N
     load_drive = np.where(forward, piece.torque, -piece.torque) - fs
-    sigma = gearing.power_flow_indicator(
-        c.load_inertia[run],
-        c.damper_inertia[run],
-        ideal_damping * speed0 + ideal_friction,
-        load_drive,
-    )
+    needed = ideal_damping * speed0 + ideal_friction
+    if c.eddy.name != "linear" or c.rotor_rise0 is not None:
+        # Roll-off or heating: the damper side needs its law's torque at the start.
+        eddy = c.eddy.take(run)
+        factor_now = thermal.damping_factor_from_log(
+            s.heat[run], np.maximum(eddy.factor(c.ambient[run]), 0.0), eddy.coefficient
+        )
+        shaft = c.ratio[run] * speed0
+        eddy_torque = eddy.torque_at_factor(shaft, factor_now)
+        needed = c.ratio[run] * (eddy_torque + c.gearbox_damping[run] * shaft) + ideal_friction
+    felt = load_drive
+    if c.gravity_amplitude is not None and c.gravity_angle is not None:
+        # A ground test's gravity against the motion at the start (equations.Model.gravity).
+        felt = load_drive - direction * gravity_torque(
+            0.0, c.gravity_amplitude[run], c.gravity_angle[run] + s.phi[run]
+        )
+    sigma = gearing.power_flow_indicator(c.load_inertia[run], c.damper_inertia[run], needed, felt)
     hint = s.flow_hint[run]
     flow = np.where(hint != 0, hint, np.where(sigma >= 0.0, 1.0, -1.0))
     s.flow_hint[run] = 0
@@ -731,7 +744,8 @@ def _table_cases(c: _Cases, seg: _Segment, problem: DynamicProblem) -> BoolArray
     if c.angles.shape[0] - 1 < TABLE_PIECES or problem.integrator != integrate.BATCHED:
         return None
     if c.two_node or c.lossy:
-        # A lossy gear's power flow is found on closed-form segments (gearflow).
+        # The table kernel carries no mesh factor nor power-flow event (a lossy gear's
+        # segments run one pass each: closed form, or integrated with the switch).
         return None
     ahead = (c.angles.shape[0] - 2) - seg.piece.index  # pieces after the current one
     chosen: BoolArray = seg.forward & seg.engaged & (ahead + 1 >= TABLE_PIECES)
@@ -978,13 +992,18 @@ def _step_integrated(
     problem: DynamicProblem,
     records: _Records | None,
 ) -> None:
-    """Nonlinear segments ``idx`` (roll-off, heating) by :mod:`ecdsim.dynamics.integrate`."""
+    """Nonlinear segments ``idx`` (roll-off, heating) by :mod:`ecdsim.dynamics.integrate`.
+
+    With a lossy gear the segment's mesh factor and power flow go to the integrators,
+    whose SWITCH event ends it like a closed-form segment's power_flow cap.
+    """
     cases = seg.run[idx]
     engaged = seg.engaged[idx]
     # Free play (lost motion not yet closed) is integrated only for its Stribeck friction:
     # the damper side is at rest, so no damping torque and no heating (ratio 0).
     ratio = np.where(engaged, c.ratio[cases], 0.0)
     excess = seg.stribeck_excess
+    mesh = _mesh_segments(c, seg, idx)
     out = integrate.advance_nonlinear(
         integrate.NonlinearSegments(
             inertia=seg.inertia[idx],
@@ -1007,12 +1026,15 @@ def _step_integrated(
             stribeck_speed=None if excess is None else c.stribeck_speed[cases],
             **_housing_segments(c, s, cases),
             **_gravity_segments(c, s, cases, seg.direction[idx]),
+            **mesh,
         ),
         rtol=problem.rtol,
         method=problem.integrator,
         record=records is not None,
     )
-    step.kind[idx] = out.kind
+    if mesh:
+        _integrated_mesh_loss(c, seg, idx, out, step)
+    step.kind[idx] = np.where(out.kind == SWITCH, linear.CAP, out.kind)
     step.duration[idx] = out.duration
     step.x[idx] = out.x
     step.v[idx] = out.v
@@ -1039,6 +1061,50 @@ def _step_integrated(
                         solution=sol,
                     )
                 )
+
+
+def _mesh_segments(c: _Cases, seg: _Segment, idx: NDArray[np.intp]) -> dict[str, Any]:
+    """A lossy gear's arguments of :class:`~ecdsim.dynamics.integrate.NonlinearSegments`:
+    the segment's mesh factor m and power flow (1 and 0 in free play), and what the
+    power-flow indicator needs; none for ideal gears."""
+    if seg.factor is None or seg.flow is None:
+        return {}
+    cases = seg.run[idx]
+    fs = c.system_friction[cases]
+    return {
+        "mesh": seg.factor[idx],
+        "flow": seg.flow[idx],
+        "load_inertia": c.load_inertia[cases],
+        "damper_inertia": c.damper_inertia[cases],
+        "mesh_friction": c.ecd_friction[cases] * c.eta_forward[cases],
+        # The drive less the mesh-scaled ECD friction: the spring less FS_T.
+        "load_drive": seg.drive[idx] + (seg.kinetic[idx] - fs),
+    }
+
+
+def _integrated_mesh_loss(
+    c: _Cases, seg: _Segment, idx: NDArray[np.intp], out: integrate.NonlinearAdvance, step: _Step
+) -> None:
+    """Book the mesh loss of integrated segments and mark the power-flow switches.
+
+    E (``out.damper_work``) is the damper side's own work ``int M_d u`` (ideal gear), so
+    the loss ``(m - 1) int (J_D u' + M_d + F_q) u`` is ``(m - 1) (dKE_D + E + F_q |x|)``
+    (docs/model.md, lossy gear), as on the closed-form segments.
+    """
+    assert seg.factor is not None
+    assert seg.flow is not None
+    cases = seg.run[idx]
+    factor = seg.factor[idx]
+    engaged = seg.flow[idx] != 0.0
+    kinetic_change = 0.5 * c.damper_inertia[cases] * (out.v * out.v - seg.speed0[idx] ** 2)
+    friction = c.ecd_friction[cases] * c.eta_forward[cases] * np.abs(out.x)
+    own = kinetic_change + out.damper_work + friction
+    if step.gear_loss is None:
+        step.gear_loss = np.zeros(step.kind.size)
+    if step.switched is None:
+        step.switched = np.zeros(step.kind.size, dtype=bool)
+    step.gear_loss[idx] = np.where(engaged, (factor - 1.0) * own, 0.0)
+    step.switched[idx] = out.kind == SWITCH
 
 
 def _gravity_segments(

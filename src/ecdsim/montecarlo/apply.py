@@ -76,7 +76,9 @@ def _owner(parameters: Parameters, key: str) -> tuple[Any, str]:
     for name in quantity.model_path[:-1]:
         obj = getattr(obj, name)
         if obj is None:
-            if quantity.owner in _OWNERS:  # an optional part of the model, absent here
+            # An optional part of the model, absent here (the dynamic parameters themselves
+            # are absent without [load] inertia, whatever the key's section).
+            if name != "dynamics" and quantity.owner in _OWNERS:
                 raise NotTolerable(
                     f"not set in this config: it applies to {_OWNERS[quantity.owner]}"
                 )

@@ -393,6 +393,35 @@ def margin(plan: Plan, margins: FloatArray) -> dict[str, Any]:
 
 
 def _notes(plan: Plan) -> list[str]:
+    return _dynamic_only_note(plan) + _margin_note(plan)
+
+
+def _dynamic_only_note(plan: Plan) -> list[str]:
+    """Tolerances the chosen method cannot see: inertia, heating, roll-off (dynamic only).
+
+    Their sampled values are recorded and their sensitivities come out as 0, which is
+    true of the quasi-static methods but easily read as "this does not matter"; say so.
+    """
+    if plan.method == "dynamic":
+        return []
+    from ecdsim.config.tolerance_schema import TOLERABLE
+
+    unseen = [
+        key
+        for key in plan.tolerances.keys
+        if key in TOLERABLE and TOLERABLE[key].model_path[0] == "dynamics"
+    ]
+    if not unseen:
+        return []
+    one = len(unseen) == 1
+    return [
+        f"{', '.join(unseen)}: only the dynamic method models {'this' if one else 'these'}; "
+        f"with --method {plan.method} the results do not depend on {'it' if one else 'them'} "
+        "(sensitivity 0); use --method dynamic"
+    ]
+
+
+def _margin_note(plan: Plan) -> list[str]:
     settings = plan.margin
     if settings is None:
         return [

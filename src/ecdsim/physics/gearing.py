@@ -78,7 +78,8 @@ def input_torque(
     pass it to the input. Where it and the input speed have the same sign (or the speed
     is zero: breakaway always drives the damper) the load drives the damper and the
     result is ``N tau_out / eta_f``; where they have opposite signs the damper side's
-    inertia drives the load and the result is ``N tau_out * eta_b``.
+    inertia drives the load and the result is ``N tau_out * eta_b``. Source: the MSL
+    LossyGear mesh law of the module notes, on the paper's reflection through N (Eq. 3-4).
 
     Parameters
     ----------
@@ -103,7 +104,8 @@ def mesh_loss_power(
     """Power lost in the mesh, ``tau_in omega - N tau_out omega`` >= 0 [W].
 
     Forward: ``(1/eta_f - 1) |N tau_out omega|``; back-driven: ``(1 - eta_b) |N tau_out
-    omega|`` (the power the damper side delivers, less what reaches the load).
+    omega|`` (the power the damper side delivers, less what reaches the load). Source:
+    the power balance of the MSL LossyGear (module notes) with the paper's Eq. 3-4.
 
     Parameters
     ----------
@@ -136,7 +138,9 @@ def power_flow_indicator(
     load drives the damper (forward efficiency) where it has the sign of the speed, the
     damper side drives the load (back-driven) where the signs differ. It is continuous
     in the state, and at its zero both modes give the same acceleration A / J_L (the mesh
-    passes no torque), so a switch of the power flow is a plain event.
+    passes no torque), so a switch of the power flow is a plain event. Source: Newton's
+    second law for the two inertias coupled by the MSL LossyGear mesh (module notes;
+    Pelchen et al. 2002, section 3), with the paper's Eq. 3-4 reflection.
 
     Parameters
     ----------

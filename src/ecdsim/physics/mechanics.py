@@ -148,7 +148,8 @@ def elasto_backlash_torque(
     together (the teeth only push), so the contact torque never changes sign through d.
     A torque limited to zero while ``|phi_rel| > b/2`` means the flanks have separated
     faster than the compressed mesh relaxes (its stored energy is then dissipated, see
-    docs/dynamics.md).
+    docs/dynamics.md). The lost motion b is the gearbox's, which the paper notes in its
+    section 3.4 without modelling it.
 
     Parameters
     ----------

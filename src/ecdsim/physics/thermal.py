@@ -370,9 +370,11 @@ def two_node_relaxation(
 
     Parameters
     ----------
-    rotor_rise, housing_rise : T_r - T_env, T_h - T_env at the start [K]
+    rotor_rise : T_r - T_env at the start [K]
+    housing_rise : T_h - T_env at the start [K]
     time : t >= 0 [s]
-    rotor_heat_capacity, housing_heat_capacity : C_r, C_h [J/K], > 0
+    rotor_heat_capacity : C_r > 0 [J/K]
+    housing_heat_capacity : C_h > 0 [J/K]
     coupling_resistance : R_rh [K/W]; ``inf`` for none
     environment_resistance : R_he [K/W]; ``inf`` for an adiabatic housing
 

@@ -633,8 +633,16 @@ def compare_fluid(
     free motion through a deadband is ``spec.load_inertia``, else ``load_inertia`` [kg*m^2]
     (e.g. the config's ``[load] inertia``), else none (free time not computed). Raises
     :class:`~ecdsim.deployment.ModelDomainError` where BECD <= 0 and ``ValueError`` if a
-    deadband is not shorter than the travel.
+    deadband is not shorter than the travel or the load has gravity (a ground test).
     """
+    gravity = system.load.gravity
+    if gravity is not None and bool(np.any(gravity.amplitude > 0.0)):
+        # The fluid side's deployment is the piecewise-linear exact solution: with a sine
+        # drive the two dampers would not be compared on the same load.
+        raise ValueError(
+            "load.gravity: the fluid-damper comparison does not model gravity; compare "
+            "in flight (a config without [load.gravity], or offload = 1)"
+        )
     temps = as_float(temperatures).reshape(-1)
     law = VISCOSITY_LAWS[spec.law](spec.viscosity_points())
     ecd_run = predict(system, temps, ("exact",))
