@@ -86,6 +86,21 @@ def test_quasi_static_deploy_and_a_printed_fit_skip_what_they_do_not_run() -> No
     assert "ecdsim.characterize.droptest" in fit_own
 
 
+def test_a_config_without_study_sections_skips_their_schemas() -> None:
+    # [requirements], [fluid_damper] and [tolerances] have schemas of their own (~15 ms
+    # to import); a file without them is validated without them, one with them by the
+    # whole schema (so that the check is not vacuous: sizing.toml has [requirements]).
+    study = {
+        "ecdsim.config.full_schema",
+        "ecdsim.config.sizing_schema",
+        "ecdsim.config.tolerance_schema",
+    }
+    _, paper = loaded(["deploy", "examples/paper_cc16.toml"], own=True)
+    _, sizing = loaded(["deploy", "examples/sizing.toml"], own=True)
+    assert study.isdisjoint(paper)
+    assert study <= set(sizing)
+
+
 def test_reading_a_config_does_not_scan_for_pydantic_plugins() -> None:
     # pydantic's first validator build reads every installed distribution's entry points
     # looking for plugins (~10 ms); the config schema is built with plugins off, and

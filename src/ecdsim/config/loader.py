@@ -9,7 +9,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import ValidationError
 
@@ -38,7 +38,10 @@ def _without_pydantic_plugins() -> Iterator[None]:
 
 
 with _without_pydantic_plugins():
-    from ecdsim.config.schema import ConfigSpec, describe_field
+    from ecdsim.config.schema import STUDY_SECTIONS, CoreConfigSpec
+
+if TYPE_CHECKING:
+    from ecdsim.config.full_schema import ConfigSpec
 
 
 @dataclass(frozen=True)
@@ -58,7 +61,7 @@ class Config:
     system: DeploymentSystem
     temperatures: tuple[float, ...]
     methods: tuple[str, ...]
-    spec: ConfigSpec
+    spec: ConfigSpec | CoreConfigSpec
     source: str
     sha256: str
 
@@ -141,14 +144,26 @@ def nesting_depth(document: object, limit: int = MAX_NESTING) -> int:
     return deepest
 
 
-def validate(raw: dict[str, Any], source: str = "<string>") -> ConfigSpec:
-    """Validate a parsed TOML document against the schema."""
+def validate(raw: dict[str, Any], source: str = "<string>") -> ConfigSpec | CoreConfigSpec:
+    """Validate a parsed TOML document against the schema.
+
+    A file with a study section (``[requirements]``, ``[fluid_damper]``, ``[tolerances]``)
+    is validated by the whole :class:`~ecdsim.config.full_schema.ConfigSpec`; any other
+    by :class:`~ecdsim.config.schema.CoreConfigSpec`, the same fields without those
+    three, so that their schemas are not imported at start-up. Both give the same
+    messages (their keys are described by the whole schema).
+    """
     if nesting_depth(raw) > MAX_NESTING:
         raise ConfigError(
             [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"], source
         )
     try:
-        return ConfigSpec.model_validate(raw)
+        if any(section in raw for section in STUDY_SECTIONS):
+            with _without_pydantic_plugins():
+                from ecdsim.config.full_schema import ConfigSpec
+
+            return ConfigSpec.model_validate(raw)
+        return CoreConfigSpec.model_validate(raw)
     except ValidationError as exc:
         raise ConfigError([_message(e) for e in exc.errors()], source) from None
 
@@ -164,6 +179,9 @@ def _message(error: Any) -> str:
     loc = tuple(error["loc"])
     path = _path(loc)
     kind = error["type"]
+    # Errors only: the whole schema describes every key (and knows the study sections).
+    from ecdsim.config.full_schema import describe_field
+
     expected, known = describe_field(loc)
     if kind == "missing":
         return f"{path}: missing; {expected}" if expected else f"{path}: missing"

@@ -30,7 +30,7 @@ def field_kind(key: str) -> Kind | None:
     """The quantity kind of a dotted config key, or None if it has none (or is unknown)."""
     from pydantic import BaseModel
 
-    from ecdsim.config.schema import ConfigSpec
+    from ecdsim.config.full_schema import ConfigSpec
 
     model: type[BaseModel] | None = ConfigSpec
     kind: Kind | None = None

@@ -8,7 +8,7 @@ missing-key message say which unit was expected.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 from pydantic_core import PydanticCustomError
@@ -35,8 +35,6 @@ from ecdsim.config.fields import (
     positive,
     quantity,
 )
-from ecdsim.config.sizing_schema import FluidDamperSpec, RequirementsSpec
-from ecdsim.config.tolerance_schema import TolerancesSpec
 from ecdsim.config.units import (
     HEAT_CAPACITY,
     LENGTH,
@@ -44,7 +42,6 @@ from ecdsim.config.units import (
     NUMBER,
     THERMAL_RESISTANCE,
     TORSIONAL_STIFFNESS,
-    Kind,
     quoted,
 )
 from ecdsim.dynamics.params import INTEGRATORS, DynamicParameters, Rolloff, Thermal
@@ -496,22 +493,28 @@ class OutputSpec(_Section):
     units: Annotated[str, BeforeValidator(_unit_system)] = "si"
 
 
-class ConfigSpec(_Section):
-    """A whole configuration file."""
+class SpecBase(_Section):
+    """What every configuration spec has: the check across sections and the models.
 
-    title: str = "deployment"
-    damper: DamperSpec
-    gearbox: GearboxSpec
-    load: LoadSpec
-    analysis: AnalysisSpec = Field(default_factory=AnalysisSpec)
-    requirements: RequirementsSpec | None = None
-    fluid_damper: FluidDamperSpec | None = None
-    tolerances: TolerancesSpec | None = None
-    initial: InitialSpec = Field(default_factory=InitialSpec)
-    output: OutputSpec = Field(default_factory=OutputSpec)
+    Two specs share it (docs/architecture.md, start-up): :class:`CoreConfigSpec`, a file
+    without ``[requirements]``, ``[fluid_damper]`` or ``[tolerances]``, validated without
+    importing those sections' schemas (most commands read such a file; about 15 ms of
+    start-up), and :class:`ecdsim.config.full_schema.ConfigSpec`, any file. Both declare
+    the same fields in the same order, so that messages, reports and round trips see one
+    layout.
+    """
+
+    if TYPE_CHECKING:
+        title: str
+        damper: DamperSpec
+        gearbox: GearboxSpec
+        load: LoadSpec
+        analysis: AnalysisSpec
+        initial: InitialSpec
+        output: OutputSpec
 
     @model_validator(mode="after")
-    def _dynamic_inputs(self) -> ConfigSpec:
+    def _dynamic_inputs(self) -> SpecBase:
         needing = [m for m in self.analysis.methods if SOLVERS[m].needs_dynamics]
         if needing and self.load.inertia is None:
             raise ValueError(
@@ -556,30 +559,35 @@ class ConfigSpec(_Section):
         )
 
 
-def describe_field(loc: tuple[Any, ...]) -> tuple[str | None, list[str]]:
-    """For a key path: the expected-unit phrase of the field, and the section's known keys."""
-    model: type[BaseModel] | None = ConfigSpec
-    expected: str | None = None
-    known: list[str] = list(ConfigSpec.model_fields)
-    for part in loc:
-        if model is None or not isinstance(part, str) or part not in model.model_fields:
-            return expected, known
-        info = model.model_fields[part]
-        known = list(model.model_fields)
-        kinds = [m for m in info.metadata if isinstance(m, Kind)]
-        expected = kinds[0].expected if kinds else None
-        nested = _model_in(info.annotation)
-        if nested is not None:
-            known = list(nested.model_fields)
-        model = nested
-    return expected, known
+# The top-level sections only ConfigSpec declares (their schemas are imported with it).
+STUDY_SECTIONS = ("requirements", "fluid_damper", "tolerances")
 
 
-def _model_in(annotation: Any) -> type[BaseModel] | None:
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in getattr(annotation, "__args__", ()):
-        found = _model_in(arg)
-        if found is not None:
-            return found
-    return None
+class CoreConfigSpec(SpecBase):
+    """A configuration file without ``[requirements]``, ``[fluid_damper]``, ``[tolerances]``.
+
+    Its three study sections read as None, as they do on :class:`ConfigSpec`.
+    """
+
+    title: str = "deployment"
+    damper: DamperSpec
+    gearbox: GearboxSpec
+    load: LoadSpec
+    analysis: AnalysisSpec = Field(default_factory=AnalysisSpec)
+    initial: InitialSpec = Field(default_factory=InitialSpec)
+    output: OutputSpec = Field(default_factory=OutputSpec)
+
+    @property
+    def requirements(self) -> None:
+        """No ``[requirements]`` in this file."""
+        return None
+
+    @property
+    def fluid_damper(self) -> None:
+        """No ``[fluid_damper]`` in this file."""
+        return None
+
+    @property
+    def tolerances(self) -> None:
+        """No ``[tolerances]`` in this file."""
+        return None
