@@ -364,6 +364,9 @@ def test_the_report_and_the_explorer_api_carry_flight_and_test() -> None:
     assert "Flight (0 g) against ground test (1 g, 90 % offloaded)" in html
     plain_html = render_html(parse_config(TEXT), predict_config(parse_config(TEXT)), TEXT)
     assert 'id="ground-test"' not in plain_html
+    # The figures are the ground test's and say so; without gravity they say nothing.
+    assert "Deployed angle against time (paper Fig. 4-6) (ground test, 1 g)" in html
+    assert "(ground test, 1 g)" not in plain_html
     client = TestClient(create_app(None))
     raw = client.post("/api/config/parse", json={"toml": text}).json()["config"]
     body = client.post("/api/deploy", json={"config": raw, "sweep_points": 0}).json()

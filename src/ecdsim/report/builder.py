@@ -190,8 +190,12 @@ def _figures(prediction: Prediction, units: UnitSystem = "si") -> list[dict[str,
             plot_torque_speed(prediction, units=units),
         ),
     ]
+    # With [load.gravity] the curves are the ground test's (the flight twin is the table
+    # above them): say so, since a figure is often read without the section it is in.
+    scope = " (ground test, 1 g)" if prediction.flight is not None else ""
     return [
-        {"id": key, "caption": caption, "src": figure_data_uri(fig)} for key, caption, fig in made
+        {"id": key, "caption": caption + scope, "src": figure_data_uri(fig)}
+        for key, caption, fig in made
     ]
 
 
