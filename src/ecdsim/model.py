@@ -249,24 +249,16 @@ class Ecd:
         ft = assembly.total_friction(fd, fl, fg)
         n = np.asarray(self.gearbox.ratio, dtype=float)
         efficiency = self.gearbox.efficiency
-        if efficiency is not None:
+        ideal = np.asarray(1.0)
+        eta_f = ideal if efficiency is None else np.asarray(efficiency.forward, dtype=float)
+        eta_b = ideal if efficiency is None else np.asarray(efficiency.backward, dtype=float)
+        if efficiency is None:
+            ecd_damping = assembly.refer_damping_to_input(bt, n)
+            ecd_friction = assembly.refer_friction_to_input(ft, n)
+        else:
             # A lossy mesh driven forward (issue 16 item 5): Eq. 3-4 divided by eta_f.
-            eta_f = np.asarray(efficiency.forward, dtype=float)
-            return EcdState(
-                temperature=t,
-                damper_damping_rate=bd_t,
-                gearbox_damping_rate=bg,
-                total_damping_rate=bt,
-                damper_friction=fd,
-                lubrication_friction=fl,
-                gearbox_friction=fg,
-                total_friction=ft,
-                ecd_damping_rate=gearing.refer_damping_through_mesh(bt, n, eta_f),
-                ecd_friction=gearing.refer_friction_through_mesh(ft, n, eta_f),
-                gear_ratio=n,
-                forward_efficiency=eta_f,
-                backward_efficiency=np.asarray(efficiency.backward, dtype=float),
-            )
+            ecd_damping = gearing.refer_damping_through_mesh(bt, n, eta_f)
+            ecd_friction = gearing.refer_friction_through_mesh(ft, n, eta_f)
         return EcdState(
             temperature=t,
             damper_damping_rate=bd_t,
@@ -276,9 +268,11 @@ class Ecd:
             lubrication_friction=fl,
             gearbox_friction=fg,
             total_friction=ft,
-            ecd_damping_rate=assembly.refer_damping_to_input(bt, n),
-            ecd_friction=assembly.refer_friction_to_input(ft, n),
+            ecd_damping_rate=ecd_damping,
+            ecd_friction=ecd_friction,
             gear_ratio=n,
+            forward_efficiency=eta_f,
+            backward_efficiency=eta_b,
         )
 
 
