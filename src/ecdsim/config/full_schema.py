@@ -26,7 +26,7 @@ from ecdsim.config.sizing_schema import FluidDamperSpec, RequirementsSpec
 from ecdsim.config.tolerance_schema import TolerancesSpec
 from ecdsim.config.units import Kind
 
-__all__ = ["ConfigSpec", "describe_field"]
+__all__ = ["ConfigSpec", "describe_field", "model_in"]
 
 
 class ConfigSpec(SpecBase):
@@ -56,18 +56,19 @@ def describe_field(loc: tuple[Any, ...]) -> tuple[str | None, list[str]]:
         known = list(model.model_fields)
         kinds = [m for m in info.metadata if isinstance(m, Kind)]
         expected = kinds[0].expected if kinds else None
-        nested = _model_in(info.annotation)
+        nested = model_in(info.annotation)
         if nested is not None:
             known = list(nested.model_fields)
         model = nested
     return expected, known
 
 
-def _model_in(annotation: Any) -> type[BaseModel] | None:
+def model_in(annotation: Any) -> type[BaseModel] | None:
+    """The pydantic model inside a field's annotation (``X | None`` -> X), or None."""
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return annotation
     for arg in getattr(annotation, "__args__", ()):
-        found = _model_in(arg)
+        found = model_in(arg)
         if found is not None:
             return found
     return None

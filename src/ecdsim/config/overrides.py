@@ -30,7 +30,7 @@ def field_kind(key: str) -> Kind | None:
     """The quantity kind of a dotted config key, or None if it has none (or is unknown)."""
     from pydantic import BaseModel
 
-    from ecdsim.config.full_schema import ConfigSpec
+    from ecdsim.config.full_schema import ConfigSpec, model_in
 
     model: type[BaseModel] | None = ConfigSpec
     kind: Kind | None = None
@@ -40,7 +40,7 @@ def field_kind(key: str) -> Kind | None:
         info = model.model_fields[part]
         kinds = [m for m in info.metadata if isinstance(m, Kind)]
         kind = kinds[0] if kinds else _kind_in(info.annotation)
-        model = _model_in(info.annotation)
+        model = model_in(info.annotation)
     return kind
 
 
@@ -53,18 +53,6 @@ def _kind_in(annotation: Any) -> Kind | None:
         return None
     for arg in getattr(annotation, "__args__", ()):
         found = _kind_in(arg)
-        if found is not None:
-            return found
-    return None
-
-
-def _model_in(annotation: Any) -> Any:
-    from pydantic import BaseModel
-
-    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
-        return annotation
-    for arg in getattr(annotation, "__args__", ()):
-        found = _model_in(arg)
         if found is not None:
             return found
     return None
