@@ -56,7 +56,7 @@ from ecdsim.dynamics.result import (
     EventLog,
     TrajectoryData,
 )
-from ecdsim.dynamics.rosenbrock import GAMMA, A, C, _hermite
+from ecdsim.dynamics.rosenbrock import GAMMA, A, C, Trajectory
 
 GAP, PRESS, RELEASED = 0, 1, 2  # mesh modes (PRESS and RELEASED with a flank side +-1)
 _STICK_MARGIN = 1e-12  # as the rigid solver's: no restart by rounding at the boundary
@@ -916,26 +916,19 @@ def _cases(problem: DynamicProblem) -> list[_Case]:
 
 
 class _Dense:
-    """A case's whole run as a callable ``t -> [phi_L, w_L, T_d, E_d]`` (Hermite steps)."""
+    """A case's whole run as a callable ``t -> [phi_L, w_L, T_d, E_d]`` (Hermite steps).
+
+    The steps are evaluated by :class:`ecdsim.dynamics.rosenbrock.Trajectory`; the damper
+    side's rows are dropped and the damper stays at the ambient temperature.
+    """
 
     def __init__(self, times: FloatArray, states: FloatArray, slopes: FloatArray, ambient: float):
-        self.times, self.states, self.slopes, self.ambient = times, states, slopes, ambient
+        self.steps = Trajectory(times, states, slopes)
+        self.ambient = ambient
 
     def __call__(self, t: FloatArray) -> FloatArray:
-        tt = np.atleast_1d(np.asarray(t, dtype=float))
-        i = np.clip(np.searchsorted(self.times, tt, side="right") - 1, 0, self.times.size - 2)
-        h = self.times[i + 1] - self.times[i]
-        safe = np.where(h > 0.0, h, 1.0)
-        s = np.clip((tt - self.times[i]) / safe, 0.0, 1.0)
-        y = _hermite(
-            self.states[:, i],
-            self.slopes[:, i],
-            self.states[:, i + 1],
-            self.slopes[:, i + 1],
-            h,
-            s,
-        )
-        return np.stack([y[0], y[1], np.full(tt.shape, self.ambient), y[4]])
+        y = self.steps(t)
+        return np.stack([y[0], y[1], np.full(y[0].shape, self.ambient), y[4]])
 
 
 def solve_compliant(problem: DynamicProblem, record: bool = True) -> DynamicResult:
