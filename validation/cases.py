@@ -19,7 +19,7 @@ import tomllib
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, SupportsFloat
 
 import numpy as np
 
@@ -135,6 +135,32 @@ def _dynamic_result(prediction: Prediction) -> DynamicResult:
 
 def _relative(reference: float, rtol: float) -> float:
     return rtol * abs(reference)
+
+
+def _integrated(name: str, unit: str, reference: float, source: str, value: SupportsFloat) -> Check:
+    """A quantity of an integrated run, held to INTEGRATED_RTOL of its reference."""
+    return Check(
+        name,
+        unit,
+        reference,
+        source,
+        float(value),
+        _relative(reference, INTEGRATED_RTOL),
+        INTEGRATED_REASON,
+    )
+
+
+def _energy_closure(at: str, error: SupportsFloat, bound: float, reason: str) -> Check:
+    """The run's energy balance error (0 by conservation), within ``bound``."""
+    return Check(
+        f"energy balance error {at}",
+        "-",
+        0.0,
+        "energy conservation",
+        float(error),
+        bound,
+        reason,
+    )
 
 
 def msl_eddy_current_brake() -> CaseResult:
@@ -701,24 +727,11 @@ def stribeck() -> CaseResult:
                 result.energy.damper_dissipation[i],
             ),
         ):
-            checks.append(
-                Check(
-                    f"{quantity} {at}",
-                    unit,
-                    reference,
-                    label,
-                    float(value),
-                    _relative(reference, INTEGRATED_RTOL),
-                    INTEGRATED_REASON,
-                )
-            )
+            checks.append(_integrated(f"{quantity} {at}", unit, reference, label, value))
         checks.append(
-            Check(
-                f"energy balance error {at}",
-                "-",
-                0.0,
-                "energy conservation",
-                float(np.ravel(result.energy_balance_error)[i]),
+            _energy_closure(
+                at,
+                np.ravel(result.energy_balance_error)[i],
                 1e-8,
                 "1e-8 of the spring work: each term is computed on its own, the dissipation "
                 "integrated at rtol 1e-8",
@@ -935,12 +948,9 @@ def lossy_gear() -> CaseResult:
                 )
             )
         checks.append(
-            Check(
-                f"energy balance error {at}",
-                "-",
-                0.0,
-                "energy conservation",
-                float(np.ravel(result.energy.error)[i]),
+            _energy_closure(
+                at,
+                np.ravel(result.energy.error)[i],
                 1e-12,
                 "1e-12 of the spring work: every term is a closed form of its own",
             )
@@ -1026,24 +1036,11 @@ def compliant_backlash() -> CaseResult:
             ("arrival speed", "rad/s", speed, result.arrival_speed[i]),
             (f"mesh dissipation to {BACKLASH_UNTIL:g} s", "J", mesh, mesh_value[i]),
         ):
-            checks.append(
-                Check(
-                    f"{quantity} {at}",
-                    unit,
-                    reference,
-                    label,
-                    float(value),
-                    _relative(reference, INTEGRATED_RTOL),
-                    INTEGRATED_REASON,
-                )
-            )
+            checks.append(_integrated(f"{quantity} {at}", unit, reference, label, value))
         checks.append(
-            Check(
-                f"energy balance error {at}",
-                "-",
-                0.0,
-                "energy conservation",
-                float(np.ravel(result.energy_balance_error)[i]),
+            _energy_closure(
+                at,
+                np.ravel(result.energy_balance_error)[i],
                 1e-8,
                 "1e-8 of the spring work: each term is computed on its own, the dissipations "
                 "integrated at rtol 1e-8",
