@@ -10,6 +10,8 @@ exit with code 2, with no traceback.
 
 from __future__ import annotations
 
+import copy
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -22,6 +24,7 @@ from ecdsim.cli.common import (
     UnitsOpt,
     echo_warnings,
     fail,
+    import_numpy_single_threaded,
     load_run,
     predict_run,
     units_option,
@@ -176,6 +179,7 @@ def deploy(
 ) -> None:
     """Predict deployment time, speeds and stall at each temperature (paper Eq. 1-13)."""
     display.configure(wide=wide, plain=plain)
+    import_numpy_single_threaded()
     conditions = failon.parse(fail_on)
     loaded = load_run(config, temperature, method)
     system = units_option(units, loaded)
@@ -201,6 +205,7 @@ def demo(
 ) -> None:
     """Run the paper's Cc-16 example (section 6) and write its plots."""
     display.configure(wide=wide, plain=plain)
+    import_numpy_single_threaded()
     from importlib.resources import as_file, files
 
     from ecdsim.atomic import write_text
@@ -234,6 +239,32 @@ app.command(cls=HelpCommand, epilog=REPORT_EPILOG)(report)
 app.command(cls=HelpCommand, name="app", epilog=APP_EPILOG)(explore)
 
 
+def only(name: str) -> typer.Typer:
+    """``app`` with only the command or group ``name`` registered (``app`` itself when
+    ``name`` is none of them).
+
+    typer builds the click command of every registered command before it parses the
+    arguments (reading each function's signature and evaluating its annotations), about
+    20 ms for all of them: a command that is named needs only its own, and the root
+    callback's ``--version``. Its help, usage lines and errors are the same
+    (``tests/test_cli_lean_app.py``).
+    """
+    from typer.main import get_command_name
+
+    commands = [
+        c
+        for c in app.registered_commands
+        if c.callback is not None and (c.name or get_command_name(c.callback.__name__)) == name
+    ]
+    groups = [g for g in app.registered_groups if g.name == name]
+    if not commands and not groups:
+        return app
+    lean = copy.copy(app)
+    lean.registered_commands = commands
+    lean.registered_groups = groups
+    return lean
+
+
 def main() -> None:
-    """Console-script entry point."""
-    app()
+    """Console-script entry point: the command named first is the only one built."""
+    only(sys.argv[1] if len(sys.argv) > 1 else "")()

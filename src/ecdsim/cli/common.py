@@ -8,6 +8,8 @@ inside the functions, so that ``ecdsim --help`` stays fast.
 
 from __future__ import annotations
 
+import os
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, NoReturn
 
@@ -19,6 +21,30 @@ if TYPE_CHECKING:
     from ecdsim.units_display import UnitSystem
 
 USER_ERROR = 2
+
+# The variables OpenBLAS reads for the size of its thread pool, in its order of priority.
+_BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
+
+
+def import_numpy_single_threaded() -> None:
+    """Import NumPy with OpenBLAS's thread pool off, unless the user sized it.
+
+    NumPy's OpenBLAS starts one worker thread per further core when it is loaded, and
+    each worker spins waiting for work before it sleeps: about 30 ms of CPU time of a
+    ``deploy`` (its whole start-up is some 250 ms), taken from the core the command runs
+    on when the machine is busy. The quasi-static and dynamic solvers hand BLAS nothing
+    bigger than 6 x 6, which OpenBLAS runs on the calling thread whatever the pool, so
+    the results are the same. ``OPENBLAS_NUM_THREADS`` is read once, when the library is
+    loaded; it is restored at once, so that no child process inherits it. Without effect
+    once NumPy is imported, or with a BLAS other than OpenBLAS.
+    """
+    if "numpy" in sys.modules or any(name in os.environ for name in _BLAS_THREADS):
+        return
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    try:
+        import numpy  # noqa: F401  (loads OpenBLAS now, with one thread)
+    finally:
+        del os.environ["OPENBLAS_NUM_THREADS"]
 
 
 def fail(problems: list[str]) -> NoReturn:
