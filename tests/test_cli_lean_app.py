@@ -1,22 +1,30 @@
-"""The console script builds only the command it is asked for (issue 13, item 4).
+"""How the console script starts (issue 13, item 4).
 
 ``ecdsim.cli.app.main`` runs ``only(name)``: the app with just the command or group
 named first on the command line, so that typer builds one click command instead of all
 of them. A user must not see the difference: every command's help, usage errors and
 output are compared here with the whole app's, through typer's test runner.
+``main`` also keeps the garbage collector off until a command runs (for the whole of a
+quick one), and the quick commands load NumPy with OpenBLAS's thread pool off.
 No wall-clock assertion: the time saved is a benchmark (benchmarks/bench_startup.py).
 """
 
 from __future__ import annotations
 
+import gc
+import json
+import os
 import subprocess
 import sys
 
 import pytest
+import typer
 from typer.main import get_command
 from typer.testing import CliRunner
 
 from ecdsim.cli.app import app, only
+from ecdsim.cli.common import pause_gc, resume_gc
+from ecdsim.cli.display import HelpCommand, QuickCommand
 from tests.conftest import ROOT
 
 runner = CliRunner()
@@ -89,3 +97,74 @@ def test_the_console_script_runs_the_command_named() -> None:
         check=True,
     )
     assert runner.invoke(app, ["deploy", PAPER, "--json"]).stdout == deploy.stdout
+
+
+def test_the_collector_is_on_in_a_command_and_off_in_a_quick_one() -> None:
+    # pause_gc as main() calls it, then one command of each class: a HelpCommand runs
+    # with the collector on again, a QuickCommand without it; resume_gc (main's last
+    # step) turns it on. A collector the caller turned off stays off.
+    seen: list[tuple[str, bool]] = []
+    probe = typer.Typer()
+
+    @probe.command(cls=HelpCommand)
+    def slow() -> None:
+        seen.append(("slow", gc.isenabled()))
+
+    @probe.command(cls=QuickCommand)
+    def quick() -> None:
+        seen.append(("quick", gc.isenabled()))
+
+    assert gc.isenabled()
+    try:
+        for name in ("slow", "quick"):
+            pause_gc()
+            assert not gc.isenabled()
+            probe([name], standalone_mode=False)
+            resume_gc()
+            assert gc.isenabled()
+        gc.disable()
+        pause_gc()
+        probe(["slow"], standalone_mode=False)
+        resume_gc()
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+    assert seen == [("slow", True), ("quick", False), ("slow", False)]
+
+
+PROBE = """
+import contextlib, io, json, os, sys
+from ecdsim.cli.app import main
+sys.argv = ["ecdsim", "deploy", sys.argv[1]]
+with contextlib.redirect_stdout(io.StringIO()):
+    try:
+        main()
+    except SystemExit:
+        pass
+tasks = os.listdir("/proc/self/task") if os.path.isdir("/proc/self/task") else None
+print(json.dumps({"threads": None if tasks is None else len(tasks),
+                  "blas": {k: v for k, v in os.environ.items() if k.endswith("_NUM_THREADS")}}))
+"""
+
+
+@pytest.mark.parametrize("user", [{}, {"OMP_NUM_THREADS": "2"}, {"OPENBLAS_NUM_THREADS": "2"}])
+def test_deploy_loads_numpy_single_threaded_unless_the_user_sized_it(
+    user: dict[str, str],
+) -> None:
+    # The variable is set only while NumPy loads (a child process does not inherit it),
+    # and a size the user chose is left alone. On Linux, the process's threads are
+    # counted: one with the pool off, more with the user's two (on a machine with two
+    # cores or more, as the project's).
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")} | user
+    done = subprocess.run(
+        [sys.executable, "-c", PROBE, PAPER],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    result = json.loads(done.stdout)
+    assert result["blas"] == user
+    if result["threads"] is not None and (os.cpu_count() or 1) >= 2:
+        assert (result["threads"] == 1) == (user == {})

@@ -26,10 +26,12 @@ from ecdsim.cli.common import (
     fail,
     import_numpy_single_threaded,
     load_run,
+    pause_gc,
     predict_run,
+    resume_gc,
     units_option,
 )
-from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, WideOpt
+from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, QuickCommand, WideOpt
 from ecdsim.cli.fit import fit_app
 from ecdsim.cli.fmu import EPILOG as FMU_EPILOG
 from ecdsim.cli.fmu import export_fmu
@@ -160,7 +162,7 @@ TimeseriesOpt = Annotated[
 
 
 @app.command(
-    cls=HelpCommand,
+    cls=QuickCommand,
     epilog=(
         "Example: [bold]ecdsim deploy examples/paper_cc16.toml -T -40 -T 25 -T 100 --json[/bold]"
     ),
@@ -194,7 +196,7 @@ def deploy(
     failon.finish(conditions, reasons)
 
 
-@app.command(cls=HelpCommand, epilog="Example: [bold]ecdsim demo --out ecdsim-demo[/bold]")
+@app.command(cls=QuickCommand, epilog="Example: [bold]ecdsim demo --out ecdsim-demo[/bold]")
 def demo(
     out: Annotated[
         Path, typer.Option("--out", help="Folder for the demo's plots.", metavar="DIR")
@@ -266,5 +268,10 @@ def only(name: str) -> typer.Typer:
 
 
 def main() -> None:
-    """Console-script entry point: the command named first is the only one built."""
-    only(sys.argv[1] if len(sys.argv) > 1 else "")()
+    """Console-script entry point: the command named first is the only one built, with
+    the garbage collector off until the command runs (:func:`~ecdsim.cli.common.pause_gc`)."""
+    pause_gc()
+    try:
+        only(sys.argv[1] if len(sys.argv) > 1 else "")()
+    finally:
+        resume_gc()

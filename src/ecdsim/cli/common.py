@@ -8,6 +8,7 @@ inside the functions, so that ``ecdsim --help`` stays fast.
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 from pathlib import Path
@@ -22,6 +23,37 @@ if TYPE_CHECKING:
 
 USER_ERROR = 2
 
+# Whether pause_gc turned the collector off (and resume_gc is to turn it on again).
+_gc_paused = False
+
+
+def pause_gc() -> None:
+    """Turn the cyclic garbage collector off while the command line starts.
+
+    Parsing the command line imports pydantic and builds typer's option adapters, and a
+    short command then imports NumPy, the config schema and rich: tens of thousands of
+    objects that live as long as the process, over which the collector would run some
+    70 times (about 10 ms of a ``deploy``) and free nothing of note. :func:`resume_gc`
+    turns it on again as a command starts (``display.HelpCommand.invoke``), so that a
+    long command (a Monte Carlo run, the explorer) collects as usual; a
+    ``display.QuickCommand`` (``deploy``, ``demo``, ``fit drop-test``) runs without it,
+    reference counting freeing the rest, and the process ends with it. Without effect if
+    the collector is already off.
+    """
+    global _gc_paused
+    if gc.isenabled():
+        gc.disable()
+        _gc_paused = True
+
+
+def resume_gc() -> None:
+    """Turn the collector on again if :func:`pause_gc` turned it off."""
+    global _gc_paused
+    if _gc_paused:
+        _gc_paused = False
+        gc.enable()
+
+
 # The variables OpenBLAS reads for the size of its thread pool, in its order of priority.
 _BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
 
@@ -32,11 +64,13 @@ def import_numpy_single_threaded() -> None:
     NumPy's OpenBLAS starts one worker thread per further core when it is loaded, and
     each worker spins waiting for work before it sleeps: about 30 ms of CPU time of a
     ``deploy`` (its whole start-up is some 250 ms), taken from the core the command runs
-    on when the machine is busy. The quasi-static and dynamic solvers hand BLAS nothing
-    bigger than 6 x 6, which OpenBLAS runs on the calling thread whatever the pool, so
-    the results are the same. ``OPENBLAS_NUM_THREADS`` is read once, when the library is
-    loaded; it is restored at once, so that no child process inherits it. Without effect
-    once NumPy is imported, or with a BLAS other than OpenBLAS.
+    on when the machine is busy. ``deploy``, ``demo`` and ``fit drop-test`` call it
+    first: what they hand BLAS is small (6 x 6 matrices, least squares over a drop
+    test's rows), mostly below the sizes at which OpenBLAS splits work between threads,
+    and the shipped examples' output is the same byte for byte either way.
+    ``OPENBLAS_NUM_THREADS`` is read once, as the library loads; it is removed again at
+    once, so that no child process inherits it. Without effect once NumPy is imported,
+    or with a BLAS other than OpenBLAS.
     """
     if "numpy" in sys.modules or any(name in os.environ for name in _BLAS_THREADS):
         return

@@ -18,8 +18,14 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from ecdsim.cli import display
-from ecdsim.cli.common import UnitsOpt, fail, temperature_option, units_option
-from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, WideOpt
+from ecdsim.cli.common import (
+    UnitsOpt,
+    fail,
+    import_numpy_single_threaded,
+    temperature_option,
+    units_option,
+)
+from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, QuickCommand, WideOpt
 from ecdsim.units_display import KEY_SUFFIXES, Shown, UnitSystem, kind_of_key
 
 if TYPE_CHECKING:
@@ -257,7 +263,7 @@ def _finish(
 
 @fit_app.command(
     "drop-test",
-    cls=HelpCommand,
+    cls=QuickCommand,
     epilog=(
         "Example: [bold]ecdsim fit drop-test examples/drop_test.csv --plot plots "
         "-o fitted.toml[/bold]"
@@ -295,6 +301,7 @@ def drop_test(
 ) -> None:
     """Fit BECD and FECD per temperature from drop tests, then laws over temperature."""
     display.configure(wide=wide, plain=plain)
+    import_numpy_single_threaded()
     from ecdsim.characterize.droptest import fit_drop_test, noise_model
     from ecdsim.characterize.export import (
         fitted_config_text,
