@@ -54,12 +54,14 @@ print("MARKER" + json.dumps(sorted({name.split(".")[0] for name in sys.modules})
 # asserts the same. pint: every unit of the examples is in the lean table; dask: pint
 # imports it; scipy: the drop-test fit solves and computes its distributions itself
 # (characterize/leastsq.py, distributions.py).
+# markdown_it: typer's help renderer imports it (rich.markdown); a command that prints no
+# help has no use for it.
 _NEVER = ("matplotlib", "pandas", "jinja2", "pint", "dask")
 COMMANDS: tuple[tuple[str, tuple[str, ...], float, tuple[str, ...]], ...] = (
     ("ecdsim deploy (paper)", ("deploy", "examples/paper_cc16.toml"), 0.35,
-     (*_NEVER, "scipy")),
+     (*_NEVER, "scipy", "markdown_it")),
     ("ecdsim fit drop-test", ("fit", "drop-test", "examples/drop_test.csv"), 0.6,
-     (*_NEVER, "scipy")),
+     (*_NEVER, "scipy", "markdown_it")),
     ("ecdsim --help", ("--help",), 0.3, (*_NEVER, "scipy", "numpy", "pydantic")),
 )  # fmt: skip
 
