@@ -151,7 +151,7 @@ def _parse_once(console: Console, table: Table) -> None:
 
     rich parses a str cell (markup, emoji codes) again each time it measures or renders
     it: three times or more per table here (:func:`_needed`, then the print, which
-    measures before it renders), about a third of the time spent printing the tables.
+    measures before it renders), about half the time spent printing the tables.
     ``render_str`` with the column's ``highlight`` is what rich's Table does with a str
     cell, so the printed table is the same.
     """
