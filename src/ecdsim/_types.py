@@ -1,5 +1,6 @@
 """Array type aliases shared by the physics and solver layers."""
 
+import math
 from typing import TypeAlias
 
 import numpy as np
@@ -8,9 +9,36 @@ from numpy.typing import ArrayLike, NDArray
 FloatArray: TypeAlias = NDArray[np.float64]
 BoolArray: TypeAlias = NDArray[np.bool_]
 
-__all__ = ["ArrayLike", "BoolArray", "FloatArray", "as_float"]
+__all__ = ["ArrayLike", "BoolArray", "FloatArray", "as_float", "broadcast", "joint_shape"]
 
 
 def as_float(value: object) -> FloatArray:
     """``value`` as a float64 array (typed, so that NumPy arithmetic stays checked)."""
     return np.asarray(value, dtype=np.float64)
+
+
+def broadcast(value: FloatArray, shape: tuple[int, ...]) -> FloatArray:
+    """``np.broadcast_to(value, shape)``: a read-only view of ``value`` with ``shape``.
+
+    The same view, built without NumPy's general machinery (about 2 us a call) where
+    that is plain: ``value`` has the shape already, or is one number and ``shape`` one
+    case. The per-case fields of a problem are broadcast dozens of times per solve, and
+    a single deployment pays that fixed cost in full (issue 13, single cases).
+    """
+    if value.shape == shape:
+        view = value.view()
+    elif value.size == 1 and math.prod(shape) == 1:
+        view = value.reshape(shape)
+    else:
+        return np.broadcast_to(value, shape)
+    view.flags.writeable = False
+    return view
+
+
+def joint_shape(*shapes: tuple[int, ...]) -> tuple[int, ...]:
+    """``np.broadcast_shapes(*shapes)``, at once where all are one shape or scalars ``()``."""
+    distinct = set(shapes)
+    distinct.discard(())
+    if len(distinct) <= 1:
+        return distinct.pop() if distinct else ()
+    return np.broadcast_shapes(*shapes)

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim._types import FloatArray
+from ecdsim._types import FloatArray, broadcast, joint_shape
 from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
 from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.model import DeploymentSystem, EcdState
@@ -149,7 +149,7 @@ class DynamicProblem(QuasiStaticProblem):
     def __post_init__(self) -> None:
         own = {name: np.asarray(getattr(self, name), dtype=float) for name in _CASE_FIELDS}
         angles = np.asarray(self.angles, dtype=float)
-        batch = np.broadcast_shapes(
+        batch = joint_shape(
             angles.shape[1:],
             np.shape(self.torques)[1:],
             np.shape(self.friction),
@@ -160,15 +160,13 @@ class DynamicProblem(QuasiStaticProblem):
         )
         # Widen the quasi-static fields to the joint batch first, then let the base class
         # align the breakpoint arrays with them.
+        object.__setattr__(self, "friction", broadcast(np.asarray(self.friction, float), batch))
         object.__setattr__(
-            self, "friction", np.broadcast_to(np.asarray(self.friction, float), batch)
-        )
-        object.__setattr__(
-            self, "damping_rate", np.broadcast_to(np.asarray(self.damping_rate, float), batch)
+            self, "damping_rate", broadcast(np.asarray(self.damping_rate, float), batch)
         )
         super().__post_init__()
         for name, value in own.items():
-            object.__setattr__(self, name, np.broadcast_to(value, batch))
+            object.__setattr__(self, name, broadcast(value, batch))
 
     @property
     def nonlinear(self) -> bool:

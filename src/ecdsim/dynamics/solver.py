@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ecdsim._types import BoolArray, FloatArray
+from ecdsim._types import BoolArray, FloatArray, broadcast
 from ecdsim.dynamics import gearflow, integrate, linear
 from ecdsim.dynamics.backlash import solve_compliant
 from ecdsim.dynamics.damping import EddyLaw
@@ -109,8 +109,11 @@ def _flatten(problem: DynamicProblem) -> _Cases:
     points = problem.angles.shape[0]
 
     def flat(a: FloatArray) -> FloatArray:
-        # The problem's fields already have the batch shape; broadcast only the others.
-        full = a if np.shape(a) == shape else np.broadcast_to(a, shape)
+        # The problem's fields already have the batch shape (float, from its
+        # __post_init__): a contiguous one is its own 1-D view; broadcast only the others.
+        if a.shape == shape and a.flags.c_contiguous and a.dtype == np.float64:
+            return a.reshape(n)
+        full = a if np.shape(a) == shape else broadcast(np.asarray(a, dtype=float), shape)
         return np.ascontiguousarray(np.reshape(full, n), dtype=float)
 
     return _Cases(
