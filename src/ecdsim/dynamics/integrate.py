@@ -243,12 +243,13 @@ def _model(segs: NonlinearSegments) -> Model:
 
 def _start(segs: NonlinearSegments, model: Model) -> FloatArray:
     """Start states ``[x, u, s, E]`` (and the housing rise h with two nodes), (rows, n)."""
-    zero = np.zeros_like(segs.speed0)
-    rows = [zero, segs.speed0, segs.state0, zero]
+    y0 = np.zeros((model.rows, segs.speed0.size))
+    y0[1] = segs.speed0
+    y0[2] = segs.state0
     if model.two_node:
         assert segs.housing_state0 is not None
-        rows.append(segs.housing_state0)
-    return np.stack(rows)
+        y0[4] = segs.housing_state0
+    return y0
 
 
 class _InTemperature:
