@@ -1,13 +1,14 @@
 """Array type aliases shared by the physics and solver layers."""
 
 import math
-from typing import TypeAlias
+from typing import TypeAlias, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 FloatArray: TypeAlias = NDArray[np.float64]
 BoolArray: TypeAlias = NDArray[np.bool_]
+_Item = TypeVar("_Item", bound=np.generic)
 
 __all__ = ["ArrayLike", "BoolArray", "FloatArray", "as_float", "broadcast", "joint_shape"]
 
@@ -17,7 +18,7 @@ def as_float(value: object) -> FloatArray:
     return np.asarray(value, dtype=np.float64)
 
 
-def broadcast(value: FloatArray, shape: tuple[int, ...]) -> FloatArray:
+def broadcast(value: NDArray[_Item], shape: tuple[int, ...]) -> NDArray[_Item]:
     """``np.broadcast_to(value, shape)``: a read-only view of ``value`` with ``shape``.
 
     The same view, built without NumPy's general machinery (about 2 us a call) where

@@ -158,7 +158,7 @@ class DeploymentSolution:
     def solved_mask(self) -> BoolArray:
         """``solved`` as an array of the batch shape (True where the method has an answer)."""
         assert self.solved is not None  # set in __post_init__
-        return np.broadcast_to(self.solved, self.stalled.shape)
+        return broadcast(np.asarray(self.solved), self.stalled.shape)
 
     # Hooks through which a method adds what only it knows. Callers (predict, the JSON,
     # the CLI) use them for every method alike; a method overrides those it needs.
