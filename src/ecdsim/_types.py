@@ -27,6 +27,8 @@ def broadcast(value: NDArray[_Item], shape: tuple[int, ...]) -> NDArray[_Item]:
     a single deployment pays that fixed cost in full (issue 13, single cases).
     """
     if value.shape == shape:
+        if not value.flags.writeable:
+            return value  # already a read-only array of the shape (a problem's field)
         view = value.view()
     elif value.size == 1 and math.prod(shape) == 1:
         view = value.reshape(shape)
