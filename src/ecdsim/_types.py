@@ -1,16 +1,47 @@
 """Array type aliases shared by the physics and solver layers."""
 
-from typing import TypeAlias
+import math
+from typing import TypeAlias, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 FloatArray: TypeAlias = NDArray[np.float64]
 BoolArray: TypeAlias = NDArray[np.bool_]
+_Item = TypeVar("_Item", bound=np.generic)
 
-__all__ = ["ArrayLike", "BoolArray", "FloatArray", "as_float"]
+__all__ = ["ArrayLike", "BoolArray", "FloatArray", "as_float", "broadcast", "joint_shape"]
 
 
 def as_float(value: object) -> FloatArray:
     """``value`` as a float64 array (typed, so that NumPy arithmetic stays checked)."""
     return np.asarray(value, dtype=np.float64)
+
+
+def broadcast(value: NDArray[_Item], shape: tuple[int, ...]) -> NDArray[_Item]:
+    """``np.broadcast_to(value, shape)``: a read-only view of ``value`` with ``shape``.
+
+    The same view, built without NumPy's general machinery (about 2 us a call) where
+    that is plain: ``value`` has the shape already, or is one number and ``shape`` one
+    case. The per-case fields of a problem are broadcast dozens of times per solve, and
+    a single deployment pays that fixed cost in full (issue 13, single cases).
+    """
+    if value.shape == shape:
+        if not value.flags.writeable:
+            return value  # already a read-only array of the shape (a problem's field)
+        view = value.view()
+    elif value.size == 1 and math.prod(shape) == 1:
+        view = value.reshape(shape)
+    else:
+        return np.broadcast_to(value, shape)
+    view.flags.writeable = False
+    return view
+
+
+def joint_shape(*shapes: tuple[int, ...]) -> tuple[int, ...]:
+    """``np.broadcast_shapes(*shapes)``, at once where all are one shape or scalars ``()``."""
+    distinct = set(shapes)
+    distinct.discard(())
+    if len(distinct) <= 1:
+        return distinct.pop() if distinct else ()
+    return np.broadcast_shapes(*shapes)

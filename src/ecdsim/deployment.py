@@ -385,6 +385,8 @@ def _check_damping_positive(ecd: EcdState) -> None:
 
 
 def _temperature_at(prediction: Prediction, mask: BoolArray) -> list[float]:
+    if not mask.any():  # the usual answer, at once (a single case pays every call)
+        return []
     temps = np.broadcast_to(prediction.temperatures, mask.shape)
     return sorted({float(t) for t in temps[mask]})
 
@@ -474,8 +476,11 @@ def _friction_at_release(prediction: Prediction, solution: DeploymentSolution) -
 def _stall_warnings(
     prediction: Prediction, name: str, solution: DeploymentSolution
 ) -> list[ModelWarning]:
-    out = []
-    shape = solution.stalled.shape
+    out: list[ModelWarning] = []
+    stalled = solution.stalled
+    if not stalled.any():
+        return out
+    shape = stalled.shape
     temps = np.broadcast_to(prediction.temperatures, shape)
     problem = prediction.problem
     at_release = problem.torques[0]
@@ -487,7 +492,6 @@ def _stall_warnings(
         what = "spring torque less gravity"
     drive = np.broadcast_to(at_release, shape)
     friction = np.broadcast_to(_friction_at_release(prediction, solution), shape)
-    stalled = solution.stalled
     for t, angle, start, resist in zip(
         temps[stalled],
         solution.stall_angle[stalled],
@@ -514,6 +518,8 @@ def _linear_range_warnings(
     prediction: Prediction, name: str, solution: DeploymentSolution
 ) -> list[ModelWarning]:
     damper = prediction.system.ecd.damper
+    if damper.max_linear_speed is None and damper.max_linear_torque is None:
+        return []  # no linear-range limits given: nothing to check
     ecd = prediction.ecd
     # A shaft speed that overflows (start_torque = 1e308 N*m) is past any limit: compared as inf.
     with np.errstate(over="ignore"):

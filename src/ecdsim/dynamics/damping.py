@@ -22,7 +22,7 @@ from typing import Protocol, Self
 import numpy as np
 from numpy.typing import NDArray
 
-from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim._types import ArrayLike, FloatArray, as_float, broadcast
 from ecdsim.physics import assembly, rolloff
 
 
@@ -89,7 +89,7 @@ class _Broadcastable:
     def flattened(self, shape: tuple[int, ...]) -> Self:
         """The law with every parameter broadcast to ``shape`` and raveled (1-D)."""
         values = {
-            f.name: np.broadcast_to(np.asarray(getattr(self, f.name), dtype=float), shape).ravel()
+            f.name: broadcast(np.asarray(getattr(self, f.name), dtype=float), shape).ravel()
             for f in fields(self)  # type: ignore[arg-type]
         }
         return replace(self, **values)  # type: ignore[type-var]

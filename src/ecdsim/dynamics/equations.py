@@ -65,7 +65,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ecdsim._types import FloatArray
+from ecdsim._types import FloatArray, broadcast
 from ecdsim.dynamics.damping import EddyLaw
 from ecdsim.physics import thermal
 from ecdsim.physics.gravity import gravity_torque, gravity_torque_slope
@@ -185,9 +185,7 @@ class Model:
             # The problem's domain checks keep f_a >= 0 (Eq. 1's BD_T >= 0 at ambient, a
             # positive peak speed); the clip only removes rounding at the law's zero.
             factor = np.maximum(self.eddy.factor(self.ambient), 0.0)
-            object.__setattr__(
-                self, "ambient_factor", np.broadcast_to(factor, np.shape(self.inertia))
-            )
+            object.__setattr__(self, "ambient_factor", broadcast(factor, np.shape(self.inertia)))
 
     @property
     def _factor_at_ambient(self) -> FloatArray:

@@ -181,29 +181,23 @@ class _Scales:
 
 
 def _scales(segs: NonlinearSegments, rtol: float) -> _Scales:
+    # Pairwise maxima (the same values as np.maximum.reduce over a stacked list, without
+    # building the stack: a single deployment pays these calls' fixed cost in full).
     damping0 = np.maximum(segs.linear_damping, 1e-300)
-    speed = np.maximum.reduce(
-        [np.abs(segs.speed0), np.abs(segs.drive) / damping0, np.full(segs.drive.shape, 1e-300)]
-    )
+    drive = np.abs(segs.drive)
+    speed = np.maximum(np.maximum(np.abs(segs.speed0), drive / damping0), 1e-300)
     length = np.maximum(segs.length, 1e-9)
-    energy = np.maximum.reduce(
-        [
-            np.abs(segs.drive) * segs.length,
-            0.5 * segs.inertia * segs.speed0**2,
-            np.full(segs.drive.shape, 1e-300),
-        ]
+    energy = np.maximum(
+        np.maximum(drive * segs.length, 0.5 * segs.inertia * segs.speed0**2), 1e-300
     )
     # The speed's absolute tolerance resolves the creep threshold (1e-9 of its scale).
     # The temperature state s changes T_d by f ds (f the damping factor, about 1 or
     # less), so its absolute tolerance is one in kelvin.
-    atol = np.stack(
-        [
-            rtol * 1e-3 * length,
-            np.minimum(rtol * 1e-3, 1e-12) * speed,
-            np.full(length.shape, rtol * 1e-3),
-            rtol * 1e-3 * energy,
-        ]
-    )
+    atol = np.empty((4, length.size))
+    atol[0] = rtol * 1e-3 * length
+    atol[1] = min(rtol * 1e-3, 1e-12) * speed
+    atol[2] = rtol * 1e-3
+    atol[3] = rtol * 1e-3 * energy
     if segs.housing_state0 is not None and segs.thermal:
         atol = np.concatenate([atol, atol[2:3]])  # the housing rise, in kelvin like s
     # At rest the friction is the breakaway one: with Stribeck friction the motion can
@@ -249,12 +243,13 @@ def _model(segs: NonlinearSegments) -> Model:
 
 def _start(segs: NonlinearSegments, model: Model) -> FloatArray:
     """Start states ``[x, u, s, E]`` (and the housing rise h with two nodes), (rows, n)."""
-    zero = np.zeros_like(segs.speed0)
-    rows = [zero, segs.speed0, segs.state0, zero]
+    y0 = np.zeros((model.rows, segs.speed0.size))
+    y0[1] = segs.speed0
+    y0[2] = segs.state0
     if model.two_node:
         assert segs.housing_state0 is not None
-        rows.append(segs.housing_state0)
-    return np.stack(rows)
+        y0[4] = segs.housing_state0
+    return y0
 
 
 class _InTemperature:

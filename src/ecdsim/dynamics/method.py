@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, BoolArray, FloatArray
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, broadcast
 from ecdsim.dynamics.damping import KlossEddy
 from ecdsim.dynamics.problem import DynamicProblem
 from ecdsim.dynamics.result import STATUSES, DynamicResult
@@ -152,7 +152,7 @@ def solution_from_result(
     return DynamicSolution(
         method=name,
         deployment_time=result.deployment_time,
-        start_speed=np.broadcast_to(problem.initial_speed, shape).astype(float),
+        start_speed=broadcast(problem.initial_speed, shape).astype(float),
         end_speed=result.arrival_speed,
         max_speed=result.max_speed,
         stalled=np.asarray(stalled),
@@ -212,12 +212,12 @@ def _findings(
     eddy = problem.eddy
     if isinstance(eddy, KlossEddy):
         shape = result.batch_shape
-        n = np.broadcast_to(problem.gear_ratio, shape)
-        ambient = np.broadcast_to(problem.ambient_temperature, shape)
+        n = broadcast(problem.gear_ratio, shape)
+        ambient = broadcast(problem.ambient_temperature, shape)
         peak = eddy.peak_speed(ambient)
         slope = rolloff.kloss_speed_derivative(0.0, eddy.peak_torque, peak)
         kloss_becd = np.ravel(n * n * (slope + problem.gearbox_damping_rate))
-        eq1_becd = np.ravel(np.broadcast_to(problem.damping_rate, shape))
+        eq1_becd = np.ravel(broadcast(problem.damping_rate, shape))
         mismatch = kloss_becd / eq1_becd - 1.0
         for i in np.flatnonzero(np.abs(mismatch) > 0.01):
             out.append(

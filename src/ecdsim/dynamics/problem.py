@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim._types import FloatArray
+from ecdsim._types import FloatArray, broadcast, joint_shape
 from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
 from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.model import DeploymentSystem, EcdState
@@ -149,7 +149,7 @@ class DynamicProblem(QuasiStaticProblem):
     def __post_init__(self) -> None:
         own = {name: np.asarray(getattr(self, name), dtype=float) for name in _CASE_FIELDS}
         angles = np.asarray(self.angles, dtype=float)
-        batch = np.broadcast_shapes(
+        batch = joint_shape(
             angles.shape[1:],
             np.shape(self.torques)[1:],
             np.shape(self.friction),
@@ -160,15 +160,13 @@ class DynamicProblem(QuasiStaticProblem):
         )
         # Widen the quasi-static fields to the joint batch first, then let the base class
         # align the breakpoint arrays with them.
+        object.__setattr__(self, "friction", broadcast(np.asarray(self.friction, float), batch))
         object.__setattr__(
-            self, "friction", np.broadcast_to(np.asarray(self.friction, float), batch)
-        )
-        object.__setattr__(
-            self, "damping_rate", np.broadcast_to(np.asarray(self.damping_rate, float), batch)
+            self, "damping_rate", broadcast(np.asarray(self.damping_rate, float), batch)
         )
         super().__post_init__()
         for name, value in own.items():
-            object.__setattr__(self, name, np.broadcast_to(value, batch))
+            object.__setattr__(self, name, broadcast(value, batch))
 
     @property
     def nonlinear(self) -> bool:
@@ -178,19 +176,20 @@ class DynamicProblem(QuasiStaticProblem):
     @property
     def lossy(self) -> bool:
         """True when some case's gear has a mesh efficiency below 1 (issue 16 item 5)."""
+        # ndarray.any: np.any's dispatch costs more than the test on one case's arrays.
         return bool(
-            np.any(self.forward_efficiency != 1.0) or np.any(self.backward_efficiency != 1.0)
+            (self.forward_efficiency != 1.0).any() or (self.backward_efficiency != 1.0).any()
         )
 
     @property
     def stribeck(self) -> bool:
         """True when some case's sliding friction depends on speed (a Stribeck speed)."""
-        return bool(np.any(np.isfinite(self.stribeck_speed)))
+        return bool(np.isfinite(self.stribeck_speed).any())
 
     @property
     def compliant(self) -> bool:
         """True when some case has a compliant gear mesh (compliant backlash)."""
-        return bool(np.any(np.isfinite(self.gear_stiffness)))
+        return bool(np.isfinite(self.gear_stiffness).any())
 
     @property
     def total_inertia(self) -> FloatArray:
@@ -242,14 +241,14 @@ def dynamic_problem(
             params.rolloff.resistivity_coefficient,
             damper.reference_temperature,
         )
-        if np.any(peak <= 0.0):
+        if np.asarray(peak <= 0.0).any():
             raise DynamicDomainError(
                 "damper.rolloff.resistivity_coefficient",
                 "the peak speed omega_peak(T) is <= 0 at an analysis temperature; the "
                 "resistivity law does not reach that far",
             )
         alpha = np.asarray(params.rolloff.resistivity_coefficient, dtype=float)
-        if params.thermal is not None and np.any(alpha < 0.0):
+        if params.thermal is not None and (alpha < 0.0).any():
             # Heating drives omega_peak = omega_peak_ref (1 + alpha (T - T_ref)) towards 0
             # and the low-speed damping BD / (1 + alpha (T - T_ref)) to infinity: the
             # damper would lock the load short of the end, approached without end.
@@ -262,14 +261,14 @@ def dynamic_problem(
             )
     travel = np.asarray(base.travel)
     start = np.asarray(params.initial_angle, dtype=float)
-    if np.any(start < 0.0) or np.any(start >= travel):
+    if (start < 0.0).any() or (start >= travel).any():
         raise DynamicDomainError(
             "initial.angle",
             f"must be >= 0 and below the travel ({float(np.min(travel)):.6g} rad), got "
             f"{float(np.max(start)):.6g} rad",
         )
     thermal = params.thermal
-    if thermal is not None and np.any(np.asarray(thermal.initial_rotor_rise) != 0.0):
+    if thermal is not None and (np.asarray(thermal.initial_rotor_rise) != 0.0).any():
         # A warm start (repeated deployments) must lie below the damping law's zero.
         warm = eddy.factor(np.asarray(temperatures, float) + thermal.initial_rotor_rise)
         if np.any(warm <= 0.0):

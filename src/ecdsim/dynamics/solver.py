@@ -15,6 +15,7 @@ bookkeeping (:func:`_account`, :func:`_apply_events`, :func:`_impact`).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -22,7 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ecdsim._types import BoolArray, FloatArray
+from ecdsim._types import BoolArray, FloatArray, broadcast
 from ecdsim.dynamics import gearflow, integrate, linear
 from ecdsim.dynamics.backlash import solve_compliant
 from ecdsim.dynamics.damping import EddyLaw
@@ -105,12 +106,15 @@ class _Cases:
 
 def _flatten(problem: DynamicProblem) -> _Cases:
     shape = problem.batch_shape
-    n = int(np.prod(shape)) if shape else 1
+    n = math.prod(shape)
     points = problem.angles.shape[0]
 
     def flat(a: FloatArray) -> FloatArray:
-        # The problem's fields already have the batch shape; broadcast only the others.
-        full = a if np.shape(a) == shape else np.broadcast_to(a, shape)
+        # The problem's fields already have the batch shape (float, from its
+        # __post_init__): a contiguous one is its own 1-D view; broadcast only the others.
+        if a.shape == shape and a.flags.c_contiguous and a.dtype == np.float64:
+            return a.reshape(n)
+        full = a if np.shape(a) == shape else broadcast(np.asarray(a, dtype=float), shape)
         return np.ascontiguousarray(np.reshape(full, n), dtype=float)
 
     return _Cases(
@@ -171,6 +175,8 @@ class _Piece:
 
 def _first_piece(c: _Cases, phi: FloatArray) -> NDArray[np.intp]:
     """The piece of every case at its release angle, counted once: O(P) per case."""
+    if c.angles.shape[0] == 2:  # a linear spring: its one piece, without the count
+        return np.zeros(c.n, dtype=np.intp)
     interior = c.angles[1:-1]
     return np.asarray(np.sum(interior <= phi, axis=0), dtype=np.intp)
 
@@ -226,7 +232,8 @@ class _Log:
         if case.size:
             self.parts.append((case.copy(), time.copy(), _EV[kind], angle.copy(), speed.copy()))
 
-    def build(self) -> EventLog:
+    def build(self, cases: int) -> EventLog:
+        """The events sorted by case, then in the order logged (time order per case)."""
         if not self.parts:
             empty = np.zeros(0)
             return EventLog(np.zeros(0, np.intp), empty, np.zeros(0, np.int8), empty, empty)
@@ -235,6 +242,8 @@ class _Log:
         kind = np.concatenate([np.full(p[0].size, p[2], np.int8) for p in self.parts])
         angle = np.concatenate([p[3] for p in self.parts])
         speed = np.concatenate([p[4] for p in self.parts])
+        if cases == 1:  # one case: the order logged is the order sought
+            return EventLog(case, time, kind, angle, speed)
         order = np.lexsort((np.arange(case.size), case))
         return EventLog(case[order], time[order], kind[order], angle[order], speed[order])
 
@@ -446,7 +455,7 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
         impacts=shaped(s.impacts),
         status=shaped(s.status),
         energy=energy.reshaped(shape),
-        events=log.build(),
+        events=log.build(c.n),
         trajectory=trajectory,
     )
 
@@ -1249,7 +1258,7 @@ def _impact(c: _Cases, s: _State, hit: NDArray[np.intp], name: str, log: _Log) -
         stopped = hit[latch]
         s.impact_loss[stopped] += ke[latch]
         s.w[stopped] = 0.0
-    if np.all(latch):
+    if latch.all():
         return
     bouncing = ~latch
     idx = hit[bouncing]

@@ -7,7 +7,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, BoolArray, FloatArray
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, broadcast, joint_shape
 
 
 @dataclass(frozen=True)
@@ -53,7 +53,7 @@ class QuasiStaticProblem:
                 np.asarray(self.gravity_amplitude, dtype=float),
                 np.asarray(0.0 if self.gravity_angle is None else self.gravity_angle, dtype=float),
             )
-        batch = np.broadcast_shapes(
+        batch = joint_shape(
             angles.shape[1:],
             torques.shape[1:],
             friction.shape,
@@ -62,16 +62,16 @@ class QuasiStaticProblem:
         )
         points = (angles.shape[0], *batch)
         object.__setattr__(
-            self, "angles", np.broadcast_to(angles.reshape(_aligned(angles, batch)), points)
+            self, "angles", broadcast(angles.reshape(_aligned(angles, batch)), points)
         )
         object.__setattr__(
-            self, "torques", np.broadcast_to(torques.reshape(_aligned(torques, batch)), points)
+            self, "torques", broadcast(torques.reshape(_aligned(torques, batch)), points)
         )
-        object.__setattr__(self, "friction", np.broadcast_to(friction, batch))
-        object.__setattr__(self, "damping_rate", np.broadcast_to(damping, batch))
+        object.__setattr__(self, "friction", broadcast(friction, batch))
+        object.__setattr__(self, "damping_rate", broadcast(damping, batch))
         if gravity is not None:
-            object.__setattr__(self, "gravity_amplitude", np.broadcast_to(gravity[0], batch))
-            object.__setattr__(self, "gravity_angle", np.broadcast_to(gravity[1], batch))
+            object.__setattr__(self, "gravity_amplitude", broadcast(gravity[0], batch))
+            object.__setattr__(self, "gravity_angle", broadcast(gravity[1], batch))
 
     @property
     def has_gravity(self) -> bool:
@@ -158,7 +158,7 @@ class DeploymentSolution:
     def solved_mask(self) -> BoolArray:
         """``solved`` as an array of the batch shape (True where the method has an answer)."""
         assert self.solved is not None  # set in __post_init__
-        return np.broadcast_to(self.solved, self.stalled.shape)
+        return broadcast(np.asarray(self.solved), self.stalled.shape)
 
     # Hooks through which a method adds what only it knows. Callers (predict, the JSON,
     # the CLI) use them for every method alike; a method overrides those it needs.
