@@ -2,8 +2,8 @@
 
 The config file refused them, but the command line's ``-T -300`` and ``-T -500degF``
 ran ``deploy``, ``report`` and ``montecarlo`` and printed results. Every command with a
-temperature option is checked here (deploy, report, montecarlo, repeat, sweep, fit). Every temperature
-option now reads through the config's rule (``ecdsim.config.units.parse_temperature``):
+temperature option is checked here (deploy, report, montecarlo, repeat, sweep, fit). Every
+temperature option now reads through the config's rule (``ecdsim.config.units.parse_temperature``):
 exit code 2 and one ``error:`` line naming the option, the value and the expected unit.
 The explorer's API reads configs, so it answers 422 naming the field.
 """
