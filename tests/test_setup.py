@@ -11,6 +11,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import ROOT
 
 SCRIPT = ROOT / "scripts" / "ensure-chromium.sh"
@@ -82,3 +84,29 @@ def test_missing_npm_without_apt_stops_with_one_line(tmp_path: Path) -> None:
     assert len(lines) == 1, result.stderr
     assert "'npm'" in lines[0]
     assert not (tmp_path / "axe").exists()
+
+
+def test_a_missing_test_dependency_fails_with_the_install_command() -> None:
+    # conftest.require is how a test imports an optional package: a failure naming the
+    # package and the install command, never a skip (issue 11, item 9).
+    from tests.conftest import INSTALL_TEST_EXTRA, require
+
+    with pytest.raises(pytest.fail.Exception) as info:
+        require("ecdsim_no_such_package")
+    assert str(info.value) == f"ecdsim_no_such_package is missing: {INSTALL_TEST_EXTRA}"
+    assert require("numpy").__name__ == "numpy"
+
+
+def test_no_test_skips() -> None:
+    # A skip turns a missing package or browser into a green run: none anywhere.
+    needles = ("importorskip", "pytest.skip", "mark.skip", "skipif", "mark.xfail")
+    this = Path(__file__).resolve()
+    found = [
+        f"{path.relative_to(ROOT)}:{number}: {line.strip()}"
+        for folder in ("tests", "validation", "benchmarks")
+        for path in sorted((ROOT / folder).rglob("*.py"))
+        if path.resolve() != this
+        for number, line in enumerate(path.read_text().splitlines(), 1)
+        if any(needle in line for needle in needles) and not line.lstrip().startswith(("#", "``"))
+    ]
+    assert found == []
