@@ -36,6 +36,33 @@ def test_missing_chromium_without_apt_stops_with_one_line(tmp_path: Path) -> Non
     assert "apt-get is not available" in lines[0]
 
 
+def test_missing_chromium_without_root_stops_with_one_line(tmp_path: Path) -> None:
+    # apt-get is there but the user is not root and has no password-less sudo: one line
+    # with the command to run, exit 2, and apt-get never called. Fakes on the PATH: an
+    # apt-get that records a call, an id that answers uid 1000, no sudo.
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    bash = shutil.which("bash")
+    assert bash is not None
+    (bin_dir / "bash").symlink_to(bash)
+    called = tmp_path / "apt-get-called"
+    for name, body in (("apt-get", f"touch {called}\n"), ("id", "echo 1000\n")):
+        (bin_dir / name).write_text(f"#!{bash}\n{body}")
+        (bin_dir / name).chmod(0o755)
+    env = {**os.environ, "PATH": str(bin_dir), "ECDSIM_CHROMIUM": str(tmp_path / "chromium")}
+    result = subprocess.run(
+        [bash, str(SCRIPT)], env=env, capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 2
+    assert result.stderr.strip().splitlines() == [
+        "error: "
+        + str(tmp_path / "chromium")
+        + " is missing and installing it needs root: run 'sudo apt-get install -y chromium', "
+        "then rerun make test"
+    ]
+    assert not called.exists()
+
+
 def test_present_chromium_is_left_alone(tmp_path: Path) -> None:
     fake = tmp_path / "chromium"
     fake.write_text("#!/bin/sh\n")
