@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import importlib
 import re
 from collections.abc import Generator
 from pathlib import Path
+from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import pytest
@@ -39,6 +41,18 @@ def _with_install_hint(report: pytest.CollectReport | pytest.TestReport) -> None
     if report.failed and missing and INSTALL_TEST_EXTRA not in text:
         # First line: pytest's short summary shows it.
         report.longrepr = f"{missing.group(1)} is missing: {INSTALL_TEST_EXTRA}\n\n{text}"
+
+
+def require(name: str) -> ModuleType:
+    """Import an optional test dependency, or fail (never skip) with the install command.
+
+    ``pytest.importorskip`` would report a missing package as a skip, which a green run
+    hides (issue 11, item 9): every package the tests import is in the test extra.
+    """
+    try:
+        return importlib.import_module(name)
+    except ModuleNotFoundError as error:
+        pytest.fail(f"{error.name} is missing: {INSTALL_TEST_EXTRA}", pytrace=False)
 
 
 def pytest_collectreport(report: pytest.CollectReport) -> None:

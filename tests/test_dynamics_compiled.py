@@ -22,10 +22,11 @@ from ecdsim.dynamics.damping import KlossEddy, LinearEddy
 from ecdsim.dynamics.equations import Model
 from ecdsim.dynamics.result import DynamicResult
 from ecdsim.model import DeploymentSystem, Ecd, LinearSpring
-from tests.conftest import paper_system
+from tests.conftest import paper_system, require
 from tests.dynamics_reference import assert_energy_closes, toy_system
 
-compiled = pytest.importorskip("ecdsim.dynamics.compiled", reason="numba is not installed")
+# numba is in the test extra: without it this fails with the install command.
+compiled = require("ecdsim.dynamics.compiled")
 
 
 def _dynamic(

@@ -19,10 +19,11 @@ from ecdsim.deployment import predict
 from ecdsim.dynamics import DynamicParameters, Rolloff, Thermal, solver
 from ecdsim.model import DeploymentSystem, TabulatedSpring
 from tests import hand
-from tests.conftest import paper_system
+from tests.conftest import paper_system, require
 from tests.dynamics_reference import assert_energy_closes
 
-pytest.importorskip("ecdsim.dynamics.compiled_table", reason="numba is not installed")
+# numba is in the test extra: without it this fails with the install command.
+require("ecdsim.dynamics.compiled_table")
 
 
 def _table(points: int, end_torque: float = hand.TE) -> DeploymentSystem:

@@ -24,6 +24,7 @@ import ecdsim
 from ecdsim.cli.app import app
 from ecdsim.fmu.model import DamperModel
 from tests import hand
+from tests.conftest import require
 
 ROOT = Path(__file__).resolve().parent.parent
 PAPER = ROOT / "examples" / "paper_cc16.toml"
@@ -77,8 +78,8 @@ def test_heat_balance_matches_the_adiabatic_closed_form(tmp_path: Path) -> None:
 
 def _run(kind: str, fmu: Path, folder: Path, **inputs: Any) -> Any:
     """Simulate ``fmu`` with FMPy in a child process (tests/fmu_driver.py says why)."""
-    pytest.importorskip("pythonfmu")
-    pytest.importorskip("fmpy")
+    require("pythonfmu")
+    require("fmpy")
     source, target = folder / f"{kind}-in.npz", folder / f"{kind}-out.npz"
     start = inputs.pop("start", {})
     np.savez(
@@ -99,7 +100,7 @@ def _run(kind: str, fmu: Path, folder: Path, **inputs: Any) -> Any:
 
 @pytest.mark.slow
 def test_damper_fmu_reproduces_a_dynamic_run(tmp_path: Path) -> None:
-    pytest.importorskip("pythonfmu")
+    require("pythonfmu")
     from ecdsim.fmu import build_fmu
     from ecdsim.plotting_dynamic import dynamic_result
 
@@ -141,7 +142,7 @@ def test_damper_fmu_reproduces_a_dynamic_run(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_damper_fmu_parameters_override_the_config(tmp_path: Path) -> None:
-    pytest.importorskip("pythonfmu")
+    require("pythonfmu")
     from ecdsim.fmu import build_fmu
 
     fmu = build_fmu(PAPER, tmp_path / "damper.fmu")
@@ -161,7 +162,7 @@ def test_damper_fmu_parameters_override_the_config(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_deployment_fmu_follows_the_dynamic_method(tmp_path: Path) -> None:
-    pytest.importorskip("pythonfmu")
+    require("pythonfmu")
     code = CliRunner().invoke(
         app, ["export-fmu", str(DYNAMIC), "--deployment", "-o", str(tmp_path / "d.fmu")]
     )
@@ -209,7 +210,7 @@ def test_export_fmu_errors_are_one_line_exit_2(
 def test_help_lists_the_options_and_its_example_runs(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    pytest.importorskip("pythonfmu")
+    require("pythonfmu")
     from tests.helptext import assert_options, read_help, run_example
 
     runner = CliRunner()

@@ -16,6 +16,8 @@ from typing import Any
 
 import pytest
 
+from tests.conftest import require
+
 ROOT = Path(__file__).resolve().parent.parent
 SOURCE = ROOT / "examples" / "paper_section6.py"
 RENDERED = SOURCE.with_suffix(".ipynb")
@@ -45,9 +47,9 @@ def execute() -> Any:
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")
 def test_the_example_notebook_runs() -> None:
-    pytest.importorskip("nbclient")
-    pytest.importorskip("jupytext")
-    pytest.importorskip("ipykernel")
+    require("nbclient")
+    require("jupytext")
+    require("ipykernel")
     notebook = execute()  # raises CellExecutionError, with the cell, if a cell fails
     outputs = [o for cell in notebook.cells for o in cell.get("outputs", [])]
     pictures = [o for o in outputs if "image/png" in o.get("data", {})]
@@ -57,8 +59,8 @@ def test_the_example_notebook_runs() -> None:
 
 
 def test_the_rendered_notebook_has_the_same_code() -> None:
-    jupytext = pytest.importorskip("jupytext")
-    nbformat = pytest.importorskip("nbformat")
+    jupytext = require("jupytext")
+    nbformat = require("nbformat")
     rendered = nbformat.read(RENDERED, as_version=4)
     assert _code(rendered) == _code(jupytext.read(SOURCE))
     # and it was executed: every code cell has run

@@ -23,7 +23,7 @@ from ecdsim.units_display import (
     kind_of_key,
 )
 from ecdsim.webapp.server import create_app
-from tests.conftest import PAPER_CONFIG
+from tests.conftest import PAPER_CONFIG, require
 
 # By hand: 1 lbf*in = 4.4482216152605 N * 0.0254 m = 0.112984829027617 N*m
 # (4.4482216152605 * 0.0254 = 0.11298482902761670 exactly in decimal).
@@ -475,7 +475,7 @@ def test_fit_drop_test_in_us_units() -> None:
 def test_montecarlo_tables_in_us_units(tmp_path: Any) -> None:
     import json
 
-    pytest.importorskip("pyarrow")
+    require("pyarrow")
     from tests.conftest import ROOT
 
     config = ROOT / "examples" / "paper_cc16_tolerances.toml"

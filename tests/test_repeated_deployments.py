@@ -21,7 +21,7 @@ from ecdsim.deployment import predict
 from ecdsim.dynamics import DynamicParameters, DynamicResult, Thermal
 from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.dynamics.sequence import Cycle, run_sequence
-from tests.conftest import ROOT, paper_system
+from tests.conftest import ROOT, SavedFigures, paper_system
 from tests.helptext import assert_options, read_help, run_example
 from tests.test_two_node_heating import two_node_deploy
 
@@ -154,7 +154,7 @@ def _two_node_config(folder: Path) -> Path:
     return path
 
 
-def test_repeat_command(tmp_path: Path) -> None:
+def test_repeat_command(tmp_path: Path, saved_figures: SavedFigures) -> None:
     config = _two_node_config(tmp_path)
     args = ["repeat", str(config), "-n", "6", "--cool-down", "5", "--stow-time", "3 s"]
     document = runner.invoke(app, [*args, "-T", "25", "-T", "-40", "--json"])
@@ -174,13 +174,37 @@ def test_repeat_command(tmp_path: Path) -> None:
     direct = run_sequence(solve, params, TEMPS, Cycle(6, 5.0, 3.0))
     for j in range(2):
         assert cases[j]["deployments"]["deployment_time_s"] == direct.deployment_time[:, j].tolist()
-    table = runner.invoke(app, [*args, "--plot", str(tmp_path / "life.png")])
+    table = runner.invoke(app, [*args, "-T", "25", "--plot", str(tmp_path / "life.png")])
     assert table.exit_code == 0, table.output
     assert max(len(line) for line in table.stdout.splitlines()) <= 80
     assert "housing" in table.stdout  # the two-node column (its header may wrap)
     assert "[degC]" in table.stdout
     assert "drift 1 to 6" in table.stdout
-    assert (tmp_path / "life.png").stat().st_size > 10_000
+    assert (tmp_path / "life.png").read_bytes().startswith(b"\x89PNG")
+    # What a reader sees (saved_figures): the title, labelled axes, one legend entry per
+    # temperature, and the plotted numbers are the JSON's deployments above.
+    top, bottom = saved_figures.axes("life.png")
+    title = top.get_title().replace("\n", " ")
+    assert "6 deployments, cool-down 5 s, stow 3 s" in title
+    assert top.get_ylabel() == "deployment time change\nfrom deployment 1 [%]"
+    assert bottom.get_xlabel() == "deployment number [-]"
+    assert "[K]" in bottom.get_ylabel()
+    assert "rotor temperature above T" in bottom.get_ylabel()
+    assert saved_figures.legend(top) == ["T = 25 degC"]
+    assert saved_figures.legend(bottom) == ["peak, T = 25 degC", "start, T = 25 degC"]
+    deployments = cases[0]["deployments"]  # the JSON's first case is +25 degC
+    times = np.array(deployments["deployment_time_s"])
+    number, change = (np.asarray(v) for v in top.get_lines()[0].get_data())
+    assert number.tolist() == [1, 2, 3, 4, 5, 6]
+    # Percent change from deployment 1, by hand from the JSON: rounding only.
+    np.testing.assert_allclose(change, 100.0 * (times / times[0] - 1.0), rtol=1e-12, atol=1e-12)
+    peak, start = (np.asarray(line.get_data()[1]) for line in bottom.get_lines()[:2])
+    # The rises above +25 degC, by hand from the JSON: rounding only.
+    expected_peak = np.array(deployments["peak_rotor_temperature_C"]) - 25.0
+    expected_start = np.array(deployments["start_rotor_temperature_C"]) - 25.0
+    np.testing.assert_allclose(peak, expected_peak, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(start, expected_start, rtol=1e-12, atol=1e-12)
+    assert expected_peak.min() > 1.0  # a real rise, so that the check can fail
 
 
 @pytest.mark.parametrize(

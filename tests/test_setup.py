@@ -11,6 +11,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import ROOT
 
 SCRIPT = ROOT / "scripts" / "ensure-chromium.sh"
@@ -32,6 +34,33 @@ def test_missing_chromium_without_apt_stops_with_one_line(tmp_path: Path) -> Non
     assert len(lines) == 1, result.stderr
     assert "'chromium'" in lines[0]
     assert "apt-get is not available" in lines[0]
+
+
+def test_missing_chromium_without_root_stops_with_one_line(tmp_path: Path) -> None:
+    # apt-get is there but the user is not root and has no password-less sudo: one line
+    # with the command to run, exit 2, and apt-get never called. Fakes on the PATH: an
+    # apt-get that records a call, an id that answers uid 1000, no sudo.
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    bash = shutil.which("bash")
+    assert bash is not None
+    (bin_dir / "bash").symlink_to(bash)
+    called = tmp_path / "apt-get-called"
+    for name, body in (("apt-get", f"touch {called}\n"), ("id", "echo 1000\n")):
+        (bin_dir / name).write_text(f"#!{bash}\n{body}")
+        (bin_dir / name).chmod(0o755)
+    env = {**os.environ, "PATH": str(bin_dir), "ECDSIM_CHROMIUM": str(tmp_path / "chromium")}
+    result = subprocess.run(
+        [bash, str(SCRIPT)], env=env, capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 2
+    assert result.stderr.strip().splitlines() == [
+        "error: "
+        + str(tmp_path / "chromium")
+        + " is missing and installing it needs root: run 'sudo apt-get install -y chromium', "
+        "then rerun make test"
+    ]
+    assert not called.exists()
 
 
 def test_present_chromium_is_left_alone(tmp_path: Path) -> None:
@@ -82,3 +111,29 @@ def test_missing_npm_without_apt_stops_with_one_line(tmp_path: Path) -> None:
     assert len(lines) == 1, result.stderr
     assert "'npm'" in lines[0]
     assert not (tmp_path / "axe").exists()
+
+
+def test_a_missing_test_dependency_fails_with_the_install_command() -> None:
+    # conftest.require is how a test imports an optional package: a failure naming the
+    # package and the install command, never a skip (issue 11, item 9).
+    from tests.conftest import INSTALL_TEST_EXTRA, require
+
+    with pytest.raises(pytest.fail.Exception) as info:
+        require("ecdsim_no_such_package")
+    assert str(info.value) == f"ecdsim_no_such_package is missing: {INSTALL_TEST_EXTRA}"
+    assert require("numpy").__name__ == "numpy"
+
+
+def test_no_test_skips() -> None:
+    # A skip turns a missing package or browser into a green run: none anywhere.
+    needles = ("importorskip", "pytest.skip", "mark.skip", "skipif", "mark.xfail")
+    this = Path(__file__).resolve()
+    found = [
+        f"{path.relative_to(ROOT)}:{number}: {line.strip()}"
+        for folder in ("tests", "validation", "benchmarks")
+        for path in sorted((ROOT / folder).rglob("*.py"))
+        if path.resolve() != this
+        for number, line in enumerate(path.read_text().splitlines(), 1)
+        if any(needle in line for needle in needles) and not line.lstrip().startswith(("#", "``"))
+    ]
+    assert found == []

@@ -133,3 +133,22 @@ print(len(scans), "PYDANTIC_DISABLE_PLUGINS" in __import__("os").environ)
     )
     # No scan, and the variable is not left set for the user's own models.
     assert done.stdout.split() == ["0", "False"]
+
+
+def test_start_up_loads_the_modules_docs_architecture_names() -> None:
+    # docs/architecture.md, "Start-up": importing the command line loads typer, the
+    # version, the two formatting modules and the CLI's own modules, and nothing else of
+    # ecdsim (each command imports the library inside its function).
+    script = (
+        "import sys, json; import ecdsim.cli.app; "
+        "print(json.dumps(sorted(m for m in sys.modules if m.startswith('ecdsim'))))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, check=True
+    )
+    modules = json.loads(done.stdout)
+    documented = {"ecdsim", "ecdsim._version", "ecdsim.formatting", "ecdsim.units_display"}
+    assert [m for m in modules if m not in documented and not m.startswith("ecdsim.cli")] == []
+    assert "ecdsim.cli.render" not in modules  # rich: imported by the tables, when printed
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    assert all(f"`{m}`" in text for m in sorted(documented - {"ecdsim"}))

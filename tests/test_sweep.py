@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 
 from ecdsim.cli.app import app
 from ecdsim.sweeps import SweepError, design, parse_vary
+from tests.conftest import require
 
 ROOT = Path(__file__).resolve().parent.parent
 PAPER = ROOT / "examples" / "paper_cc16.toml"
@@ -72,7 +73,7 @@ def test_full_factorial_table_matches_the_hand_calculation(tmp_path: Path) -> No
 
 
 def test_parquet_holds_the_same_table(tmp_path: Path) -> None:
-    pq = pytest.importorskip("pyarrow.parquet")
+    pq = require("pyarrow.parquet")
     args = ["--vary", "gearbox.ratio=300,380", "-T", "25", "-m", "exact"]
     assert _run(*args, "-o", str(tmp_path / "s.csv"))[0] == 0
     assert _run(*args, "-o", str(tmp_path / "s.parquet"))[0] == 0

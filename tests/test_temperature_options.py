@@ -1,8 +1,9 @@
 """Temperatures at or below absolute zero are refused everywhere a temperature comes in.
 
 The config file refused them, but the command line's ``-T -300`` and ``-T -500degF``
-ran ``deploy``, ``report`` and ``montecarlo`` and printed results. Every temperature
-option now reads through the config's rule (``ecdsim.config.units.parse_temperature``):
+ran ``deploy``, ``report`` and ``montecarlo`` and printed results. Every command with a
+temperature option is checked here (deploy, report, montecarlo, repeat, sweep, fit). Every
+temperature option now reads through the config's rule (``ecdsim.config.units.parse_temperature``):
 exit code 2 and one ``error:`` line naming the option, the value and the expected unit.
 The explorer's API reads configs, so it answers 422 naming the field.
 """
@@ -28,15 +29,28 @@ runner = CliRunner()
 TOLERANCES = ROOT / "examples" / "paper_cc16_tolerances.toml"
 DROP_TEST = ROOT / "examples" / "drop_test.csv"
 TRACE = ROOT / "examples" / "deployment_trace.csv"
+DYNAMIC_CONFIG = ROOT / "examples" / "paper_cc16_dynamic.toml"
 EXPECTED = "expected a temperature in degC or compatible units, e.g. '25 degC'"
 
 
 def _command(name: str, option: str, value: str, tmp_path: Path) -> list[str]:
     config = str(TOLERANCES if name == "montecarlo" else PAPER_CONFIG)
+    dynamic = str(DYNAMIC_CONFIG)
     return {
         "deploy": ["deploy", config, option, value],
         "report": ["report", config, option, value, "-o", str(tmp_path / "r.html")],
         "montecarlo": ["montecarlo", config, "-n", "8", option, value, "--out", str(tmp_path)],
+        "repeat": ["repeat", dynamic, "--cool-down", "10", "-n", "2", option, value],
+        "sweep": [
+            "sweep",
+            config,
+            "--vary",
+            "gearbox.ratio=300,380",
+            option,
+            value,
+            "-o",
+            str(tmp_path / "s.csv"),
+        ],
         "fit drop-test": ["fit", "drop-test", str(DROP_TEST), option, value],
         "fit trace": ["fit", "trace", str(TRACE), "--config", str(PAPER_CONFIG), option, value],
     }[name]
@@ -51,6 +65,10 @@ CASES = [
     ("report", "-T", "-500degF", "'-500degF'"),
     ("montecarlo", "-T", "-300", "'-300 degC'"),
     ("montecarlo", "-T", "-500degF", "'-500degF'"),
+    ("repeat", "-T", "-300", "'-300 degC'"),
+    ("repeat", "--temperature", "-500degF", "'-500degF'"),
+    ("sweep", "-T", "-300", "'-300 degC'"),
+    ("sweep", "-T", "-500degF", "'-500degF'"),
     ("fit drop-test", "--reference-temperature", "-500degF", "'-500degF'"),
     ("fit drop-test", "--reference-temperature", "-273.15", "'-273.15 degC'"),
     ("fit trace", "-T", "-500degF", "'-500degF'"),
@@ -71,6 +89,30 @@ def test_below_absolute_zero_exits_2_with_one_line(
     assert result.stdout == ""
     assert result.exception is None or isinstance(result.exception, SystemExit)
     assert not (tmp_path / "r.html").exists()
+    assert not (tmp_path / "s.csv").exists()
+
+
+def test_a_swept_temperature_key_below_absolute_zero_is_refused(tmp_path: Path) -> None:
+    # sweep takes temperatures through --vary too (here a config key in degF); the value
+    # goes through the same reader, so the same words, naming the key and the point.
+    out = tmp_path / "s.csv"
+    result = runner.invoke(
+        app,
+        [
+            "sweep",
+            str(PAPER_CONFIG),
+            "--vary",
+            "damper.reference_temperature=-500 degF,77 degF",
+            "-o",
+            str(out),
+        ],
+    )
+    assert result.exit_code == 2, result.output
+    assert result.stderr.splitlines() == [
+        "error: --vary: damper.reference_temperature: '-500 degF' is below absolute zero; "
+        f"{EXPECTED} (at damper.reference_temperature=-500 degF)"
+    ]
+    assert not out.exists()
 
 
 def test_every_bad_temperature_is_reported_at_once() -> None:

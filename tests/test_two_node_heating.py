@@ -34,7 +34,7 @@ from ecdsim.model import (
     Load,
 )
 from tests import hand
-from tests.conftest import ROOT, paper_system
+from tests.conftest import ROOT, paper_system, require
 from tests.dynamics_reference import assert_energy_closes
 
 T_ZERO = 25.0 + 1.0 / 0.004  # Eq. 1's BD_T = 0 [degC]
@@ -303,7 +303,7 @@ def test_compiled_and_numpy_rodas4_agree(monkeypatch: pytest.MonkeyPatch, numba:
     # 1e-10 (global error a few 1e-10), with the housing, the recorded time series
     # included (the compiled kernel records the fifth row too).
     if numba:
-        pytest.importorskip("ecdsim.dynamics.compiled", reason="numba is not installed")
+        require("ecdsim.dynamics.compiled")
     monkeypatch.setenv("ECDSIM_NUMBA", "1" if numba else "0")
     thermal = Thermal(C_R, R_RH, C_H, R_HE, initial_rotor_rise=5.0, initial_housing_rise=2.0)
     params = DynamicParameters(load_inertia=1.0, thermal=thermal, rtol=1e-10)

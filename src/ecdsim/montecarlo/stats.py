@@ -402,7 +402,11 @@ def _dynamic_only_note(plan: Plan) -> list[str]:
     Their sampled values are recorded and their sensitivities come out as 0, which is
     true of the quasi-static methods but easily read as "this does not matter"; say so.
     """
-    if plan.method == "dynamic":
+    from ecdsim.methods import SOLVERS
+
+    # The registry's hook, not the method's name (docs/architecture.md, solver registry):
+    # a method that takes the dynamic parameters sees these tolerances.
+    if SOLVERS[plan.method].needs_dynamics:
         return []
     from ecdsim.config.tolerance_schema import TOLERABLE
 
