@@ -250,3 +250,45 @@ def test_a_user_file_the_fit_cannot_keep_is_an_export_error() -> None:
         spring_config_text('title = "x"\n', estimate, estimate, ["test"], "x.toml")
     with pytest.raises(ExportError, match="cannot keep the --config file's text"):
         spring_config_text("[load\n", estimate, estimate, ["test"], "x.toml")
+
+
+def test_damper_and_gearbox_keys_the_fit_does_not_hold_are_named(tmp_path: Path) -> None:
+    # The fitted file replaces [damper] and [gearbox] by one 1:1 ECD; keys of the damper's
+    # own shaft or the gearbox (here a roll-off law, the rotor inertia and lost motion)
+    # are not carried over. They used to vanish without a word: now the file's header and
+    # a warning name each one.
+    user = tmp_path / "mine.toml"
+    text = PAPER_CONFIG.read_text().replace(
+        'coulomb_friction = "7.9e-4 N*m"',
+        'coulomb_friction = "7.9e-4 N*m"\nrotor_inertia = "2e-7 kg*m^2"\n'
+        'rolloff = { peak_speed = "5000 rpm", resistivity_coefficient = "0.0039 / K" }',
+        1,
+    )
+    text = text.replace("[gearbox]\n", '[gearbox]\nlost_motion = "0.2 deg"\n', 1)
+    user.write_text(text)
+    parse_config(text)  # the user's file is itself valid
+    data = tmp_path / "drops.csv"
+    data.write_text(drop_csv(drop_points(TRUTH, TEMPERATURES, MASSES), inertia_column=False))
+    out = tmp_path / "fitted.toml"
+    result = runner.invoke(
+        app, ["fit", "drop-test", str(data), "-o", str(out), "--config", str(user), "--json"]
+    )
+    assert result.exit_code == 0, result.output
+    names = "damper.rotor_inertia, damper.rolloff, gearbox.lost_motion"
+    header = out.read_text().split("\n\n", 1)[0]
+    assert names in header
+    warnings = [w["message"] for w in json.loads(result.stdout)["warnings"]]
+    assert any(names in w and "not carried over" in w for w in warnings), warnings
+    written = tomllib.loads(out.read_text())
+    assert "rolloff" not in written["damper"]
+    assert "lost_motion" not in written["gearbox"]
+    # A file with only the keys the fit writes names none (no header line, no warning).
+    plain = tmp_path / "plain.toml"
+    plain.write_text(PAPER_CONFIG.read_text())
+    result = runner.invoke(
+        app, ["fit", "drop-test", str(data), "-o", str(out), "--config", str(plain), "--json"]
+    )
+    assert result.exit_code == 0, result.output
+    assert "not carried over" not in out.read_text()
+    messages = [w["message"] for w in json.loads(result.stdout)["warnings"]]
+    assert not any("not carried over" in m for m in messages)

@@ -531,6 +531,29 @@ def _parse_user(text: str) -> Any:
         raise ExportError(f"cannot keep the --config file's text ({exc})") from None
 
 
+def keys_not_carried(user_text: str, ecd: FittedEcd) -> list[str]:
+    """The user's ``[damper]`` and ``[gearbox]`` keys that the fitted file does not hold.
+
+    :func:`fitted_config_text` replaces both tables with the fitted ECD at its input shaft
+    (N = 1); keys of the high-speed damper or the gearbox that the fit does not give (a
+    roll-off or heating law, inertias, backlash, an efficiency, ...) have no meaning at
+    that 1:1 shaft and are not carried over. They are named, dotted (``damper.rolloff``),
+    in file order, so that the user is told rather than finding them gone. A file tomlkit
+    cannot read names none (``fitted_config_text`` reports it).
+    """
+    try:
+        document = _parse_user(user_text)
+    except ExportError:
+        return []
+    out: list[str] = []
+    for name, entries in ecd_sections(ecd):
+        kept = {entry.key for entry in entries}
+        table = document.get(name)
+        if isinstance(table, dict):  # tomlkit's Table is a dict
+            out.extend(f"{name}.{key}" for key in table if key not in kept)
+    return out
+
+
 def fitted_config_text(
     user_text: str, ecd: FittedEcd, provenance: Sequence[str], config_name: str
 ) -> str:
@@ -545,6 +568,7 @@ def fitted_config_text(
     import tomlkit
 
     document = _parse_user(user_text)
+    dropped = keys_not_carried(user_text, ecd)
     sections = dict(ecd_sections(ecd))
     for name in ("damper", "gearbox"):
         _replace_table(document, name, sections[name])
@@ -554,6 +578,15 @@ def fitted_config_text(
         *provenance,
         f"from {config_name}: every section as written there, except [damper] and [gearbox],",
         "which hold the fitted ECD at its input shaft (1:1, docs/characterize.md)",
+        *(
+            [
+                "not carried over from [damper] and [gearbox] (the fitted 1:1 ECD does not",
+                "separate the damper's shaft from the gearbox; enter them again referred to",
+                f"the input shaft where they apply): {', '.join(dropped)}",
+            ]
+            if dropped
+            else []
+        ),
         "",
         *ecd.comments,
     ]

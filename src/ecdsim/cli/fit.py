@@ -126,6 +126,23 @@ def _export(output: Path, build: Callable[[], str]) -> str:
         fail([f"-o {output}: {exc}"])
 
 
+def _not_carried(output: Path, config: Path, ecd: FittedEcd) -> list[FitWarning]:
+    """A warning naming the --config's damper and gearbox keys the -o file does not hold."""
+    from ecdsim.characterize.export import keys_not_carried
+    from ecdsim.characterize.findings import FitWarning
+
+    dropped = keys_not_carried(_config_text(config), ecd)
+    if not dropped:
+        return []
+    return [
+        FitWarning(
+            "keys_not_carried",
+            f"{output}: {', '.join(dropped)} of {config.name} not carried over: the "
+            "fitted ECD is one 1:1 body at the input shaft; enter them again referred to it",
+        )
+    ]
+
+
 def _config_text(path: Path) -> str:
     """The --config file's text, to be written back with the fit (read once loaded)."""
     try:
@@ -356,6 +373,7 @@ def drop_test(
             text = _export(
                 output, lambda: fitted_config_text(_config_text(config), ecd, lines, config.name)
             )
+            warnings.extend(_not_carried(output, config, ecd))
         else:
             text = fitted_parameter_text(
                 ecd,
@@ -568,6 +586,7 @@ def trace(
         text = _export(
             output, lambda: fitted_config_text(_config_text(config), ecd, source, config.name)
         )
+        warnings.extend(_not_carried(output, config, ecd))
 
     def plotter(folder: Path) -> list[Path]:
         from ecdsim.characterize.plots import write_trace_plots
