@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import base64
 import math
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
@@ -241,6 +242,18 @@ def chunk_sums(
     if scores is None:
         scores = np.stack([t.scores(values[:, j]) for j, t in enumerate(tolerances)]).T
     labels = bin_labels(scores, bins)
+    if compiled_sums(values.shape[0] * len(plan.temperatures)):
+        from ecdsim.montecarlo import _streaming_numba
+
+        times = np.stack(
+            [np.asarray(columns[output_column("deployment_time_s", t)]) for t in plan.temperatures]
+        ).astype(float, copy=False)
+        return [
+            Sums(*part)
+            for part in _streaming_numba.chunk_sums(
+                np.ascontiguousarray(values.T), np.ascontiguousarray(labels.T), times, bins
+            )
+        ]
     shared = _Inputs.of(values, labels, bins)
     return [
         sums_of(
@@ -252,6 +265,19 @@ def chunk_sums(
         )
         for t in plan.temperatures
     ]
+
+
+def compiled_sums(cases: int) -> bool:
+    """True if a chunk of ``cases`` samples x temperatures takes its sums from the
+    compiled kernel (:mod:`ecdsim.montecarlo._streaming_numba`): numba installed, not
+    switched off (``ECDSIM_NUMBA=0``), and a chunk as large as the exact solution's
+    compiled kernel asks for (its import is paid once per run, with that kernel's).
+    """
+    from ecdsim.solvers.exact_kernel import NUMBA_MIN_CASES, numba_available
+
+    if os.environ.get("ECDSIM_NUMBA", "").strip() == "0":
+        return False
+    return cases >= NUMBA_MIN_CASES and numba_available()
 
 
 def encode(sums: Sequence[Sums]) -> str:
