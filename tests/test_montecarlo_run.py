@@ -657,7 +657,7 @@ def test_forked_workers_write_the_same_files_and_summary(tmp_path: Path) -> None
     run(plan, tmp_path / "one", InProcess())
     one = json.dumps(stats.summarize(plan, tmp_path / "one"))
     report = run(plan, tmp_path / "forked", InProcess(threads=2, fork=True))
-    assert "2 forked worker processes" in report.executor
+    assert "2 forked workers" in report.executor
     assert report.chunks_computed == plan.chunks
     assert not list((tmp_path / "forked" / "chunks").glob(".*.tmp"))
     names = [p.name for p in chunk_files(tmp_path / "one")]

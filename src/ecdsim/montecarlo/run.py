@@ -535,7 +535,8 @@ class InProcess:
     def describe(self) -> str:
         """One line for the console."""
         if self.threads > 1 and self.fork and fork_available():
-            return f"in process, {self.threads} forked worker processes"
+            below = FORK_MIN_CHUNKS + 1
+            return f"in process, {self.threads} forked workers (threads below {below} chunks)"
         if self.threads > 1:
             return f"in process, {self.threads} threads"
         return "in process"
