@@ -223,8 +223,12 @@ def test_compiled_chunk_sums_are_numpys_to_rounding() -> None:
     finite = times.copy()
     finite[~np.isfinite(finite)] = 40.0
     rows = np.stack([finite, times, times, np.full(n, np.inf)])
+    # Scores whose labels are ``labels`` (the middle of each bin; bin_labels of the
+    # sampled scores is tested in test_bin_labels_floor_the_scaled_score_and_cap_the_top).
+    scores = (labels.astype(float) + 0.5) / bins
+    assert np.array_equal(bin_labels(scores, bins), labels)
     found = _streaming_numba.chunk_sums(
-        np.ascontiguousarray(values.T), np.ascontiguousarray(labels.T), rows, bins
+        np.ascontiguousarray(values.T), np.ascontiguousarray(scores.T), list(rows), bins
     )
     for row, part in zip(rows, found, strict=True):
         got = streaming.Sums(*part)

@@ -414,7 +414,7 @@ def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
         for (c, t, m), n in sorted(counts.items(), key=lambda item: repr(item[0]))
     ]
     ordered = {name: columns[name] for name in plan.columns}
-    sums = streaming.encode(streaming.chunk_sums(plan, ordered, scores))
+    sums = streaming.encode(streaming.chunk_sums(plan, ordered, scores, values))
     moments = streaming.encode_moments(streaming.chunk_moments(plan, ordered))
     return ChunkResult(
         index, ordered, warnings, __version__, sensitivity_sums=sums, moments=moments
