@@ -58,7 +58,7 @@ LARGE_RUN_CPUS = 2
 IN_PROCESS_THREADS = 2
 # Chunks computed in forked worker processes (InProcess.fork) only from this many after the
 # first: forking and starting the workers costs some tens of milliseconds, which a few
-# chunks of 65,536 samples (about 40 ms of CPU each) do not repay.
+# chunks of 65,536 samples (about 30 ms of CPU each) do not repay.
 FORK_MIN_CHUNKS = 8
 # Chunk writes waiting in line for the writer thread (run): a slow fsync then holds up
 # the computation only when this many are behind. Each holds its chunk's columns
@@ -483,9 +483,10 @@ class InProcess:
     With ``fork`` (Linux), a run of at least FORK_MIN_CHUNKS further chunks computes them
     in ``threads`` child processes forked from this one instead (:func:`_forked_results`):
     the Python parts of a chunk (building the system, ``predict``, the sums) then run on
-    every core at once instead of taking turns on the GIL, and each child writes its own
-    chunk files. The children inherit this process's state, imports and loaded kernel
-    (no start-up of their own), so the chunks are the same function of (plan, index).
+    every core at once instead of taking turns on the GIL, and each child encodes its own
+    chunk files (this process's writer line syncs and installs them). The children
+    inherit this process's state, imports and loaded kernels (no start-up of their own),
+    so the chunks are the same function of (plan, index).
 
     Attributes
     ----------
@@ -614,7 +615,8 @@ def _forked_results(
     result is handed out), so no child inherits a lock held by one. At most
     2 * ``workers`` chunks are handed out ahead, which bounds the memory; results are
     yielded in the order given. On an error or Ctrl-C here, the chunks not started are
-    cancelled and those under way finish (each writes its whole file or none).
+    cancelled and those under way finish (each stages its whole file or none; run()
+    removes what is staged and not installed).
     """
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
