@@ -640,3 +640,128 @@ def test_queued_writes_stop_at_a_failed_one(
         run(plan, out, InProcess(threads=1))
     assert ahead.is_set()
     assert [p.name for p in chunk_files(out)] == ["chunk-000000.parquet", "chunk-000001.parquet"]
+
+
+def test_forked_workers_write_the_same_files_and_summary(tmp_path: Path) -> None:
+    """InProcess(fork=True): the chunks after the first in forked processes, which stage
+    their files for this process to install and fill the summary's columns in shared
+    memory; the files, the kept columns and the summary are those of one thread."""
+    import importlib
+
+    from ecdsim.montecarlo import stats, store
+
+    run_module = importlib.import_module("ecdsim.montecarlo.run")
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    plan = build_plan(load_config(config), 3_000, chunk_size=256)
+    assert plan.chunks - 1 >= run_module.FORK_MIN_CHUNKS  # the forked path is taken
+    run(plan, tmp_path / "one", InProcess())
+    one = json.dumps(stats.summarize(plan, tmp_path / "one"))
+    report = run(plan, tmp_path / "forked", InProcess(threads=2, fork=True))
+    assert "2 forked workers" in report.executor
+    assert report.chunks_computed == plan.chunks
+    assert not list((tmp_path / "forked" / "chunks").glob(".*.tmp"))
+    names = [p.name for p in chunk_files(tmp_path / "one")]
+    assert names == [p.name for p in chunk_files(tmp_path / "forked")]
+    for name in names:
+        a = pq.read_table(tmp_path / "one" / "chunks" / name)
+        assert a.equals(pq.read_table(tmp_path / "forked" / "chunks" / name)), name
+    # Every chunk's summary columns were kept (the first by this process, the others by
+    # the workers in shared memory): the same values as the files hold.
+    kept = store.take_kept(tmp_path / "forked", plan.identity_sha256)
+    assert kept is not None
+    columns, filled = kept
+    assert filled == set(range(plan.chunks))
+    reader = ChunkReader(tmp_path / "forked", plan.chunks)
+    for name in plan.summary_columns:
+        np.testing.assert_array_equal(columns[name], reader.column(name), err_msg=name)
+    # Kept again as the run left them: the summary from them, and then (forgotten) from
+    # the files, are both the one-thread summary.
+    store.start_keeping(tmp_path / "forked", plan.identity_sha256, plan.samples)
+    for k in range(plan.chunks):
+        start, stop = plan.bounds(k)
+        part = {name: values[start:stop] for name, values in columns.items()}
+        store.keep(tmp_path / "forked", plan.identity_sha256, k, start, part)
+    assert json.dumps(stats.summarize(plan, tmp_path / "forked")) == one
+    assert json.dumps(stats.summarize(plan, tmp_path / "forked")) == one  # from the files
+
+
+def test_forked_workers_stop_at_a_failed_install(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A staged file that cannot be installed (ENOSPC) stops the line as in process: the
+    chunks before it are on disk, none after it, and no staged file is left behind."""
+    import errno
+
+    from ecdsim.montecarlo import store
+
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    plan = build_plan(load_config(config), 3_000, chunk_size=256)
+    original = store.install_chunk
+
+    def install(out: Path, index: int, temporary: Path) -> Path:
+        if index == 3:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        installed: Path = original(out, index, temporary)
+        return installed
+
+    monkeypatch.setattr(store, "install_chunk", install)
+    out = tmp_path / "run"
+    with pytest.raises(OSError, match="No space left"):
+        run(plan, out, InProcess(threads=2, fork=True))
+    assert [p.name for p in chunk_files(out)] == [f"chunk-00000{k}.parquet" for k in range(3)]
+    assert not list((out / "chunks").glob(".*.tmp"))
+
+
+def test_a_forked_workers_error_reaches_the_run(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """An exception in a forked worker is raised by run() (the same type and message);
+    the files on disk are whole chunks from the first on, and none is left staged."""
+    import importlib
+
+    run_module = importlib.import_module("ecdsim.montecarlo.run")
+    original = run_module.evaluate_chunk
+
+    def evaluate(plan: Any, index: int) -> Any:
+        if index == 5:
+            raise ValueError("chunk 5 cannot be evaluated")
+        return original(plan, index)
+
+    monkeypatch.setattr(run_module, "evaluate_chunk", evaluate)  # inherited by the fork
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    plan = build_plan(load_config(config), 3_000, chunk_size=256)
+    out = tmp_path / "run"
+    with pytest.raises(ValueError, match="chunk 5 cannot be evaluated"):
+        run(plan, out, InProcess(threads=2, fork=True))
+    names = [p.name for p in chunk_files(out)]
+    assert names == [f"chunk-00000{k}.parquet" for k in range(len(names))]
+    assert len(names) <= 5
+    assert not list((out / "chunks").glob(".*.tmp"))
+
+
+def test_an_interrupted_forked_run_resumes_to_the_same_files(tmp_path: Path) -> None:
+    """Ctrl-C in the parent (here from its progress callback) stops a forked run: the
+    chunks under way finish, nothing staged is left, and a resume completes the study
+    with the files an uninterrupted run writes."""
+    from ecdsim.montecarlo import RunInterrupted
+
+    config = write_config(tmp_path, QUANTITIES, SETTINGS)
+    plan = build_plan(load_config(config), 3_000, chunk_size=256)
+    run(plan, tmp_path / "reference", InProcess())
+
+    def progress(done: int, total: int) -> None:
+        if done >= 4 * 256:
+            raise KeyboardInterrupt
+
+    out = tmp_path / "interrupted"
+    with pytest.raises(RunInterrupted) as stopped:
+        run(plan, out, InProcess(threads=2, fork=True), progress=progress)
+    assert 4 <= stopped.value.chunks_done < plan.chunks
+    assert not list((out / "chunks").glob(".*.tmp"))
+    report = run(plan, out, InProcess(threads=2, fork=True), resume=True)
+    assert report.chunks_reused == stopped.value.chunks_done
+    names = [p.name for p in chunk_files(tmp_path / "reference")]
+    assert names == [p.name for p in chunk_files(out)]
+    for name in names:
+        a = pq.read_table(tmp_path / "reference" / "chunks" / name)
+        assert a.equals(pq.read_table(out / "chunks" / name)), name

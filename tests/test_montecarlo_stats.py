@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -259,11 +260,14 @@ def _samples(kind: str, n: int, rng: np.random.Generator) -> np.ndarray:
         "one value",
     ],
 )
+@pytest.mark.parametrize("compiled", [False, True], ids=["numpy", "numba"])
 def test_order_statistics_are_those_of_a_full_sort(
-    kind: str, monkeypatch: pytest.MonkeyPatch
+    kind: str, compiled: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """The bracketed selection returns exactly np.sort(x)[ranks] (NaN last), whatever the
-    data; sizes shrunk so that 200,000 samples take the bracketed path."""
+    data, by the NumPy passes and by the compiled one; sizes shrunk so that 200,000
+    samples take the bracketed path."""
+    monkeypatch.setattr(intervals, "compiled_selection", lambda: compiled)
     monkeypatch.setattr(intervals, "BRACKET_MIN_SIZE", 10_000)
     monkeypatch.setattr(intervals, "BRACKET_SUBSAMPLE", 40_000)
     n = 200_000
@@ -280,18 +284,30 @@ def test_order_statistics_are_those_of_a_full_sort(
     assert np.array_equal(np.sort(copy), np.sort(x), equal_nan=True)  # reordered at most
 
 
+@pytest.mark.parametrize("compiled", [False, True], ids=["numpy", "numba"])
 def test_order_statistics_answer_from_the_brackets_on_a_smooth_sample(
-    monkeypatch: pytest.MonkeyPatch,
+    compiled: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """On continuous data the brackets hold their ranks (no fall-back to a partition of
-    the whole sample), and the answer is still the full sort's."""
+    the whole sample), and the answer is still the full sort's; the compiled pass is
+    taken when asked for (the brackets of continuous data are disjoint)."""
+    monkeypatch.setattr(intervals, "compiled_selection", lambda: compiled)
     monkeypatch.setattr(intervals, "BRACKET_MIN_SIZE", 10_000)
     monkeypatch.setattr(intervals, "BRACKET_SUBSAMPLE", 40_000)
+    calls: list[int] = []
+    original = intervals._bracketed_compiled
+
+    def spy(x: Any, edges: Any, members: Any) -> Any:
+        calls.append(len(edges))
+        return original(x, edges, members)
+
+    monkeypatch.setattr(intervals, "_bracketed_compiled", spy)
     x = _samples("continuous, stalled tail", 200_000, np.random.default_rng(3))
     ranks = [1999, 9999, 99_999, 189_999, 193_000]
     found = intervals._bracketed(x, ranks)
     assert found is not None
     assert [found[r] for r in ranks] == list(np.sort(x)[ranks])
+    assert bool(calls) == compiled
 
 
 def test_order_statistics_refuse_ranks_outside_the_sample() -> None:

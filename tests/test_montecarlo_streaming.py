@@ -22,7 +22,7 @@ from scipy.stats import qmc
 from ecdsim._types import FloatArray
 from ecdsim.config import load_config
 from ecdsim.montecarlo import build_plan, run, sampling, store, streaming
-from ecdsim.montecarlo.run import evaluate_chunk
+from ecdsim.montecarlo.run import chunk_scores_and_values, evaluate_chunk
 from ecdsim.montecarlo.stats import (
     bin_count,
     bin_labels,
@@ -208,3 +208,55 @@ def test_summary_of_files_without_moments_is_the_same(tmp_path: Path) -> None:
         table.replace_schema_metadata({store.METADATA_KEY: json.dumps(tag).encode()}), path
     )
     assert summarize(plan, out) == with_moments
+
+
+def test_compiled_chunk_sums_are_numpys_to_rounding() -> None:
+    """The numba kernel's sums against NumPy's (streaming.sums_of), per temperature: all
+    samples arriving, a stalled few (a temperature of its own set), none arriving. The
+    counts and bin sums add in the same order (equal); the means and centred sums add in
+    another order: relative 1e-12 holds n * eps = 4e-13 for these 4,000 samples."""
+    from ecdsim.montecarlo import _streaming_numba
+
+    rng = np.random.default_rng(11)
+    d, bins, n = 6, 16, 4000
+    values, labels, times = random_chunk(rng, n, d, bins)
+    finite = times.copy()
+    finite[~np.isfinite(finite)] = 40.0
+    rows = np.stack([finite, times, times, np.full(n, np.inf)])
+    # Scores whose labels are ``labels`` (the middle of each bin; bin_labels of the
+    # sampled scores is tested in test_bin_labels_floor_the_scaled_score_and_cap_the_top).
+    scores = (labels.astype(float) + 0.5) / bins
+    assert np.array_equal(bin_labels(scores, bins), labels)
+    found = _streaming_numba.chunk_sums(
+        np.ascontiguousarray(values.T), np.ascontiguousarray(scores.T), list(rows), bins
+    )
+    for row, part in zip(rows, found, strict=True):
+        got = streaming.Sums(*part)
+        expected = streaming.sums_of(values, labels, row, bins)
+        assert got.count == expected.count
+        assert np.array_equal(got.bin_counts, expected.bin_counts)
+        assert np.array_equal(got.bin_sums, expected.bin_sums)
+        for name in ("mean_x", "mean_y", "gram", "cross", "total"):
+            np.testing.assert_allclose(
+                getattr(got, name), getattr(expected, name), rtol=1e-12, atol=0.0, err_msg=name
+            )
+
+
+def test_large_chunks_take_the_compiled_sums(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The kernel is chosen by the chunk's size (as the exact solution's) and switched off
+    by ECDSIM_NUMBA=0; both give the summary's sums of a real chunk to rounding."""
+    plan = build_plan(load_config(EXAMPLE), 20_000, "exact", chunk_size=20_000)
+    scores, _ = chunk_scores_and_values(plan, 0)
+    columns = evaluate_chunk(plan, 0).columns
+    assert streaming.compiled_sums(20_000 * len(plan.temperatures))
+    compiled = streaming.chunk_sums(plan, columns, scores)
+    monkeypatch.setenv("ECDSIM_NUMBA", "0")
+    assert not streaming.compiled_sums(20_000 * len(plan.temperatures))
+    plain = streaming.chunk_sums(plan, columns, scores)
+    for a, b in zip(compiled, plain, strict=True):
+        assert a.count == b.count
+        assert np.array_equal(a.bin_sums, b.bin_sums)
+        # Two orders of the same 20,000-term sums: n * eps = 4e-12 relative, and the
+        # off-diagonal Gram terms of independent inputs cancel to ~1/sqrt(n) of their
+        # terms' size, which costs up to two digits more: 1e-11 would be tight, so 1e-10.
+        np.testing.assert_allclose(a.to_vector(), b.to_vector(), rtol=1e-10, atol=0.0)

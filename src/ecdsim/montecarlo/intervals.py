@@ -8,6 +8,8 @@ these, so they live below both (definitions in docs/montecarlo.md).
 from __future__ import annotations
 
 import math
+import os
+import sys
 from collections.abc import Sequence
 
 import numpy as np
@@ -136,6 +138,8 @@ def _bracketed(x: FloatArray, wanted: list[int]) -> dict[int, float] | None:
         )
         for low, high, _ in spans
     ]
+    if compiled_selection() and _disjoint(edges):
+        return _bracketed_compiled(x, edges, [members for _, _, members in spans])
     selected = np.zeros(n, dtype=bool)
     inside = np.empty(n, dtype=bool)
     inside_high = np.empty(n, dtype=bool)
@@ -159,4 +163,45 @@ def _bracketed(x: FloatArray, wanted: list[int]) -> dict[int, float] | None:
         part = np.sort(candidates[(candidates >= lowest) & (candidates <= highest)])
         for rank in members:
             found[rank] = float(part[rank - below])
+    return found
+
+
+def compiled_selection() -> bool:
+    """True if the brackets are selected by the compiled pass: numba is loaded already
+    (by the run's compiled exact kernel) and not switched off (ECDSIM_NUMBA=0)."""
+    return "numba" in sys.modules and os.environ.get("ECDSIM_NUMBA", "").strip() != "0"
+
+
+def _disjoint(edges: list[tuple[float, float]]) -> bool:
+    """True if the brackets are increasing and do not overlap (their edges are values of
+    a sorted subsample, so ties can make neighbours share an edge)."""
+    return all(high < low for (_, high), (low, _) in zip(edges, edges[1:], strict=False))
+
+
+def _bracketed_compiled(
+    x: FloatArray, edges: list[tuple[float, float]], members: list[list[int]]
+) -> dict[int, float] | None:
+    """The brackets' selection in one compiled pass (ecdsim.montecarlo._brackets_numba):
+    the same values and counts as the NumPy passes of :func:`_bracketed`, and the same
+    checks; used where numba is loaded already (its import is not worth it here)."""
+    from ecdsim.montecarlo._brackets_numba import select
+
+    n = x.size
+    lows = np.array([low for low, _ in edges])
+    highs = np.array([high for _, high in edges])
+    candidates = np.empty(n // 8)
+    spans = np.empty(n // 8, dtype=np.int64)
+    below = np.empty(len(edges), dtype=np.int64)
+    found_count = int(select(np.ascontiguousarray(x), lows, highs, candidates, spans, below))
+    if found_count < 0:
+        return None
+    candidates, spans = candidates[:found_count], spans[:found_count]
+    found: dict[int, float] = {}
+    for s, ranks in enumerate(members):
+        part = np.sort(candidates[spans == s])
+        first = int(below[s])
+        if not (first <= ranks[0] and ranks[-1] < first + part.size):
+            return None
+        for rank in ranks:
+            found[rank] = float(part[rank - first])
     return found

@@ -56,6 +56,10 @@ LARGE_RUN_CPUS = 2
 # sessions), run() of 40 chunks took 2.7 to 3.4 s on two threads against 3.3 to 4.0 s on
 # one (three alternating pairs); on a quiet machine the gain is larger.
 IN_PROCESS_THREADS = 2
+# Chunks computed in forked worker processes (InProcess.fork) only from this many after the
+# first: forking and starting the workers costs some tens of milliseconds, which a few
+# chunks of 65,536 samples (about 30 ms of CPU each) do not repay.
+FORK_MIN_CHUNKS = 8
 # Chunk writes waiting in line for the writer thread (run): a slow fsync then holds up
 # the computation only when this many are behind. Each holds its chunk's columns
 # (about 9 MB at 65,536 samples).
@@ -302,6 +306,10 @@ class ChunkResult:
         (:mod:`ecdsim.montecarlo.streaming`), stored in the chunk file's metadata
     moments : the chunk's moments of the times and speeds, encoded
         (:func:`ecdsim.montecarlo.streaming.encode_moments`), stored beside them
+    kept : True if a forked worker also copied the summary's columns into the study's
+        shared whole columns (:func:`ecdsim.montecarlo.store.share_kept`)
+    staged : the chunk file a forked worker wrote under a temporary name, for :func:`run`
+        to sync and install (:func:`ecdsim.montecarlo.store.install_chunk`); "" if none
     """
 
     index: int
@@ -311,6 +319,8 @@ class ChunkResult:
     written: bool = False
     sensitivity_sums: str = ""
     moments: str = ""
+    kept: bool = False
+    staged: str = ""
 
 
 def chunk_values(plan: Plan, index: int) -> np.ndarray[Any, np.dtype[np.float64]]:
@@ -404,7 +414,7 @@ def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
         for (c, t, m), n in sorted(counts.items(), key=lambda item: repr(item[0]))
     ]
     ordered = {name: columns[name] for name in plan.columns}
-    sums = streaming.encode(streaming.chunk_sums(plan, ordered, scores))
+    sums = streaming.encode(streaming.chunk_sums(plan, ordered, scores, values))
     moments = streaming.encode_moments(streaming.chunk_moments(plan, ordered))
     return ChunkResult(
         index, ordered, warnings, __version__, sensitivity_sums=sums, moments=moments
@@ -412,13 +422,22 @@ def evaluate_chunk(plan: Plan, index: int) -> ChunkResult:
 
 
 def write_result(plan: Plan, out: Path, result: ChunkResult) -> Path:
-    """Write an evaluated chunk as its Parquet file, atomically, stamped with the plan."""
-    extra = {
+    """Write an evaluated chunk as its Parquet file, atomically, stamped with the plan
+    (or install the file a forked worker staged for it)."""
+    if result.staged:
+        return store.install_chunk(out, result.index, Path(result.staged))
+    return store.write_chunk(
+        out, result.index, result.columns, plan.identity_sha256, _extra(result)
+    )
+
+
+def _extra(result: ChunkResult) -> dict[str, Any]:
+    """What a chunk file's metadata holds besides the study's identity and its index."""
+    return {
         "warnings": result.warnings,
         streaming.KEY: result.sensitivity_sums,
         streaming.MOMENTS_KEY: result.moments,
     }
-    return store.write_chunk(out, result.index, result.columns, plan.identity_sha256, extra)
 
 
 def evaluate_and_write(plan: Plan, index: int, out: Path) -> ChunkResult:
@@ -461,12 +480,22 @@ class InProcess:
     The first chunk is computed alone, so that lazy imports and the compiled kernel's
     loading happen on one thread.
 
+    With ``fork`` (Linux), a run of at least FORK_MIN_CHUNKS further chunks computes them
+    in ``threads`` child processes forked from this one instead (:func:`_forked_results`):
+    the Python parts of a chunk (building the system, ``predict``, the sums) then run on
+    every core at once instead of taking turns on the GIL, and each child encodes its own
+    chunk files (this process's writer line syncs and installs them). The children
+    inherit this process's state, imports and loaded kernels (no start-up of their own),
+    so the chunks are the same function of (plan, index).
+
     Attributes
     ----------
     threads : chunks computed at once (1: one after another on the calling thread)
+    fork : compute the chunks after the first in forked processes where possible
     """
 
     threads: int = 1
+    fork: bool = False
 
     def results(
         self, plan: Plan, indices: Sequence[int], out: Path
@@ -476,6 +505,12 @@ class InProcess:
         first = next(pending, None)
         if first is None:
             return
+        if self.threads > 1 and self.fork and fork_available():
+            rest = list(pending)
+            if len(rest) >= FORK_MIN_CHUNKS:
+                yield from _forked_results(plan, first, rest, out, self.threads)
+                return
+            pending = iter(rest)
         yield evaluate_chunk(plan, first)
         if self.threads <= 1:
             for index in pending:
@@ -500,9 +535,115 @@ class InProcess:
 
     def describe(self) -> str:
         """One line for the console."""
+        if self.threads > 1 and self.fork and fork_available():
+            below = FORK_MIN_CHUNKS + 1
+            return f"in process, {self.threads} forked workers (threads below {below} chunks)"
         if self.threads > 1:
             return f"in process, {self.threads} threads"
         return "in process"
+
+
+def fork_available() -> bool:
+    """True where chunk workers can be forked: Linux (fork is unsafe on macOS with its
+    system libraries' threads, and absent on Windows)."""
+    return sys.platform.startswith("linux") and hasattr(os, "fork")
+
+
+# A forked child's study: set by _start_forked in the child (inherited, never pickled).
+_FORKED: tuple[Plan, Path, dict[str, np.ndarray[Any, Any]]] | None = None
+
+
+def _start_forked(
+    plan: Plan, out: Path, shared: dict[str, np.ndarray[Any, Any]], parent: int
+) -> None:
+    """Initialise a forked chunk worker: its study, and no reaction to Ctrl-C.
+
+    A terminal's Ctrl-C reaches the whole process group; the parent alone acts on it
+    (it stops handing out chunks and waits for the ones under way, _forked_results).
+    """
+    import signal
+
+    global _FORKED
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # Die with the parent: a parent killed outright (SIGKILL, the OOM killer) cannot shut
+    # the pool down, and its workers would wait for tasks forever (each holds the task
+    # pipe open for the others). PR_SET_PDEATHSIG = 1 (linux/prctl.h); then check that
+    # the parent did not die before it was set.
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:
+        os._exit(1)
+    _FORKED = (plan, out, shared)
+
+
+def _forked_chunk(index: int) -> ChunkResult:
+    """A forked worker's task: evaluate chunk ``index``, write its file under a temporary
+    name, copy the summary's columns into the shared whole columns; return the rest.
+
+    The file is synced and renamed by the parent's writer line (:func:`run`), in chunk
+    order, so that the worker goes on computing while the disk catches up, and the
+    chunks on disk after a failed write are exactly those before it, as in process.
+    """
+    assert _FORKED is not None, "not a forked chunk worker"
+    plan, out, shared = _FORKED
+    result = evaluate_chunk(plan, index)
+    start, stop = plan.bounds(index)
+    for name, whole in shared.items():
+        whole[start:stop] = result.columns[name]
+    staged = store.stage_chunk(out, index, result.columns, plan.identity_sha256, _extra(result))
+    return ChunkResult(
+        index,
+        {},
+        result.warnings,
+        result.version,
+        sensitivity_sums=result.sensitivity_sums,
+        moments=result.moments,
+        kept=bool(shared),
+        staged=str(staged),
+    )
+
+
+def _forked_results(
+    plan: Plan, first: int, rest: Sequence[int], out: Path, workers: int
+) -> Generator[ChunkResult, None, None]:
+    """Chunk ``first`` here, then ``rest`` in ``workers`` forked processes, in order.
+
+    The first chunk is computed before the fork, so that the lazy imports and the
+    compiled kernel's loading happen once and every child inherits them; the whole
+    summary columns are allocated in shared memory before it too (store.share_kept),
+    and no thread of this module runs yet (the chunk writer starts when the first
+    result is handed out), so no child inherits a lock held by one. At most
+    2 * ``workers`` chunks are handed out ahead, which bounds the memory; results are
+    yielded in the order given. On an error or Ctrl-C here, the chunks not started are
+    cancelled and those under way finish (each stages its whole file or none; run()
+    removes what is staged and not installed).
+    """
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    head = evaluate_chunk(plan, first)
+    _steady_heap()  # inherited by the children (glibc's settings are process memory)
+    summary = {name: head.columns[name] for name in plan.summary_columns}
+    shared = store.share_kept(out, plan.identity_sha256, summary)
+    pool = ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("fork"),
+        initializer=_start_forked,
+        initargs=(plan, out.resolve(), shared, os.getpid()),
+    )
+    pending = iter(rest)
+    window: deque[Future[ChunkResult]] = deque()
+    try:
+        window.extend(pool.submit(_forked_chunk, k) for k in islice(pending, 2 * workers))
+        yield head
+        while window:
+            result = window.popleft().result()
+            following = next(pending, None)
+            if following is not None:
+                window.append(pool.submit(_forked_chunk, following))
+            yield result
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)  # chunks under way finish
 
 
 @dataclass(frozen=True)
@@ -688,8 +829,11 @@ _M_MMAP_THRESHOLD = -3
 
 
 def in_process() -> InProcess:
-    """The in-process executor on min(IN_PROCESS_THREADS, CPUs) threads."""
-    return InProcess(threads=max(1, min(IN_PROCESS_THREADS, os.cpu_count() or 1)))
+    """The in-process executor on min(IN_PROCESS_THREADS, CPUs) threads, or as many
+    forked worker processes where fork is available (InProcess)."""
+    return InProcess(
+        threads=max(1, min(IN_PROCESS_THREADS, os.cpu_count() or 1)), fork=fork_available()
+    )
 
 
 @dataclass(frozen=True)
@@ -810,6 +954,8 @@ def run(
 
     def write_in_line(result: ChunkResult) -> None:
         if stopped.is_set():
+            if result.staged:
+                Path(result.staged).unlink(missing_ok=True)
             raise _WriteSkipped
         try:
             write_result(plan, out, result)
@@ -824,6 +970,8 @@ def run(
         if result.columns:
             kept = {name: result.columns[name] for name in plan.summary_columns}
             store.keep(out, identity, result.index, plan.bounds(result.index)[0], kept)
+        elif result.kept:
+            store.mark_kept(out, identity, result.index, plan.bounds(result.index)[0])
         computed += 1
         start, stop = plan.bounds(result.index)
         samples_done += stop - start
@@ -866,6 +1014,7 @@ def run(
         raise RunInterrupted(out, on_disk, plan.chunks) from None
     except Exception:
         stop_writing()
+        store.remove_partial_files(out)  # files staged by forked workers, not installed
         if created and computed == 0:
             # Nothing was computed (no scheduler, a missing package, a bad first chunk):
             # leave no half-started run behind, so that the same command can be repeated.

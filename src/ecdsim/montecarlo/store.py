@@ -17,6 +17,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+import mmap
+import os
+import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -105,8 +108,27 @@ def write_chunk(
     extra: Mapping[str, Any],
 ) -> Path:
     """Write one chunk's columns as Parquet, atomically, tagged with the study's identity."""
+    table = _chunk_table(index, columns, identity_sha256, extra)
+
+    def write(stream: IO[bytes]) -> None:
+        # pyarrow writes the temporary file itself, by its path (its own file, no Python
+        # in between), page by page; write_with then fsyncs the file through ``stream``
+        # (the same inode) and renames it. Building the file in an Arrow buffer and
+        # writing that in one call cost 3 to 4 times the system time (11 to 12 ms against
+        # 2.6 to 3.5 ms per 65,536-sample chunk, measured alternately).
+        _write_table(table, stream.name)
+
+    return atomic.write_with(chunk_path(out, index), write)
+
+
+def _chunk_table(
+    index: int,
+    columns: Mapping[str, np.ndarray[Any, Any]],
+    identity_sha256: str,
+    extra: Mapping[str, Any],
+) -> Any:
+    """The chunk's Arrow table, its metadata tagged with the study's identity."""
     pa = require("pyarrow")
-    pq = require("pyarrow.parquet")
     arrays = [_arrow_array(pa, values) for values in columns.values()]
     # Declared non-nullable (no column holds a null): Parquet then writes no definition
     # levels, which halved the encoding of a 65,536-sample chunk (10.3 to 4.9 ms of CPU);
@@ -119,23 +141,70 @@ def write_chunk(
         sort_keys=True,
         allow_nan=False,
     )
-    table = table.replace_schema_metadata({METADATA_KEY: tag.encode("utf-8")})
+    return table.replace_schema_metadata({METADATA_KEY: tag.encode("utf-8")})
+
+
+def _write_table(table: Any, path: str) -> None:
+    """Write a chunk's table as Parquet to ``path`` (pyarrow opens the file itself)."""
+    pa = require("pyarrow")
+    pq = require("pyarrow.parquet")
     # Sampled floats do not repeat and do not compress: dictionary encoding cost 4x the
     # write time, snappy 1.5x and per-page min/max statistics 2.5x, for files 3 % smaller
     # at best.
+    with pa.OSFile(path, "wb") as sink:
+        pq.write_table(
+            table, sink, use_dictionary=False, compression="none", write_statistics=False
+        )
 
-    def write(stream: IO[bytes]) -> None:
-        # pyarrow writes the temporary file itself, by its path (its own file, no Python
-        # in between), page by page; write_with then fsyncs the file through ``stream``
-        # (the same inode) and renames it. Building the file in an Arrow buffer and
-        # writing that in one call cost 3 to 4 times the system time (11 to 12 ms against
-        # 2.6 to 3.5 ms per 65,536-sample chunk, measured alternately).
-        with pa.OSFile(stream.name, "wb") as sink:
-            pq.write_table(
-                table, sink, use_dictionary=False, compression="none", write_statistics=False
-            )
 
-    return atomic.write_with(chunk_path(out, index), write)
+def stage_chunk(
+    out: Path,
+    index: int,
+    columns: Mapping[str, np.ndarray[Any, Any]],
+    identity_sha256: str,
+    extra: Mapping[str, Any],
+) -> Path:
+    """Write chunk ``index``'s Parquet file under a temporary name beside its final one
+    (``.chunk-NNNNNN.parquet.*.tmp``, as ecdsim.atomic names them, which
+    :func:`remove_partial_files` sweeps up), not yet synced; :func:`install_chunk` syncs
+    and renames it. :func:`write_chunk` in two halves, the same file and the same steps
+    as ecdsim.atomic.write_with, so that a forked worker (ecdsim.montecarlo.run) encodes
+    the file while the parent's writer line syncs and installs the files in chunk order.
+    """
+    table = _chunk_table(index, columns, identity_sha256, extra)
+    final = chunk_path(out, index)
+    final.parent.mkdir(parents=True, exist_ok=True)
+    handle, name = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent)
+    temporary = Path(name)
+    try:
+        os.close(handle)
+        os.chmod(temporary, 0o666 & ~_umask())  # as a plain open() makes it (ecdsim.atomic)
+        _write_table(table, str(temporary))
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+    return temporary
+
+
+def install_chunk(out: Path, index: int, temporary: Path) -> Path:
+    """Sync a staged chunk file (:func:`stage_chunk`) and rename it to its final name:
+    the chunk appears whole or not at all. The temporary file is removed on failure."""
+    final = chunk_path(out, index)
+    try:
+        with open(temporary, "rb+") as stream:
+            os.fsync(stream.fileno())
+        os.replace(temporary, final)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+    return final
+
+
+def _umask() -> int:
+    """The process's umask (os.umask can only be read by setting it, as ecdsim.atomic)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def _arrow_array(pa: Any, values: np.ndarray[Any, Any]) -> Any:
@@ -234,6 +303,36 @@ def keep(
             whole = kept.columns[name] = np.empty(kept.samples, dtype=np.asarray(values).dtype)
         whole[start : start + len(values)] = values
     kept.filled[index] = start
+
+
+def share_kept(
+    out: Path, identity_sha256: str, like: Mapping[str, np.ndarray[Any, Any]]
+) -> dict[str, np.ndarray[Any, Any]]:
+    """Allocate the study's whole columns (those of ``like``, with their dtypes) in
+    anonymous shared memory, and return them; empty if this study is not being kept.
+
+    Child processes forked after this call write their chunks' values into the same
+    pages (``mmap(-1, ...)`` maps MAP_SHARED), so that the summary reads them here
+    without a copy through a pipe; :func:`mark_kept` then records the chunk as filled.
+    Columns already allocated are kept as they are.
+    """
+    kept = _kept_for(out, identity_sha256)
+    if kept is None:
+        return {}
+    for name, values in like.items():
+        if name not in kept.columns:
+            dtype = np.asarray(values).dtype
+            buffer = mmap.mmap(-1, max(1, kept.samples * dtype.itemsize))
+            kept.columns[name] = np.frombuffer(buffer, dtype=dtype, count=kept.samples)
+    return {name: kept.columns[name] for name in like}
+
+
+def mark_kept(out: Path, identity_sha256: str, index: int, start: int) -> None:
+    """Record that chunk ``index`` (first sample ``start``) was filled into the shared
+    columns by a child process (:func:`share_kept`)."""
+    kept = _kept_for(out, identity_sha256)
+    if kept is not None:
+        kept.filled[index] = start
 
 
 def take_kept(

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import base64
 import math
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
@@ -225,33 +226,52 @@ class Study(Protocol):
 
 
 def chunk_sums(
-    plan: Study, columns: Mapping[str, np.ndarray[Any, Any]], scores: FloatArray | None = None
+    plan: Study,
+    columns: Mapping[str, np.ndarray[Any, Any]],
+    scores: FloatArray | None = None,
+    values: FloatArray | None = None,
 ) -> list[Sums]:
     """One chunk's sums at each of the plan's temperatures, from its columns.
 
     ``scores`` (n, d) are the inputs' uniform scores as sampled (after the copula); the
     bins are cut on them. Without them (a chunk read back from its file) they are the
     inputs' distribution functions at the values, the same numbers up to rounding (a
-    sample within 1e-16 of a bin edge could change bin).
+    sample within 1e-16 of a bin edge could change bin). ``values`` (n, d) are the
+    inputs' columns side by side, if the caller has them so (no copy is then made).
     """
     tolerances = plan.tolerances.tolerances
     bins = bin_count(plan.samples)
-    # (n, d) views of (d, n) stacks: each input's column contiguous, as the chunk's own.
-    values = np.stack([np.asarray(columns[t.key], dtype=float) for t in tolerances]).T
+    if values is None:
+        # (n, d) views of (d, n) stacks: each input's column contiguous, as the chunk's own.
+        values = np.stack([np.asarray(columns[t.key], dtype=float) for t in tolerances]).T
     if scores is None:
         scores = np.stack([t.scores(values[:, j]) for j, t in enumerate(tolerances)]).T
-    labels = bin_labels(scores, bins)
-    shared = _Inputs.of(values, labels, bins)
-    return [
-        sums_of(
-            values,
-            labels,
-            np.asarray(columns[output_column("deployment_time_s", t)], dtype=float),
-            bins,
-            shared,
-        )
+    times = [
+        np.asarray(columns[output_column("deployment_time_s", t)], dtype=float)
         for t in plan.temperatures
     ]
+    if compiled_sums(values.shape[0] * len(plan.temperatures)):
+        from ecdsim.montecarlo import _streaming_numba
+
+        rows = np.ascontiguousarray(values.T, dtype=float)
+        found = _streaming_numba.chunk_sums(rows, np.ascontiguousarray(scores.T), times, bins)
+        return [Sums(*part) for part in found]
+    labels = bin_labels(scores, bins)
+    shared = _Inputs.of(values, labels, bins)
+    return [sums_of(values, labels, row, bins, shared) for row in times]
+
+
+def compiled_sums(cases: int) -> bool:
+    """True if a chunk of ``cases`` samples x temperatures takes its sums from the
+    compiled kernel (:mod:`ecdsim.montecarlo._streaming_numba`): numba installed, not
+    switched off (``ECDSIM_NUMBA=0``), and a chunk as large as the exact solution's
+    compiled kernel asks for (its import is paid once per run, with that kernel's).
+    """
+    from ecdsim.solvers.exact_kernel import NUMBA_MIN_CASES, numba_available
+
+    if os.environ.get("ECDSIM_NUMBA", "").strip() == "0":
+        return False
+    return cases >= NUMBA_MIN_CASES and numba_available()
 
 
 def encode(sums: Sequence[Sums]) -> str:
