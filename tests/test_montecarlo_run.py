@@ -9,6 +9,7 @@ seconds that worker processes take. One CLI test runs real worker processes.
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import shlex
@@ -38,7 +39,12 @@ from ecdsim.montecarlo import (
     run,
 )
 from ecdsim.montecarlo import apply as apply_values
-from ecdsim.montecarlo.run import LARGE_RUN_SAMPLES, chunk_values, output_column
+from ecdsim.montecarlo.run import (
+    LARGE_RUN_SAMPLES,
+    chunk_values,
+    fork_available,
+    output_column,
+)
 from ecdsim.montecarlo.store import MANIFEST, SUMMARY, ChunkReader, chunk_path, read_manifest
 from tests import hand
 from tests.conftest import SavedFigures
@@ -371,9 +377,16 @@ def test_executor_choice(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(os, "cpu_count", lambda: 4)
     assert choose_executor(LARGE_RUN_SAMPLES, None, None) == DaskExecutor(workers=4)
     assert isinstance(choose_executor(LARGE_RUN_SAMPLES - 1, None, None), InProcess)
-    # Issue 6: the cluster is the default for large runs on any multi-core machine.
+    # Issue 6: the cluster is the default for large runs on a multi-core machine, unless
+    # the in-process path already forks one worker per CPU (Linux, 2 CPUs): no scheduler
+    # and client then share the CPUs with the workers.
     monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    expected = InProcess(threads=2, fork=True) if fork_available() else DaskExecutor(workers=2)
+    assert choose_executor(LARGE_RUN_SAMPLES, None, None) == expected
+    run_module = importlib.import_module("ecdsim.montecarlo.run")  # the package's run is a function
+    monkeypatch.setattr(run_module, "fork_available", lambda: False)
     assert choose_executor(LARGE_RUN_SAMPLES, None, None) == DaskExecutor(workers=2)
+    monkeypatch.setattr(run_module, "fork_available", lambda: True)
     monkeypatch.setattr(os, "cpu_count", lambda: 1)
     assert isinstance(choose_executor(LARGE_RUN_SAMPLES, None, None), InProcess)
     monkeypatch.setattr(os, "cpu_count", lambda: 3)
