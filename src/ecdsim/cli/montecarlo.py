@@ -57,7 +57,8 @@ def montecarlo(
         typer.Option(
             "--workers",
             help="Dask LocalCluster workers; 0 runs in this process. Default: in process, "
-            "or one worker per CPU for 2,000,000 samples and more on 2 or more CPUs.",
+            "or one worker per CPU for 2,000,000 samples and more on 3 or more CPUs (on "
+            "Linux; 2 or more elsewhere).",
             metavar="N",
         ),
     ] = None,
