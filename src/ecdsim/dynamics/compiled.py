@@ -136,12 +136,72 @@ def _law(kind: int, a: float, b: float, w: float, f: float) -> tuple[float, ...]
     if not den > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     scale = 2.0 * a
-    torque = scale * w * p / den
-    d_speed = scale * p * (p * p - w * w) / den / den
-    d_factor = scale * w * (w * w - p * p) / den / den * b
-    power = scale * w * w / den * b
-    common = 2.0 * scale * w * p / den / den
+    # One division: the terms over den and den^2 as products with its reciprocals.
+    inv = 1.0 / den
+    inv2 = inv * inv
+    torque = scale * w * p * inv
+    d_speed = scale * p * (p * p - w * w) * inv2
+    d_factor = scale * w * (w * w - p * p) * inv2 * b
+    power = scale * w * w * inv * b
+    common = 2.0 * scale * w * p * inv2
     return torque, d_speed, d_factor, power, common * p * b, -common * w * b * b
+
+
+@_inline
+def _torque(
+    kind: int, heating: bool, a: float, b: float, w: float, f: float
+) -> tuple[float, float]:
+    """:func:`_law`'s torque and (with heating; else 0) power over f: what a stage needs."""
+    if kind == 0:
+        return a * f * w, a * w * w if heating else 0.0
+    p = b * f
+    den = w * w + p * p
+    if not den > 0.0:
+        return 0.0, 0.0
+    scale = 2.0 * a
+    if not heating:
+        return scale * w * p / den, 0.0
+    inv = 1.0 / den
+    return scale * w * p * inv, scale * w * w * inv * b
+
+
+# expm1(z) = z P(z), P(z) = sum_k z^k / (k + 1)! for |z| <= 2^-5: eight terms leave out
+# z^8 / 9! < 3e-18 relative (below the rounding of a double).
+_SMALL = 2.0**-5
+_P1, _P2, _P3, _P4, _P5, _P6, _P7 = (1.0 / math.factorial(k + 1) for k in range(1, 8))
+
+
+@_inline
+def _expm1_small(z: float) -> float:
+    """``e^z - 1`` for ``|z| <= 2^-5`` (the Taylor polynomial above, in Estrin's order).
+
+    glibc's expm1 takes several times exp's latency, and a stage of a heating segment
+    waits on it; this polynomial is as accurate (a few units in the last place) and short.
+    """
+    z2 = z * z
+    low = (1.0 + _P1 * z) + z2 * (_P2 + _P3 * z)
+    high = (_P4 + _P5 * z) + z2 * (_P6 + _P7 * z)
+    return z * (low + (z2 * z2) * high)
+
+
+@_inline
+def _thermal(par: Params, s: float) -> tuple[float, float, float]:
+    """``f_a e^{cs}``, ``s E(-cs) = (1 - e^{-cs}) / c`` and ``e^{cs}`` at the log state s.
+
+    The damping factor (thermal.damping_factor_from_log) and the cooling's temperature
+    rise over f_a (thermal.temperature_from_factor_log) from one ``e^{cs} - 1`` where
+    ``|cs| <= 2^-5`` (a damper within about 8 K of its ambient for Eq. 1's c = -0.004/K;
+    ``1 + (e^{cs} - 1)`` then keeps every digit of e^{cs}); an exp and an expm1 beyond.
+    A stage of a heating segment needs both, so this spares it two library calls.
+    """
+    c = par[_COEF]
+    z = c * s
+    if abs(z) <= _SMALL:
+        grown = _expm1_small(z)
+        e = 1.0 + grown
+        return par[_FA] * e, s if z == 0.0 else grown / (c * e), e
+    e = math.exp(z)
+    return par[_FA] * e, s * _exprel(-z), e
 
 
 @_inline
@@ -183,9 +243,12 @@ def _slope(par: Params, kind: int, heating: bool, two_node: bool, y: State) -> S
     """``dy/dt`` of :meth:`Model.rhs` for one segment."""
     u = y[1]
     s = y[2]
-    f = _factor(par, heating, s)
+    f = par[_FIXED]
+    drop = 0.0
+    if heating:
+        f, drop, _ = _thermal(par, s)
     shaft = par[_N] * u
-    eddy, _, _, power, _, _ = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)
+    eddy, power = _torque(kind, heating, par[_LAW_A], par[_LAW_B], shaft, f)
     torque = par[_N] * (eddy + par[_BG] * shaft)
     if par[_DF] > 0.0:
         # The Stribeck excess is a speed-dependent torque like the damping (Model.rhs).
@@ -198,12 +261,14 @@ def _slope(par: Params, kind: int, heating: bool, two_node: bool, y: State) -> S
     rate = 0.0
     if heating:
         r = par[_R]
-        loss = s * _exprel(-par[_COEF] * s) / r if math.isfinite(r) else 0.0
-        heat = (power - loss) / par[_C]
+        # 1 / R, 1 / J and 1 / C: constants of the segment, hoisted out of the step loop,
+        # leaving the stage's chain of dependent operations without their divisions.
+        loss = drop * (1.0 / r) if math.isfinite(r) else 0.0
+        heat = (power - loss) * (1.0 / par[_C])
         if two_node:
             back, rate = _housing_rates(par, s, y[4])
             heat += back
-    return u, accel / par[_J], heat, torque * u, rate
+    return u, accel * (1.0 / par[_J]), heat, torque * u, rate
 
 
 @_jit
@@ -238,7 +303,10 @@ def _jacobian(par: Params, kind: int, heating: bool, y: State | FloatArray) -> t
     s = y[2]
     n = par[_N]
     c = par[_COEF]
-    f = _factor(par, heating, s)
+    f = par[_FIXED]
+    e = 1.0
+    if heating:
+        f, _, e = _thermal(par, s)
     shaft = n * u
     eddy, d_speed, d_factor, _, by_speed, by_factor = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)
     torque = n * (eddy + par[_BG] * shaft)
@@ -255,7 +323,7 @@ def _jacobian(par: Params, kind: int, heating: bool, y: State | FloatArray) -> t
         slope = c * f * by_factor
         r = par[_R]
         if math.isfinite(r):
-            slope = slope - math.exp(-c * s) / r
+            slope = slope - 1.0 / e / r  # e^{-cs} / R
         j22 = slope / par[_C]
     j = par[_J]
     stiffness = par[_K]
