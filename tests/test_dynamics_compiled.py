@@ -151,7 +151,6 @@ def test_an_error_in_a_worker_thread_reaches_the_caller() -> None:
         compiled._in_threads(run, compiled._split(10, 2))
 
 
-
 @pytest.mark.parametrize("coefficient", [-0.004, 0.0039, -1.0])
 def test_the_thermal_terms_match_numpy_on_both_sides_of_the_polynomial(
     coefficient: float,
