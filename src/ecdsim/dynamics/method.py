@@ -222,7 +222,7 @@ def _findings(
         # A batch can hold thousands of these findings: the values are formatted as Python
         # floats (NumPy scalars format several times slower; the same text).
         off = np.flatnonzero(np.abs(mismatch) > 0.01)
-        for i, becd, eq1, ratio in zip(
+        for case, becd, eq1, ratio in zip(
             off.tolist(),
             kloss_becd[off].tolist(),
             eq1_becd[off].tolist(),
@@ -235,13 +235,13 @@ def _findings(
                     f"at low speed the roll-off law gives BECD {becd:.4g} N*m*s/rad, "
                     f"{ratio:+.1f} % from Eq. 1's {eq1:.4g}: with roll-off "
                     "the damper's temperature law is resistivity_coefficient's, not Eq. 1's",
-                    i,
+                    case,
                 )
             )
         shaft = np.ravel(result.max_speed * n)
         peaks = np.ravel(np.broadcast_to(peak, shape))
         beyond = np.flatnonzero(shaft > peaks)
-        for i, reached, limit in zip(
+        for case, reached, limit in zip(
             beyond.tolist(), shaft[beyond].tolist(), peaks[beyond].tolist(), strict=True
         ):
             out.append(
@@ -249,7 +249,7 @@ def _findings(
                     "rolloff_beyond_peak",
                     f"the damper reached {reached:.4g} rad/s, beyond its peak-torque speed "
                     f"{limit:.4g} rad/s, where its torque falls with speed",
-                    i,
+                    case,
                 )
             )
     return out
