@@ -61,12 +61,12 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 # Compiled on first call, cached on disk; typed as the identity for mypy.
 # NumPy's error model: a division by zero gives inf or NaN as in the NumPy integrator.
 _jit = cast("Callable[[_F], _F]", numba.njit(cache=True, nogil=True, error_model="numpy"))
-# The step and what it evaluates per stage (right-hand side, Jacobian, damping and
-# thermal laws), inlined into their callers in numba's IR, so that the step loop is one
-# function in which the segment's constants (1/J, ...) are hoisted and the stage values
-# stay in registers (about 25 % faster than leaving it to LLVM). The tuple arithmetic
-# (_plus, _scaled, _solve) is left to LLVM's inliner: inlining its ~25 call sites in the
-# IR as well made the first compilation about five times longer, for no speed.
+# The step, its stages, the right-hand side and the Jacobian, inlined into their callers
+# in numba's IR, so that the step loop is one function in which the segment's constants
+# (1/J, ...) are hoisted and the stage values stay in registers (about 25 % faster than
+# leaving them to LLVM). The small helpers (tuple arithmetic, the laws, events) are
+# plain functions that LLVM inlines as it sees fit: inlining them in the IR as well gave
+# no speed and made the first compilation (cold cache) 20 s instead of 9 s.
 _inline = cast(
     "Callable[[_F], _F]",
     numba.njit(cache=True, nogil=True, error_model="numpy", inline="always"),
@@ -117,7 +117,7 @@ _as_tuple = cast("Callable[[FloatArray, int], tuple[float, ...]]", _to_fixed_tup
 Solve = tuple[float, float, float, float, float, float, float, float, float, float, float]
 
 
-@_inline
+@_jit
 def _exprel(z: float) -> float:
     """``(e^z - 1) / z``, 1 at z = 0 (thermal._exprel)."""
     if z == 0.0:
@@ -125,7 +125,7 @@ def _exprel(z: float) -> float:
     return math.expm1(z) / z
 
 
-@_inline
+@_jit
 def _law(kind: int, a: float, b: float, w: float, f: float) -> tuple[float, ...]:
     """Torque, d/dw, d/df, power over f, and its d/dw and d/df at shaft speed w, factor f.
 
@@ -150,7 +150,7 @@ def _law(kind: int, a: float, b: float, w: float, f: float) -> tuple[float, ...]
     return torque, d_speed, d_factor, power, common * p * b, -common * w * b * b
 
 
-@_inline
+@_jit
 def _torque(
     kind: int, heating: bool, a: float, b: float, w: float, f: float
 ) -> tuple[float, float]:
@@ -174,7 +174,7 @@ _SMALL = 2.0**-5
 _P1, _P2, _P3, _P4, _P5, _P6, _P7 = (1.0 / math.factorial(k + 1) for k in range(1, 8))
 
 
-@_inline
+@_jit
 def _expm1_small(z: float) -> float:
     """``e^z - 1`` for ``|z| <= 2^-5`` (the Taylor polynomial above, in Estrin's order).
 
@@ -187,7 +187,7 @@ def _expm1_small(z: float) -> float:
     return z * (low + (z2 * z2) * high)
 
 
-@_inline
+@_jit
 def _thermal(par: Params, s: float) -> tuple[float, float, float]:
     """``f_a e^{cs}``, ``s E(-cs) = (1 - e^{-cs}) / c`` and ``e^{cs}`` at the log state s.
 
@@ -207,7 +207,7 @@ def _thermal(par: Params, s: float) -> tuple[float, float, float]:
     return par[_FA] * e, s * _exprel(-z), e
 
 
-@_inline
+@_jit
 def _factor(par: Params, heating: bool, s: float) -> float:
     """The damping law's temperature factor ``f_a exp(c s)`` (thermal.damping_factor_from_log).
 
@@ -218,7 +218,7 @@ def _factor(par: Params, heating: bool, s: float) -> float:
     return factor
 
 
-@_inline
+@_jit
 def _stribeck(par: Params, u: float) -> tuple[float, float]:
     """The Stribeck friction above Coulomb and its slope (equations.stribeck_excess)."""
     ratio = u / par[_WS]
@@ -226,7 +226,7 @@ def _stribeck(par: Params, u: float) -> tuple[float, float]:
     return g, -2.0 * ratio / par[_WS] * g
 
 
-@_inline
+@_jit
 def _housing_rates(par: Params, s: float, housing: float) -> tuple[float, float]:
     """The two-node terms of :meth:`Model.rhs`: the housing's return into ds/dt
     (thermal.housing_return) and the housing rate (thermal.housing_rate)."""
@@ -284,7 +284,7 @@ def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArr
         out[r] = slope[r]
 
 
-@_inline
+@_jit
 def _housing_jacobian(par: Params, y: State) -> tuple[float, float, float, float]:
     """The two-node entries of :meth:`Model.jacobian` and :meth:`Model.housing_jacobian`:
     (the housing's addition to j22, j24, j42, j44)."""
@@ -555,7 +555,7 @@ def _interior_peak(ya: float, fa: float, yb: float, fb: float, h: float, stop: f
     return -math.inf
 
 
-@_inline
+@_jit
 def _indicator(par: Params, kind: int, heating: bool, x: float, u: float, s: float) -> float:
     """The power-flow indicator times the segment's flow (:meth:`Model.indicator`)."""
     f = _factor(par, heating, s)
@@ -569,7 +569,7 @@ def _indicator(par: Params, kind: int, heating: bool, x: float, u: float, s: flo
     return value
 
 
-@_inline
+@_jit
 def _switch(
     par: Params, kind: int, heating: bool, y: State, f: State, y1: State, fb: State, h: float
 ) -> float:
@@ -603,7 +603,7 @@ def _grow(buffer: FloatArray, count: int) -> FloatArray:
     return bigger
 
 
-@_inline
+@_jit
 def _store(steps: FloatArray, count: int, t: float, y: State, f: State, rows: int) -> None:
     """Column ``count`` of the recorded steps: time, state and slope."""
     steps[0, count] = t
