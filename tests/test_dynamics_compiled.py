@@ -152,6 +152,34 @@ def test_an_error_in_a_worker_thread_reaches_the_caller() -> None:
         compiled._in_threads(run, compiled._split(10, 2))
 
 
+@pytest.mark.parametrize("coefficient", [-0.004, 0.0039, -1.0])
+def test_the_thermal_terms_match_numpy_on_both_sides_of_the_polynomial(
+    coefficient: float,
+) -> None:
+    # compiled._thermal gives f_a e^{cs}, s E(-cs) = (1 - e^{-cs}) / c and e^{cs} from a
+    # Taylor polynomial of e^{cs} - 1 where |cs| <= 2^-5 and from exp and expm1 beyond:
+    # against NumPy's exp and expm1 (independent implementations) over z = cs across that
+    # edge, at 0 and at a subnormal-small z. Eq. 1's c (-0.004/K), the Kloss law's alpha
+    # and a steep c of -1/K.
+    par = np.zeros(compiled._COLUMNS)
+    par[compiled._FA] = 1.3
+    par[compiled._COEF] = coefficient
+    edge = 2.0**-5
+    z = np.concatenate(
+        [np.linspace(-3 * edge, 3 * edge, 601), [edge, -edge, np.nextafter(edge, 1.0), 0.0]]
+    )
+    z = np.append(z, 1e-300)
+    for s in z / coefficient:
+        factor, drop, grown = compiled._thermal(par, s)
+        cs = coefficient * s
+        exact_drop = s if cs == 0.0 else s * (np.expm1(-cs) / -cs)
+        # 2e-15 (about 9 units in the last place): the polynomial and the library each
+        # round to a few units, and E(-cs) and the products add a rounding each.
+        assert factor == pytest.approx(1.3 * np.exp(cs), rel=2e-15, abs=0.0)
+        assert grown == pytest.approx(np.exp(cs), rel=2e-15, abs=0.0)
+        assert drop == pytest.approx(exact_drop, rel=2e-15, abs=0.0)
+
+
 def _rolloff_heating_params(rtol: float = 1e-9) -> DynamicParameters:
     return DynamicParameters(
         load_inertia=np.array([0.5, 5.0]),

@@ -10,8 +10,11 @@ them against each other and against a tight scipy reference.
 
 Why: NumPy's per-operation overhead (about a microsecond) dominates a step on a small
 batch, so one nonlinear deployment cost more than a scipy ``solve_ivp`` call; compiled,
-a step of a 4-state segment costs a few hundred nanoseconds, and a batch is a loop over
-its segments with no array traffic.
+a step of a 4-state segment costs one to two hundred nanoseconds, and a batch is a loop
+over its segments with no array traffic. Inside a segment the state, the stages and the
+parameters are tuples of floats held in registers, and the step's helpers are inlined:
+numba counts references to every array passed to a function with atomic operations,
+which had cost a third of a step.
 
 numba is an optional extra (``pip install ecdsim[numba]``). This module imports it at
 once, so it is itself imported only when a nonlinear segment is integrated
@@ -34,6 +37,7 @@ from typing import Any, TypeVar, cast
 
 import numba
 import numpy as np
+from numba.np.unsafe.ndarray import to_fixed_tuple as _to_fixed_tuple
 from numpy.typing import NDArray
 
 from ecdsim._types import FloatArray
@@ -57,6 +61,16 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 # Compiled on first call, cached on disk; typed as the identity for mypy.
 # NumPy's error model: a division by zero gives inf or NaN as in the NumPy integrator.
 _jit = cast("Callable[[_F], _F]", numba.njit(cache=True, nogil=True, error_model="numpy"))
+# The step, its stages, the right-hand side and the Jacobian, inlined into their callers
+# in numba's IR, so that the step loop is one function in which the segment's constants
+# (1/J, ...) are hoisted and the stage values stay in registers (about 25 % faster than
+# leaving them to LLVM). The small helpers (tuple arithmetic, the laws, events) are
+# plain functions that LLVM inlines as it sees fit: inlining them in the IR as well gave
+# no speed and made the first compilation (cold cache) 20 s instead of 9 s.
+_inline = cast(
+    "Callable[[_F], _F]",
+    numba.njit(cache=True, nogil=True, error_model="numpy", inline="always"),
+)
 
 # Columns of the per-segment parameter table handed to the kernels.
 _J, _K, _DRIVE, _N, _BG, _C, _R, _FA, _COEF, _LAW_A, _LAW_B, _FIXED, _DF, _WS = range(14)
@@ -74,15 +88,33 @@ _COLUMNS = 25
 LINEAR_LAW, KLOSS_LAW = 0, 1
 _REACH, _ZERO, _CAP, _REST = linear.REACH, linear.ZERO, linear.CAP, linear.REST
 
-# RODAS4's A and GAMMA * C as module-level arrays: numba freezes globals into the compiled
-# code as constants (about 8 % faster than passing them as arguments).
-_A_TABLE = np.zeros((6, 5))
-_GC_TABLE = np.zeros((6, 5))
-for _i in range(6):
-    for _j, _a in enumerate(A[_i]):
-        _A_TABLE[_i, _j] = _a
-    for _j, _g in enumerate(_GC[_i]):
-        _GC_TABLE[_i, _j] = _g
+# RODAS4's coefficients as module-level floats: numba freezes globals into the compiled
+# code as constants. Named one-based as in Hairer and Wanner: stage i's state is
+# y + sum_j A_ij K_j, its coupling GAMMA sum_j C_ij K_j (_GC_ij).
+_A21 = A[1][0]
+_A31, _A32 = A[2]
+_A41, _A42, _A43 = A[3]
+_A51, _A52, _A53, _A54 = A[4]
+_GC21 = _GC[1][0]
+_GC31, _GC32 = _GC[2]
+_GC41, _GC42, _GC43 = _GC[3]
+_GC51, _GC52, _GC53, _GC54 = _GC[4]
+_GC61, _GC62, _GC63, _GC64, _GC65 = _GC[5]
+# Stiffly accurate: stage 6's weights are stage 5's plus 1 on K5 (y1 = stage 6's + K6).
+assert A[5] == (*A[4], 1.0)
+
+# A segment's state in the kernels: (x, u, s, E, housing rise), the last 0 and unused
+# with one node. A tuple of floats, not an array: it lives in registers, and neither it
+# nor the parameter tuple (:func:`_segment`) takes the atomic reference counting that
+# numba applies to every array passed to a function (which cost a third of a step).
+State = tuple[float, float, float, float, float]
+# A segment's row of the parameter table: a tuple of _COLUMNS floats in the step loop
+# (the helpers accept the array row too, as the tests call them).
+Params = tuple[float, ...] | FloatArray
+# numba's array -> tuple of a length known when compiling (typed here for mypy).
+_as_tuple = cast("Callable[[FloatArray, int], tuple[float, ...]]", _to_fixed_tuple)
+# A step's linear solve: hg, inv1, inv2, p10, p12, p21, hg j31, hg j32, inv4, p42, p24.
+Solve = tuple[float, float, float, float, float, float, float, float, float, float, float]
 
 
 @_jit
@@ -107,16 +139,76 @@ def _law(kind: int, a: float, b: float, w: float, f: float) -> tuple[float, ...]
     if not den > 0.0:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     scale = 2.0 * a
-    torque = scale * w * p / den
-    d_speed = scale * p * (p * p - w * w) / den / den
-    d_factor = scale * w * (w * w - p * p) / den / den * b
-    power = scale * w * w / den * b
-    common = 2.0 * scale * w * p / den / den
+    # One division: the terms over den and den^2 as products with its reciprocals.
+    inv = 1.0 / den
+    inv2 = inv * inv
+    torque = scale * w * p * inv
+    d_speed = scale * p * (p * p - w * w) * inv2
+    d_factor = scale * w * (w * w - p * p) * inv2 * b
+    power = scale * w * w * inv * b
+    common = 2.0 * scale * w * p * inv2
     return torque, d_speed, d_factor, power, common * p * b, -common * w * b * b
 
 
 @_jit
-def _factor(par: FloatArray, heating: bool, s: float) -> float:
+def _torque(
+    kind: int, heating: bool, a: float, b: float, w: float, f: float
+) -> tuple[float, float]:
+    """:func:`_law`'s torque and (with heating; else 0) power over f: what a stage needs."""
+    if kind == 0:
+        return a * f * w, a * w * w if heating else 0.0
+    p = b * f
+    den = w * w + p * p
+    if not den > 0.0:
+        return 0.0, 0.0
+    scale = 2.0 * a
+    if not heating:
+        return scale * w * p / den, 0.0
+    inv = 1.0 / den
+    return scale * w * p * inv, scale * w * w * inv * b
+
+
+# expm1(z) = z P(z), P(z) = sum_k z^k / (k + 1)! for |z| <= 2^-5: eight terms leave out
+# z^8 / 9! < 3e-18 relative (below the rounding of a double).
+_SMALL = 2.0**-5
+_P1, _P2, _P3, _P4, _P5, _P6, _P7 = (1.0 / math.factorial(k + 1) for k in range(1, 8))
+
+
+@_jit
+def _expm1_small(z: float) -> float:
+    """``e^z - 1`` for ``|z| <= 2^-5`` (the Taylor polynomial above, in Estrin's order).
+
+    glibc's expm1 takes several times exp's latency, and a stage of a heating segment
+    waits on it; this polynomial is as accurate (a few units in the last place) and short.
+    """
+    z2 = z * z
+    low = (1.0 + _P1 * z) + z2 * (_P2 + _P3 * z)
+    high = (_P4 + _P5 * z) + z2 * (_P6 + _P7 * z)
+    return z * (low + (z2 * z2) * high)
+
+
+@_jit
+def _thermal(par: Params, s: float) -> tuple[float, float, float]:
+    """``f_a e^{cs}``, ``s E(-cs) = (1 - e^{-cs}) / c`` and ``e^{cs}`` at the log state s.
+
+    The damping factor (thermal.damping_factor_from_log) and the cooling's temperature
+    rise over f_a (thermal.temperature_from_factor_log) from one ``e^{cs} - 1`` where
+    ``|cs| <= 2^-5`` (a damper within about 8 K of its ambient for Eq. 1's c = -0.004/K;
+    ``1 + (e^{cs} - 1)`` then keeps every digit of e^{cs}); an exp and an expm1 beyond.
+    A stage of a heating segment needs both, so this spares it two library calls.
+    """
+    c = par[_COEF]
+    z = c * s
+    if abs(z) <= _SMALL:
+        grown = _expm1_small(z)
+        e = 1.0 + grown
+        return par[_FA] * e, s if z == 0.0 else grown / (c * e), e
+    e = math.exp(z)
+    return par[_FA] * e, s * _exprel(-z), e
+
+
+@_jit
+def _factor(par: Params, heating: bool, s: float) -> float:
     """The damping law's temperature factor ``f_a exp(c s)`` (thermal.damping_factor_from_log).
 
     Without heating s keeps its start value in every stage (its stages are exactly 0), so
@@ -127,7 +219,7 @@ def _factor(par: FloatArray, heating: bool, s: float) -> float:
 
 
 @_jit
-def _stribeck(par: FloatArray, u: float) -> tuple[float, float]:
+def _stribeck(par: Params, u: float) -> tuple[float, float]:
     """The Stribeck friction above Coulomb and its slope (equations.stribeck_excess)."""
     ratio = u / par[_WS]
     g = par[_DF] * math.exp(-ratio * ratio)
@@ -135,15 +227,32 @@ def _stribeck(par: FloatArray, u: float) -> tuple[float, float]:
 
 
 @_jit
-def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArray) -> None:
+def _housing_rates(par: Params, s: float, housing: float) -> tuple[float, float]:
+    """The two-node terms of :meth:`Model.rhs`: the housing's return into ds/dt
+    (thermal.housing_return) and the housing rate (thermal.housing_rate)."""
+    c = par[_COEF]
+    f = par[_FA] * math.exp(c * s)
+    r = par[_R]
+    den = r * f * par[_C]
+    back = housing / den if math.isfinite(r) and math.isfinite(den) and den > 0.0 else 0.0
+    rise = par[_FA] * s * _exprel(c * s)
+    gain = (rise - housing) / r if math.isfinite(r) else 0.0
+    loss = housing / par[_RHE] if math.isfinite(par[_RHE]) else 0.0
+    return back, (gain - loss) / par[_CH]
+
+
+@_inline
+def _slope(par: Params, kind: int, heating: bool, two_node: bool, y: State) -> State:
     """``dy/dt`` of :meth:`Model.rhs` for one segment."""
     u = y[1]
     s = y[2]
-    f = _factor(par, heating, s)
+    f = par[_FIXED]
+    drop = 0.0
+    if heating:
+        f, drop, _ = _thermal(par, s)
     shaft = par[_N] * u
-    eddy, _, _, power, _, _ = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)
+    eddy, power = _torque(kind, heating, par[_LAW_A], par[_LAW_B], shaft, f)
     torque = par[_N] * (eddy + par[_BG] * shaft)
-    out[0] = u
     if par[_DF] > 0.0:
         # The Stribeck excess is a speed-dependent torque like the damping (Model.rhs).
         torque = torque + _stribeck(par, u)[0]
@@ -151,38 +260,32 @@ def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArr
     if par[_GW] != 0.0:
         # The gravity torque against the motion (Model.gravity).
         accel = accel - par[_GD] * par[_GW] * math.sin(par[_GP] + par[_GD] * y[0])
-    out[1] = accel / par[_J]
+    heat = 0.0
+    rate = 0.0
     if heating:
         r = par[_R]
-        loss = s * _exprel(-par[_COEF] * s) / r if math.isfinite(r) else 0.0
-        out[2] = (power - loss) / par[_C]
-    else:
-        out[2] = 0.0
-    out[3] = torque * u
-    if y.shape[0] > 4:
-        _housing_rhs(par, y, out)
+        # 1 / R, 1 / J and 1 / C: constants of the segment, hoisted out of the step loop,
+        # leaving the stage's chain of dependent operations without their divisions.
+        loss = drop * (1.0 / r) if math.isfinite(r) else 0.0
+        heat = (power - loss) * (1.0 / par[_C])
+        if two_node:
+            back, rate = _housing_rates(par, s, y[4])
+            heat += back
+    return u, accel * (1.0 / par[_J]), heat, torque * u, rate
 
 
 @_jit
-def _housing_rhs(par: FloatArray, y: FloatArray, out: FloatArray) -> None:
-    """The two-node terms of :meth:`Model.rhs`: the housing's return into ``out[2]``
-    (thermal.housing_return) and the housing rate ``out[4]`` (thermal.housing_rate)."""
-    s = y[2]
-    h = y[4]
-    c = par[_COEF]
-    f = par[_FA] * math.exp(c * s)
-    r = par[_R]
-    den = r * f * par[_C]
-    if math.isfinite(r) and math.isfinite(den) and den > 0.0:
-        out[2] += h / den
-    rise = par[_FA] * s * _exprel(c * s)
-    gain = (rise - h) / r if math.isfinite(r) else 0.0
-    loss = h / par[_RHE] if math.isfinite(par[_RHE]) else 0.0
-    out[4] = (gain - loss) / par[_CH]
+def _rhs(par: FloatArray, kind: int, heating: bool, y: FloatArray, out: FloatArray) -> None:
+    """:func:`_slope` on arrays (``y`` and ``out`` of 4 rows, or 5 with two-node heating)."""
+    two_node = y.shape[0] > 4
+    state = (y[0], y[1], y[2], y[3], y[4] if two_node else 0.0)
+    slope = _slope(_as_tuple(par, _COLUMNS), kind, heating, two_node, state)
+    for r in range(y.shape[0]):
+        out[r] = slope[r]
 
 
 @_jit
-def _housing_jacobian(par: FloatArray, y: FloatArray) -> tuple[float, float, float, float]:
+def _housing_jacobian(par: Params, y: State) -> tuple[float, float, float, float]:
     """The two-node entries of :meth:`Model.jacobian` and :meth:`Model.housing_jacobian`:
     (the housing's addition to j22, j24, j42, j44)."""
     c = par[_COEF]
@@ -196,14 +299,17 @@ def _housing_jacobian(par: FloatArray, y: FloatArray) -> tuple[float, float, flo
     return -c * (y[4] * inverse), inverse, j42, j44
 
 
-@_jit
-def _jacobian(par: FloatArray, kind: int, heating: bool, y: FloatArray) -> tuple[float, ...]:
+@_inline
+def _jacobian(par: Params, kind: int, heating: bool, y: State | FloatArray) -> tuple[float, ...]:
     """Nonzero entries (j10, j11, j12, j21, j22, j31, j32) of :meth:`Model.jacobian`."""
     u = y[1]
     s = y[2]
     n = par[_N]
     c = par[_COEF]
-    f = _factor(par, heating, s)
+    f = par[_FIXED]
+    e = 1.0
+    if heating:
+        f, _, e = _thermal(par, s)
     shaft = n * u
     eddy, d_speed, d_factor, _, by_speed, by_factor = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)
     torque = n * (eddy + par[_BG] * shaft)
@@ -220,7 +326,7 @@ def _jacobian(par: FloatArray, kind: int, heating: bool, y: FloatArray) -> tuple
         slope = c * f * by_factor
         r = par[_R]
         if math.isfinite(r):
-            slope = slope - math.exp(-c * s) / r
+            slope = slope - 1.0 / e / r  # e^{-cs} / R
         j22 = slope / par[_C]
     j = par[_J]
     stiffness = par[_K]
@@ -239,28 +345,67 @@ def _jacobian(par: FloatArray, kind: int, heating: bool, y: FloatArray) -> tuple
 
 
 @_jit
+def _solve(heating: bool, two_node: bool, lin: Solve, v: State) -> State:
+    """z with ``(I - hg J) z = v``: the elimination of ``rosenbrock._Solver`` (z1 first,
+    then z0, z2, z3; with two nodes z4 eliminated from row 2 first)."""
+    hg, inv1, inv2, p10, p12, p21, q31, q32, inv4, p42, p24 = lin
+    v2 = v[2] + p24 * v[4] if two_node else v[2]
+    z1 = v[1] * inv1 + p10 * v[0]
+    if not heating:
+        # The temperature row of every stage is zero, and so is its solution's.
+        return v[0] + hg * z1, z1, v2, v[3] + q31 * z1, 0.0
+    z1 += p12 * v2
+    z2 = v2 * inv2 + p21 * z1
+    z4 = v[4] * inv4 + p42 * z2 if two_node else 0.0
+    return v[0] + hg * z1, z1, z2, v[3] + q31 * z1 + q32 * z2, z4
+
+
+@_jit
+def _scaled(a: float, k: State) -> State:
+    """``a K``."""
+    return a * k[0], a * k[1], a * k[2], a * k[3], a * k[4]
+
+
+@_jit
+def _plus(acc: State, a: float, k: State) -> State:
+    """``acc + a K``."""
+    return (
+        acc[0] + a * k[0],
+        acc[1] + a * k[1],
+        acc[2] + a * k[2],
+        acc[3] + a * k[3],
+        acc[4] + a * k[4],
+    )
+
+
+@_inline
+def _stage(
+    par: Params, kind: int, heating: bool, two_node: bool, lin: Solve, y: State, c: State
+) -> State:
+    """K_i of the stage whose state is y (``y + sum_j A_ij K_j``) and coupling c
+    (``GAMMA sum_j C_ij K_j``): ``(I - hg J) K_i = hg f(y) + c``."""
+    hg = lin[0]
+    f = _slope(par, kind, heating, two_node, y)
+    return _solve(
+        heating,
+        two_node,
+        lin,
+        (f[0] * hg + c[0], f[1] * hg + c[1], f[2] * hg + c[2], f[3] * hg + c[3], f[4] * hg + c[4]),
+    )
+
+
+@_inline
 def _step(
-    par: FloatArray,
-    kind: int,
-    heating: bool,
-    y: FloatArray,
-    f0: FloatArray,
-    h: float,
-    k: FloatArray,
-    stage: FloatArray,
-    value: FloatArray,
-    y1: FloatArray,
-) -> bool:
-    """One RODAS4 step into ``y1``; the error estimate is ``k[5]``; False if singular.
+    par: Params, kind: int, heating: bool, two_node: bool, y: State, f0: State, h: float
+) -> tuple[State, State, bool]:
+    """One RODAS4 step: (y1, the error estimate K6, whether the linear solve was sound).
 
     The stage equations and their elimination are those of ``rosenbrock._step`` and
-    ``rosenbrock._Solver`` (z1 first, then z0, z2, z3).
+    ``rosenbrock._Solver``.
     """
     hg = h * GAMMA
     j10, j11, j12, j21, j22, j31, j32 = _jacobian(par, kind, heating, y)
-    m = y.shape[0]
-    two_node = m > 4
-    inv4 = p42 = p24 = 0.0
+    inv4 = p42 = p24 = j42 = 0.0
     if two_node:
         # rosenbrock._Solver: z4 eliminated from row 2 (two-node heating)
         dj22, j24, j42, j44 = _housing_jacobian(par, y)
@@ -276,65 +421,60 @@ def _step(
     sound = abs(den2) > 1e-12 and abs(den1) > 1e-12
     inv1 = 1.0 / den1 if sound else 1.0
     inv2 = 1.0 / den2 if sound else 1.0
-    p10 = hg * j10 * inv1
-    p12 = hg * j12 * inv2 * inv1
-    p21 = hg * j21 * inv2
-    # The row loops run over the four one-node rows with a constant bound (as before the
-    # housing row existed: the compiler unrolls them), the housing row after them.
-    for i in range(6):
-        if i == 0:
-            for r in range(4):
-                value[r] = f0[r] * hg
-            if two_node:
-                value[4] = f0[4] * hg
-        else:
-            for r in range(4):
-                stage[r] = _stage_row(y, k, i, r)
-            if two_node:
-                stage[4] = _stage_row(y, k, i, 4)
-            _rhs(par, kind, heating, stage, value)
-            for r in range(4):
-                value[r] = value[r] * hg + _coupling_row(k, i, r)
-            if two_node:
-                value[4] = value[4] * hg + _coupling_row(k, i, 4)
-        v2 = value[2] + p24 * value[4] if two_node else value[2]
-        z1 = value[1] * inv1 + p10 * value[0]
-        if heating:
-            z1 += p12 * v2
-        k[i, 1] = z1
-        k[i, 0] = value[0] + hg * z1
-        if heating:
-            z2 = v2 * inv2 + p21 * z1
-            k[i, 2] = z2
-            k[i, 3] = value[3] + hg * j31 * z1 + hg * j32 * z2
-            if two_node:
-                k[i, 4] = value[4] * inv4 + p42 * z2
-        else:
-            k[i, 2] = value[2]
-            k[i, 3] = value[3] + hg * j31 * z1
-    for r in range(4):
-        y1[r] = _stage_row(y, k, 5, r) + k[5, r]
-    if two_node:
-        y1[4] = _stage_row(y, k, 5, 4) + k[5, 4]
-    return sound
-
-
-@_jit
-def _stage_row(y: FloatArray, k: FloatArray, i: int, r: int) -> float:
-    """Row r of stage i's state, ``y + sum_j A_ij K_j`` (stage 5's for i = 5)."""
-    acc: float = y[r]
-    for jj in range(min(i, 5)):
-        acc += _A_TABLE[i, jj] * k[jj, r]
-    return acc
-
-
-@_jit
-def _coupling_row(k: FloatArray, i: int, r: int) -> float:
-    """Row r of ``GAMMA * sum_j C_ij K_j`` for stage i."""
-    coupling = 0.0
-    for jj in range(i):
-        coupling += _GC_TABLE[i, jj] * k[jj, r]
-    return coupling
+    lin = (
+        hg,
+        inv1,
+        inv2,
+        hg * j10 * inv1,
+        hg * j12 * inv2 * inv1,
+        hg * j21 * inv2,
+        hg * j31,
+        hg * j32,
+        inv4,
+        p42,
+        p24,
+    )
+    k1 = _solve(heating, two_node, lin, _scaled(hg, f0))
+    k2 = _stage(par, kind, heating, two_node, lin, _plus(y, _A21, k1), _scaled(_GC21, k1))
+    k3 = _stage(
+        par,
+        kind,
+        heating,
+        two_node,
+        lin,
+        _plus(_plus(y, _A31, k1), _A32, k2),
+        _plus(_scaled(_GC31, k1), _GC32, k2),
+    )
+    k4 = _stage(
+        par,
+        kind,
+        heating,
+        two_node,
+        lin,
+        _plus(_plus(_plus(y, _A41, k1), _A42, k2), _A43, k3),
+        _plus(_plus(_scaled(_GC41, k1), _GC42, k2), _GC43, k3),
+    )
+    y5 = _plus(_plus(_plus(_plus(y, _A51, k1), _A52, k2), _A53, k3), _A54, k4)
+    k5 = _stage(
+        par,
+        kind,
+        heating,
+        two_node,
+        lin,
+        y5,
+        _plus(_plus(_plus(_scaled(_GC51, k1), _GC52, k2), _GC53, k3), _GC54, k4),
+    )
+    y6 = _plus(y5, 1.0, k5)
+    k6 = _stage(
+        par,
+        kind,
+        heating,
+        two_node,
+        lin,
+        y6,
+        _plus(_plus(_plus(_plus(_scaled(_GC61, k1), _GC62, k2), _GC63, k3), _GC64, k4), _GC65, k5),
+    )
+    return _plus(y6, 1.0, k6), k6, sound
 
 
 @_jit
@@ -416,44 +556,38 @@ def _interior_peak(ya: float, fa: float, yb: float, fb: float, h: float, stop: f
 
 
 @_jit
-def _indicator(par: FloatArray, kind: int, heating: bool, y: FloatArray) -> float:
+def _indicator(par: Params, kind: int, heating: bool, x: float, u: float, s: float) -> float:
     """The power-flow indicator times the segment's flow (:meth:`Model.indicator`)."""
-    f = _factor(par, heating, y[2])
-    shaft = par[_N] * y[1]
+    f = _factor(par, heating, s)
+    shaft = par[_N] * u
     eddy = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)[0]
     damper = par[_N] * (eddy + par[_BG] * shaft) + par[_FQ]
-    load = par[_AL] - par[_K] * y[0]
+    load = par[_AL] - par[_K] * x
     if par[_GW] != 0.0:
-        load = load - par[_GD] * par[_GW] * math.sin(par[_GP] + par[_GD] * y[0])
+        load = load - par[_GD] * par[_GW] * math.sin(par[_GP] + par[_GD] * x)
     value: float = par[_FLOW] * (par[_JL] * damper + par[_JD] * load)
     return value
 
 
 @_jit
 def _switch(
-    par: FloatArray,
-    kind: int,
-    heating: bool,
-    y: FloatArray,
-    f: FloatArray,
-    y1: FloatArray,
-    fb: FloatArray,
-    h: float,
-    probe: FloatArray,
+    par: Params, kind: int, heating: bool, y: State, f: State, y1: State, fb: State, h: float
 ) -> float:
     """Fraction of the step where the power flow reverses, bisected on the interpolant
     (``rosenbrock._find_switch``); inf where it does not."""
-    if par[_FLOW] == 0.0:
-        return math.inf
-    if not (_indicator(par, kind, heating, y) > 0.0 and _indicator(par, kind, heating, y1) <= 0.0):
+    if not (
+        _indicator(par, kind, heating, y[0], y[1], y[2]) > 0.0
+        and _indicator(par, kind, heating, y1[0], y1[1], y1[2]) <= 0.0
+    ):
         return math.inf
     lo = 0.0
     hi = 1.0
     for _ in range(50):
         mid = 0.5 * (lo + hi)
-        for r in range(y.shape[0]):
-            probe[r] = _hermite(y[r], f[r], y1[r], fb[r], h, mid)
-        if _indicator(par, kind, heating, probe) > 0.0:
+        x = _hermite(y[0], f[0], y1[0], fb[0], h, mid)
+        u = _hermite(y[1], f[1], y1[1], fb[1], h, mid)
+        s = _hermite(y[2], f[2], y1[2], fb[2], h, mid)
+        if _indicator(par, kind, heating, x, u, s) > 0.0:
             lo = mid
         else:
             hi = mid
@@ -467,6 +601,15 @@ def _grow(buffer: FloatArray, count: int) -> FloatArray:
     bigger = np.empty((buffer.shape[0], 2 * buffer.shape[1]))
     bigger[:, :count] = buffer[:, :count]
     return bigger
+
+
+@_jit
+def _store(steps: FloatArray, count: int, t: float, y: State, f: State, rows: int) -> None:
+    """Column ``count`` of the recorded steps: time, state and slope."""
+    steps[0, count] = t
+    for r in range(rows):
+        steps[1 + r, count] = y[r]
+        steps[1 + rows + r, count] = f[r]
 
 
 @_jit
@@ -494,15 +637,14 @@ def _segment(
     ``final``. The state has 4 rows, or 5 with two-node heating (the housing rise).
     """
     par[_FIXED] = par[_FA] * math.exp(par[_COEF] * y0[2])
+    # The parameters and the state as tuples in the step loop (see State).
+    p = _as_tuple(par, _COLUMNS)
     rows = y0.shape[0]
-    k = np.empty((6, rows))
-    stage = np.empty(rows)
-    value = np.empty(rows)
-    y = y0.copy()
-    y1 = np.empty(rows)
-    f = np.empty(rows)
-    fb = np.empty(rows)
-    _rhs(par, kind, heating, y, f)
+    two_node = rows > 4
+    y = (y0[0], y0[1], y0[2], y0[3], y0[4] if two_node else 0.0)
+    tol = (atol[0], atol[1], atol[2], atol[3], atol[4] if two_node else 1.0)
+    flow = p[_FLOW] != 0.0
+    f = _slope(p, kind, heating, two_node, y)
     t = 0.0
     h = min(first_step, cap if math.isfinite(cap) else math.inf)
     end = min(cap, horizon)
@@ -511,22 +653,20 @@ def _segment(
     steps = np.empty((1 + 2 * rows, 64 if record else 1))
     count = 0
     if record:
-        steps[0, 0] = t
-        steps[1 : 1 + rows, 0] = y
-        steps[1 + rows :, 0] = f
+        _store(steps, 0, t, y, f, rows)
         count = 1
     for _ in range(MAX_STEPS):
         h = min(h, end - t)
-        sound = _step(par, kind, heating, y, f, h, k, stage, value, y1)
+        y1, error, sound = _step(p, kind, heating, two_node, y, f, h)
         err = 0.0
         total = 0.0
         for r in range(4):
-            scale = max(abs(y[r]), abs(y1[r])) * rtol + atol[r]
-            err = max(err, abs(k[5, r]) / scale)
+            scale = max(abs(y[r]), abs(y1[r])) * rtol + tol[r]
+            err = max(err, abs(error[r]) / scale)
             total += y1[r]
-        if rows > 4:  # the housing row (two-node heating)
-            scale = max(abs(y[4]), abs(y1[4])) * rtol + atol[4]
-            err = max(err, abs(k[5, 4]) / scale)
+        if two_node:  # the housing row
+            scale = max(abs(y[4]), abs(y1[4])) * rtol + tol[4]
+            err = max(err, abs(error[4]) / scale)
             total += y1[4]
         finite = math.isfinite(err + total)
         if finite and sound:
@@ -537,7 +677,7 @@ def _segment(
         if not (sound and finite and err <= 1.0):
             h = h_next
             continue
-        _rhs(par, kind, heating, y1, fb)
+        fb = _slope(p, kind, heating, two_node, y1)
         # Events in this step: the earliest of reaching the length, zero speed, creep.
         event_s = math.inf
         event = -1
@@ -552,8 +692,8 @@ def _segment(
             s_hit = _crossing(y[1], f[1], y1[1], fb[1], h, creep)
             if s_hit < event_s:
                 event_s, event = s_hit, _REST
-        if par[_FLOW] != 0.0:
-            s_hit = _switch(par, kind, heating, y, f, y1, fb, h, stage)
+        if flow:
+            s_hit = _switch(p, kind, heating, y, f, y1, fb, h)
             if s_hit < event_s:
                 event_s, event = s_hit, SWITCH
         # Maxima of the speed and the temperature state: step ends and interior peaks.
@@ -579,28 +719,26 @@ def _segment(
                 final[1] = 0.0
             duration = t + event_s * h
             if record:
-                _rhs(par, kind, heating, final, fb)
+                last = (final[0], final[1], final[2], final[3], final[4] if two_node else 0.0)
                 steps = _grow(steps, count)
-                steps[0, count] = duration
-                steps[1 : 1 + rows, count] = final
-                steps[1 + rows :, count] = fb
+                _store(steps, count, duration, last, _slope(p, kind, heating, two_node, last), rows)
                 count += 1
             return event, duration, top_speed, top_temp, steps, count
         t += h
-        y[:] = y1
-        f[:] = fb
+        y = y1
+        f = fb
         if record:
             steps = _grow(steps, count)
-            steps[0, count] = t
-            steps[1 : 1 + rows, count] = y
-            steps[1 + rows :, count] = f
+            _store(steps, count, t, y, f, rows)
             count += 1
         if t >= end * (1.0 - 1e-15):
-            final[:] = y
+            for r in range(rows):
+                final[r] = y[r]
             code = _CAP if cap <= horizon else horizon_kind
             return code, t, top_speed, top_temp, steps, count
         h = h_next
-    final[:] = y
+    for r in range(rows):
+        final[r] = y[r]
     return horizon_kind, t, top_speed, top_temp, steps, count
 
 
@@ -761,11 +899,25 @@ def integrate_batch(model: Model, segments: Segments, control: Control) -> Outco
             # Each segment depends on its own row only: any split gives the same bits.
             part_final = np.empty((rows, hi - lo))
             _batch(
-                par[lo:hi], law, heating, np.ascontiguousarray(y0[:, lo:hi]), length[lo:hi],
-                cap[lo:hi], creep[lo:hi], creeps[lo:hi], np.ascontiguousarray(atol[:, lo:hi]),
-                first[lo:hi], control.rtol, control.horizon, control.horizon_kind,
-                kinds[lo:hi], duration[lo:hi], part_final, max_speed[lo:hi], max_temp[lo:hi],
-            )  # fmt: skip
+                par[lo:hi],
+                law,
+                heating,
+                np.ascontiguousarray(y0[:, lo:hi]),
+                length[lo:hi],
+                cap[lo:hi],
+                creep[lo:hi],
+                creeps[lo:hi],
+                np.ascontiguousarray(atol[:, lo:hi]),
+                first[lo:hi],
+                control.rtol,
+                control.horizon,
+                control.horizon_kind,
+                kinds[lo:hi],
+                duration[lo:hi],
+                part_final,
+                max_speed[lo:hi],
+                max_temp[lo:hi],
+            )
             final[:, lo:hi] = part_final
 
         _in_threads(run, parts)
@@ -773,10 +925,22 @@ def integrate_batch(model: Model, segments: Segments, control: Control) -> Outco
     end = np.empty(rows)
     for j in range(n):
         result: tuple[Any, ...] = _segment(
-            par[j], law, heating, y0[:, j].copy(), length[j], cap[j], creep[j],
-            bool(creeps[j]), atol[:, j].copy(), first[j], control.rtol, control.horizon,
-            control.horizon_kind, True, end,
-        )  # fmt: skip
+            par[j],
+            law,
+            heating,
+            y0[:, j].copy(),
+            length[j],
+            cap[j],
+            creep[j],
+            bool(creeps[j]),
+            atol[:, j].copy(),
+            first[j],
+            control.rtol,
+            control.horizon,
+            control.horizon_kind,
+            True,
+            end,
+        )
         code, time, top_speed, top_temp, steps, count = result
         kinds[j], duration[j], max_speed[j], max_temp[j] = code, time, top_speed, top_temp
         final[:, j] = end

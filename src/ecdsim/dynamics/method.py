@@ -219,25 +219,37 @@ def _findings(
         kloss_becd = np.ravel(n * n * (slope + problem.gearbox_damping_rate))
         eq1_becd = np.ravel(broadcast(problem.damping_rate, shape))
         mismatch = kloss_becd / eq1_becd - 1.0
-        for i in np.flatnonzero(np.abs(mismatch) > 0.01):
+        # A batch can hold thousands of these findings: the values are formatted as Python
+        # floats (NumPy scalars format several times slower; the same text).
+        off = np.flatnonzero(np.abs(mismatch) > 0.01)
+        for case, becd, eq1, ratio in zip(
+            off.tolist(),
+            kloss_becd[off].tolist(),
+            eq1_becd[off].tolist(),
+            (100 * mismatch[off]).tolist(),
+            strict=True,
+        ):
             out.append(
                 (
                     "rolloff_temperature_law",
-                    f"at low speed the roll-off law gives BECD {kloss_becd[i]:.4g} N*m*s/rad, "
-                    f"{100 * mismatch[i]:+.1f} % from Eq. 1's {eq1_becd[i]:.4g}: with roll-off "
+                    f"at low speed the roll-off law gives BECD {becd:.4g} N*m*s/rad, "
+                    f"{ratio:+.1f} % from Eq. 1's {eq1:.4g}: with roll-off "
                     "the damper's temperature law is resistivity_coefficient's, not Eq. 1's",
-                    int(i),
+                    case,
                 )
             )
         shaft = np.ravel(result.max_speed * n)
-        beyond = shaft > np.ravel(peak)
-        for i in np.flatnonzero(beyond):
+        peaks = np.ravel(np.broadcast_to(peak, shape))
+        beyond = np.flatnonzero(shaft > peaks)
+        for case, reached, limit in zip(
+            beyond.tolist(), shaft[beyond].tolist(), peaks[beyond].tolist(), strict=True
+        ):
             out.append(
                 (
                     "rolloff_beyond_peak",
-                    f"the damper reached {shaft[i]:.4g} rad/s, beyond its peak-torque speed "
-                    f"{float(np.ravel(peak)[i]):.4g} rad/s, where its torque falls with speed",
-                    int(i),
+                    f"the damper reached {reached:.4g} rad/s, beyond its peak-torque speed "
+                    f"{limit:.4g} rad/s, where its torque falls with speed",
+                    case,
                 )
             )
     return out
