@@ -59,6 +59,71 @@ def test_damper_model_is_the_papers_ecd_by_hand() -> None:
     assert model.temperature == 40.0
 
 
+def _paper_with(tmp_path: Path, old: str, new: str) -> DamperModel:
+    text = PAPER.read_text(encoding="utf-8")
+    assert old in text
+    path = tmp_path / "variant.toml"
+    path.write_text(text.replace(old, new, 1), encoding="utf-8")
+    return DamperModel.from_config(ecdsim.load(path), 25.0)
+
+
+def test_damper_model_with_a_lossy_mesh_by_hand(tmp_path: Path) -> None:
+    # A lossy mesh (eta_f = 0.8, FG = 0 as the config requires) used to be dropped from
+    # the damper FMU's damping torque (its friction had it, through FECD_T). By hand: the
+    # torque is N (BD f(T) + BG) N u / eta_f (Modelica's LossyGear, forward: the shaft
+    # always drives this inertia-free damper), the friction (FD + FL_T) N / eta_f
+    # (Eq. 2 and 4 without FG).
+    eta = 0.8
+    model = _paper_with(
+        tmp_path,
+        'coulomb_friction = "4.5e-4 N*m"',
+        'coulomb_friction = "0 N*m"\nefficiency = { forward = 0.8 }',
+    )
+    for t in (-40.0, 25.0, 100.0):
+        becd = (BD * (1.0 + C_T * (t - 25.0)) + 0.26 * BD) * N**2 / eta
+        fecd = (7.9e-4 + (-2.12e-6 * t + 2.2e-4)) * N / eta
+        # The same sums in another order: 1e-12.
+        assert model.damper_torque(0.1, t) == pytest.approx(becd * 0.1, rel=1e-12)
+        assert model.friction_torque(-0.1, t) == pytest.approx(-fecd, rel=1e-12)
+
+
+def test_damper_model_with_stribeck_friction_by_hand(tmp_path: Path) -> None:
+    # A Stribeck curve (f_D = 1.5, w_St = 0.02 rad/s at the slow shaft) used to be
+    # dropped: the FMU's friction was the kinetic FECD at every speed. By hand, the ECD's
+    # share of the dynamic method's curve: FECD (1 + (f_D - 1) e^{-(u/w_St)^2}).
+    f_d, w_st = 1.5, 0.02
+    model = _paper_with(
+        tmp_path,
+        'coulomb_friction = "7.9e-4 N*m"',
+        'coulomb_friction = "7.9e-4 N*m"\nstatic_friction_factor = 1.5\n'
+        'stribeck_speed = "0.02 rad/s"',
+    )
+    for t in (-40.0, 25.0, 100.0):
+        assert model.damper_torque(0.1, t) == pytest.approx(hand.becd(t) * 0.1, rel=1e-12)
+        for u in (0.005, 0.02, 0.05, -0.01):
+            curve = 1.0 + (f_d - 1.0) * math.exp(-((u / w_st) ** 2))
+            expected = math.copysign(hand.fecd(t) * curve, u)
+            assert model.friction_torque(u, t) == pytest.approx(expected, rel=1e-12)
+    # Near rest the friction is the breakaway f_D FECD; far from it the kinetic FECD.
+    assert model.friction_torque(1e-9, 25.0) == pytest.approx(f_d * hand.fecd(25.0), rel=1e-12)
+    assert model.friction_torque(1.0, 25.0) == pytest.approx(hand.fecd(25.0), rel=1e-12)
+
+
+def test_a_compliant_mesh_is_refused_by_the_damper_fmu(tmp_path: Path) -> None:
+    # The damper FMU is rigid from shaft to rotor: a compliant mesh would be dropped.
+    text = DYNAMIC.read_text(encoding="utf-8").replace(
+        'lost_motion = "0 deg"', 'lost_motion = "0.25 deg"\nstiffness = "2 kN*m/rad"'
+    )
+    assert "stiffness" in text
+    path = tmp_path / "compliant.toml"
+    path.write_text(text, encoding="utf-8")
+    result = CliRunner().invoke(app, ["export-fmu", str(path), "-o", str(tmp_path / "x.fmu")])
+    assert result.exit_code == 2
+    assert result.stderr.count("\n") == 1
+    assert "gearbox.stiffness: a compliant mesh is not in the damper FMU" in result.stderr
+    assert not (tmp_path / "x.fmu").exists()
+
+
 def test_heat_balance_matches_the_adiabatic_closed_form(tmp_path: Path) -> None:
     # The [damper.thermal] table replaced by one without a resistance: adiabatic.
     thermal = {"heat_capacity": "0.05 J/K"}

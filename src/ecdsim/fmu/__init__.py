@@ -69,6 +69,17 @@ def build_fmu(config_path: str | Path, out: str | Path, deployment: bool = False
             ],
             config.source,
         )
+    if not deployment and config.spec.gearbox.stiffness is not None:
+        # The damper FMU's ECD is rigid from the slow shaft to the rotor: a compliant mesh
+        # would need the twist as a state, and dropping it would change the torque.
+        raise ConfigError(
+            [
+                "gearbox.stiffness: a compliant mesh is not in the damper FMU, whose ECD "
+                "is rigid; remove gearbox.stiffness and mesh_damping to export it, or "
+                "export the deployment FMU (--deployment), which runs the dynamic method"
+            ],
+            config.source,
+        )
     try:
         from pythonfmu.builder import FmuBuilder
     except ImportError:

@@ -93,6 +93,10 @@ class DamperModel:
     heating : whether the damper temperature evolves ([damper.thermal] given)
     heat_capacity : C [J/K] (inf without heating)
     thermal_resistance : R [K/W] (inf: adiabatic)
+    forward_efficiency : eta_f of a lossy mesh (1: ideal); the damping torque at the
+        slow shaft is divided by it (the shaft always drives this inertia-free damper)
+    static_friction_factor : f_D, the damper's breakaway over kinetic friction
+    stribeck_speed : w_St [rad/s at the slow shaft] (inf: no Stribeck curve)
     temperature : the damper temperature T_d [degC], the state
     max_step : the longest internal Runge-Kutta step [s]
     """
@@ -104,6 +108,9 @@ class DamperModel:
     heating: bool
     heat_capacity: float
     thermal_resistance: float
+    forward_efficiency: float = 1.0
+    static_friction_factor: float = 1.0
+    stribeck_speed: float = math.inf
     temperature: float = 25.0
     max_step: float = MAX_STEP
     _friction_cache: dict[float, float] = field(default_factory=dict, repr=False)
@@ -118,6 +125,7 @@ class DamperModel:
         ecd = config.system.ecd.at(temps)
         base, fs = build_problem(config.system, ecd, temps)
         problem = dynamic_problem(config.system, ecd, temps, base, fs, _dynamic_parameters(config))
+        damper = config.spec.damper
         return cls(
             system=config.system,
             ratio=float(np.ravel(problem.gear_ratio)[0]),
@@ -126,6 +134,9 @@ class DamperModel:
             heating=bool(problem.thermal),
             heat_capacity=float(np.ravel(problem.heat_capacity)[0]),
             thermal_resistance=float(np.ravel(problem.thermal_resistance)[0]),
+            forward_efficiency=float(np.ravel(ecd.forward_efficiency)[0]),
+            static_friction_factor=float(damper.static_friction_factor),
+            stribeck_speed=math.inf if damper.stribeck_speed is None else damper.stribeck_speed,
             temperature=float(ambient),
         )
 
@@ -140,17 +151,24 @@ class DamperModel:
         return float(np.ravel(self.eddy.torque_at_factor(shaft, self._factor(temperature)))[0])
 
     def damper_torque(self, speed: float, temperature: float | None = None) -> float:
-        """Damping torque at the slow shaft, opposing ``speed`` [N*m]: N (T_eddy + BG N u)."""
+        """Damping torque at the slow shaft, opposing ``speed`` [N*m]:
+        N (T_eddy + BG N u) / eta_f (Eq. 1, 3; a lossy mesh as Modelica's LossyGear in
+        its forward mode, which this damper without inertia is always in: the shaft
+        drives it)."""
         t = self.temperature if temperature is None else temperature
         shaft = self.ratio * speed
-        return self.ratio * (self.eddy_torque(speed, t) + self.gearbox_damping * shaft)
+        torque = self.ratio * (self.eddy_torque(speed, t) + self.gearbox_damping * shaft)
+        return torque / self.forward_efficiency
 
     def friction_torque(self, speed: float, ambient: float) -> float:
-        """Kinetic Coulomb friction of the ECD at the slow shaft, opposing ``speed`` [N*m].
+        """Coulomb friction of the ECD at the slow shaft, opposing ``speed`` [N*m].
 
         ``FECD(T_ambient)`` (Eq. 2 and 4, at the ambient temperature as in the dynamic
-        method) times the sign of the speed; 0 at rest, where the holding torque
-        depends on the rest of the mechanism.
+        method, a lossy mesh's 1/eta_f included) times the sign of the speed; with a
+        Stribeck speed the dynamic method's curve for the ECD's part,
+        ``FECD [1 + (f_D - 1) exp(-(u / w_St)^2)]`` (docs/dynamics.md, "Stribeck
+        friction"); 0 at rest, where the holding torque depends on the rest of the
+        mechanism.
         """
         if speed == 0.0 or math.isnan(speed):
             return 0.0
@@ -159,7 +177,11 @@ class DamperModel:
             state = self.system.ecd.at(np.array([key]))
             self._friction_cache.clear()
             self._friction_cache[key] = float(np.ravel(state.ecd_friction)[0])
-        return math.copysign(self._friction_cache[key], speed)
+        kinetic = self._friction_cache[key]
+        excess = (self.static_friction_factor - 1.0) * kinetic
+        if excess != 0.0 and math.isfinite(self.stribeck_speed):
+            kinetic += excess * math.exp(-((speed / self.stribeck_speed) ** 2))
+        return math.copysign(kinetic, speed)
 
     def _rate(self, speed: float, temperature: float, ambient: float) -> float:
         power = self.eddy_torque(speed, temperature) * self.ratio * speed
