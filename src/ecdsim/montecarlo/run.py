@@ -680,6 +680,7 @@ class DaskExecutor:
     @contextlib.contextmanager
     def _client(self) -> Iterator[Any]:
         distributed = store.require("distributed")
+        quiet_cancel_race()
         if self.address:
             try:
                 client = distributed.Client(self.address, timeout=self.connect_timeout)
@@ -764,6 +765,40 @@ class DaskExecutor:
             finally:
                 for future in list(running.futures):
                     future.cancel()
+
+
+class _CancelRaceFilter(logging.Filter):
+    """Drop tornado's report of a race in ``distributed.utils.sync`` on Ctrl-C.
+
+    ``sync()`` (distributed 2026.8.0) declares its ``future`` without a value and, on a
+    KeyboardInterrupt, schedules a ``cancel`` callback that reads it. When Ctrl-C comes
+    before the coroutine has assigned it, ``cancel`` raises NameError ("cannot access
+    free variable 'future'") and tornado logs it with a traceback, although nothing is
+    wrong: the run stops as asked and says how to resume. Only that record is dropped
+    (a NameError raised in a function ``cancel`` of ``distributed/utils.py``).
+    """
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        error = record.exc_info[1] if record.exc_info else None
+        if not isinstance(error, NameError) or error.__traceback__ is None:
+            return True
+        frame = error.__traceback__
+        while frame.tb_next is not None:
+            frame = frame.tb_next
+        code = frame.tb_frame.f_code
+        path = Path(code.co_filename)
+        return not (code.co_name == "cancel" and path.parts[-2:] == ("distributed", "utils.py"))
+
+
+_CANCEL_RACE_FILTER = _CancelRaceFilter()
+
+
+def quiet_cancel_race() -> None:
+    """Install :class:`_CancelRaceFilter` on tornado's callback logger (once; it stays,
+    since the callback may run after the client is closed)."""
+    logger = logging.getLogger("tornado.application")
+    if _CANCEL_RACE_FILTER not in logger.filters:
+        logger.addFilter(_CANCEL_RACE_FILTER)
 
 
 def _ignore_interrupts() -> None:
