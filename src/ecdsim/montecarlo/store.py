@@ -18,8 +18,6 @@ from __future__ import annotations
 import hashlib
 import json
 import mmap
-import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -172,13 +170,8 @@ def stage_chunk(
     the file while the parent's writer line syncs and installs the files in chunk order.
     """
     table = _chunk_table(index, columns, identity_sha256, extra)
-    final = chunk_path(out, index)
-    final.parent.mkdir(parents=True, exist_ok=True)
-    handle, name = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".tmp", dir=final.parent)
-    temporary = Path(name)
+    temporary = atomic.stage(chunk_path(out, index))
     try:
-        os.close(handle)
-        os.chmod(temporary, 0o666 & ~_umask())  # as a plain open() makes it (ecdsim.atomic)
         _write_table(table, str(temporary))
     except BaseException:
         temporary.unlink(missing_ok=True)
@@ -189,22 +182,7 @@ def stage_chunk(
 def install_chunk(out: Path, index: int, temporary: Path) -> Path:
     """Sync a staged chunk file (:func:`stage_chunk`) and rename it to its final name:
     the chunk appears whole or not at all. The temporary file is removed on failure."""
-    final = chunk_path(out, index)
-    try:
-        with open(temporary, "rb+") as stream:
-            os.fsync(stream.fileno())
-        os.replace(temporary, final)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
-    return final
-
-
-def _umask() -> int:
-    """The process's umask (os.umask can only be read by setting it, as ecdsim.atomic)."""
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+    return atomic.install(temporary, chunk_path(out, index))
 
 
 def _arrow_array(pa: Any, values: np.ndarray[Any, Any]) -> Any:
