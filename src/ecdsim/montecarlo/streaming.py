@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import base64
 import math
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
@@ -267,11 +266,9 @@ def compiled_sums(cases: int) -> bool:
     switched off (``ECDSIM_NUMBA=0``), and a chunk as large as the exact solution's
     compiled kernel asks for (its import is paid once per run, with that kernel's).
     """
-    from ecdsim.solvers.exact_kernel import NUMBA_MIN_CASES, numba_available
+    from ecdsim.solvers.exact_kernel import NUMBA_MIN_CASES, numba_available, numba_switched_off
 
-    if os.environ.get("ECDSIM_NUMBA", "").strip() == "0":
-        return False
-    return cases >= NUMBA_MIN_CASES and numba_available()
+    return not numba_switched_off() and cases >= NUMBA_MIN_CASES and numba_available()
 
 
 def encode(sums: Sequence[Sums]) -> str:

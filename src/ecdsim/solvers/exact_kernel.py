@@ -238,6 +238,12 @@ def numba_available() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
+def numba_switched_off() -> bool:
+    """True if ``ECDSIM_NUMBA=0`` asks for the NumPy paths (the switch every compiled
+    kernel obeys: this one, the dynamic method's, the Monte Carlo sums)."""
+    return os.environ.get("ECDSIM_NUMBA", "").strip() == "0"
+
+
 def choose(cases: int) -> str:
     """The kernel for a batch of ``cases`` cases (module docstring)."""
     forced = os.environ.get(ENVIRONMENT, "").strip().lower()
@@ -245,7 +251,7 @@ def choose(cases: int) -> str:
         if forced not in KERNELS:
             raise ValueError(f"{ENVIRONMENT}={forced!r}: expected one of {list(KERNELS)}")
         return forced
-    if os.environ.get("ECDSIM_NUMBA", "").strip() == "0":  # as the dynamic method's switch
+    if numba_switched_off():
         return "numpy"
     if cases >= NUMBA_MIN_CASES and numba_available():
         return "numba"
