@@ -497,6 +497,12 @@ class InProcess:
     threads: int = 1
     fork: bool = False
 
+    @property
+    def forks(self) -> bool:
+        """True if this executor computes chunks in forked workers (fork asked for and
+        available, and more than one worker)."""
+        return self.threads > 1 and self.fork and fork_available()
+
     def results(
         self, plan: Plan, indices: Sequence[int], out: Path
     ) -> Generator[ChunkResult, None, None]:
@@ -505,7 +511,7 @@ class InProcess:
         first = next(pending, None)
         if first is None:
             return
-        if self.threads > 1 and self.fork and fork_available():
+        if self.forks:
             rest = list(pending)
             if len(rest) >= FORK_MIN_CHUNKS:
                 yield from _forked_results(plan, first, rest, out, self.threads)
@@ -535,7 +541,7 @@ class InProcess:
 
     def describe(self) -> str:
         """One line for the console."""
-        if self.threads > 1 and self.fork and fork_available():
+        if self.forks:
             below = FORK_MIN_CHUNKS + 1
             return f"in process, {self.threads} forked workers (threads below {below} chunks)"
         if self.threads > 1:
@@ -830,7 +836,7 @@ def choose_executor(samples: int, workers: int | None, scheduler: str | None) ->
         return in_process() if workers == 0 else DaskExecutor(workers=workers)
     cpus = os.cpu_count() or 1
     local = in_process()
-    if local.fork and fork_available() and local.threads >= cpus:
+    if local.forks and local.threads >= cpus:
         return local
     if samples >= LARGE_RUN_SAMPLES and cpus >= LARGE_RUN_CPUS:
         try:
