@@ -18,17 +18,38 @@ from tests.conftest import ROOT
 SCRIPT = ROOT / "scripts" / "ensure-chromium.sh"
 
 
-def test_missing_chromium_without_apt_stops_with_one_line(tmp_path: Path) -> None:
-    # A PATH that has bash but no apt-get, and a chromium that is not there.
+def _run_script(
+    tmp_path: Path, script: Path, env: dict[str, str], fakes: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """Run ``script`` with ``env`` added and a PATH that holds only bash and ``fakes``
+    (name -> shell script body)."""
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
     bash = shutil.which("bash")
     assert bash is not None
     (bin_dir / "bash").symlink_to(bash)
-    env = {**os.environ, "PATH": str(bin_dir), "ECDSIM_CHROMIUM": str(tmp_path / "chromium")}
-    result = subprocess.run(
-        [bash, str(SCRIPT)], env=env, capture_output=True, text=True, check=False
+    for name, body in (fakes or {}).items():
+        (bin_dir / name).write_text(f"#!{bash}\n{body}")
+        (bin_dir / name).chmod(0o755)
+    return subprocess.run(
+        [bash, str(script)],
+        env={**os.environ, "PATH": str(bin_dir), **env},
+        capture_output=True,
+        text=True,
+        check=False,
     )
+
+
+def _run_ensure_chromium(
+    tmp_path: Path, fakes: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """ensure-chromium.sh for a chromium that is not there (:func:`_run_script`)."""
+    return _run_script(tmp_path, SCRIPT, {"ECDSIM_CHROMIUM": str(tmp_path / "chromium")}, fakes)
+
+
+def test_missing_chromium_without_apt_stops_with_one_line(tmp_path: Path) -> None:
+    # A PATH that has bash but no apt-get, and a chromium that is not there.
+    result = _run_ensure_chromium(tmp_path)
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, result.stderr
@@ -40,19 +61,8 @@ def test_missing_chromium_without_root_stops_with_one_line(tmp_path: Path) -> No
     # apt-get is there but the user is not root and has no password-less sudo: one line
     # with the command to run, exit 2, and apt-get never called. Fakes on the PATH: an
     # apt-get that records a call, an id that answers uid 1000, no sudo.
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    bash = shutil.which("bash")
-    assert bash is not None
-    (bin_dir / "bash").symlink_to(bash)
     called = tmp_path / "apt-get-called"
-    for name, body in (("apt-get", f"touch {called}\n"), ("id", "echo 1000\n")):
-        (bin_dir / name).write_text(f"#!{bash}\n{body}")
-        (bin_dir / name).chmod(0o755)
-    env = {**os.environ, "PATH": str(bin_dir), "ECDSIM_CHROMIUM": str(tmp_path / "chromium")}
-    result = subprocess.run(
-        [bash, str(SCRIPT)], env=env, capture_output=True, text=True, check=False
-    )
+    result = _run_ensure_chromium(tmp_path, {"apt-get": f"touch {called}\n", "id": "echo 1000\n"})
     assert result.returncode == 2
     assert result.stderr.strip().splitlines() == [
         "error: "
@@ -92,20 +102,8 @@ AXE_SCRIPT = ROOT / "scripts" / "ensure-axe.sh"
 def test_missing_npm_without_apt_stops_with_one_line(tmp_path: Path) -> None:
     # axe-core absent (an empty prefix), no npm and no apt-get on the PATH: one line
     # naming Debian's npm package, exit 2, before anything is installed.
-    bin_dir = tmp_path / "bin"
-    bin_dir.mkdir()
-    bash = shutil.which("bash")
-    assert bash is not None
-    (bin_dir / "bash").symlink_to(bash)
-    env = {
-        **os.environ,
-        "PATH": str(bin_dir),
-        "ECDSIM_AXE_PREFIX": str(tmp_path / "axe"),
-        "ECDSIM_NPM": "npm-that-is-not-there",
-    }
-    result = subprocess.run(
-        [bash, str(AXE_SCRIPT)], env=env, capture_output=True, text=True, check=False
-    )
+    env = {"ECDSIM_AXE_PREFIX": str(tmp_path / "axe"), "ECDSIM_NPM": "npm-that-is-not-there"}
+    result = _run_script(tmp_path, AXE_SCRIPT, env)
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, result.stderr
