@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ecdsim._types import BoolArray, FloatArray, broadcast
-from ecdsim.dynamics import gearflow, integrate, linear
+from ecdsim.dynamics import gearflow, integrate, linear, single
 from ecdsim.dynamics.backlash import solve_compliant
 from ecdsim.dynamics.damping import EddyLaw
 from ecdsim.dynamics.equations import SWITCH
@@ -38,17 +38,14 @@ from ecdsim.dynamics.result import (
     EventLog,
     TrajectoryData,
 )
+from ecdsim.dynamics.rules import KEEPING_SPEED, SETTLE_FRACTION, STICK_MARGIN
 from ecdsim.physics import gearing, mechanics, thermal
 from ecdsim.physics.gravity import gravity_torque, gravity_work
 
-# A breakaway needs the drive to exceed static friction by more than this relative margin;
-# at the boundary (a forward motion that stops where drive = kinetic friction = static
-# friction) rounding must not restart the motion: that would be numerical chatter.
-_STICK_MARGIN = 1e-12
-# After an impact, a rebound whose kinetic energy is below this fraction of the first
-# arrival's is taken as coming to rest against the stop (the remaining bounces form a
-# convergent geometric series of vanishing energy).
-_SETTLE_FRACTION = 1e-12
+# The stick margin and the settle fraction (ecdsim.dynamics.rules), shared with the
+# single-case path.
+_STICK_MARGIN = STICK_MARGIN
+_SETTLE_FRACTION = SETTLE_FRACTION
 # A plot of a case that ends approaching rest asymptotically (creep) stops after this many
 # of the motion's slow time constants (its remaining motion is then below e^-10 of it).
 DISPLAY_TIME_CONSTANTS = 10.0
@@ -56,9 +53,7 @@ DISPLAY_TIME_CONSTANTS = 10.0
 _EV = {name: code for code, name in enumerate(EVENT_KINDS)}
 _ST = {name: code for code, name in enumerate(STATUSES)}
 # By status code: whether a run that ended so keeps its last speed (else it is at rest).
-_KEEPS_SPEED = np.isin(
-    np.arange(len(STATUSES)), [_ST[k] for k in ("latched", "stop_time", "event_limit", "horizon")]
-)
+_KEEPS_SPEED = np.isin(np.arange(len(STATUSES)), [_ST[k] for k in KEEPING_SPEED])
 
 
 @dataclass
@@ -356,6 +351,9 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
     """
     if problem.compliant:
         return solve_compliant(problem, record=record)
+    if single.eligible(problem):
+        # One case in the single-case subset: the same loop in floats (dynamics.single).
+        return single.solve(problem, record=record)
     c = _flatten(problem)
     s = _State.initial(c)
     _thermal_start(c, s)

@@ -1,0 +1,691 @@
+"""One deployment solved with Python floats around the compiled RODAS4 segment.
+
+The vectorised event loop (:mod:`ecdsim.dynamics.solver`) handles a batch with NumPy
+arrays; with one case every array holds one number and each operation costs its
+dispatch (about a microsecond), some 0.3 ms per deployment beside a compiled
+integration of about 0.1 ms (the MSL brake spin-down). This module runs the same loop
+for one case with ``float`` arithmetic: the same decisions in the same order, the same
+IEEE operations on the same operands, and the same kernel
+(:func:`ecdsim.dynamics.compiled._segment`, called directly with a parameter row built
+from scalars), so that its :class:`~ecdsim.dynamics.result.DynamicResult` is the
+vectorised one bit for bit (``tests/test_dynamics_single.py`` holds the two together).
+
+The subset it takes (:func:`eligible`; anything else stays on the vectorised path):
+one case of a rigid mesh (not compliant), without gravity, with an ideal gear (not
+lossy), without Stribeck friction, with one-node heating or none, without lost motion
+(``lost_motion <= 0``: engaged from the release), with a linear spring (two
+breakpoints), and with nonlinear engaged segments (roll-off and/or heating) integrated
+by "RODAS4" with the compiled kernel available. In that subset every segment is an
+engaged integrated one: no closed form, no engagement, no power-flow switch, no
+spring-table run. A warm start (an initial rotor rise) is taken as the vectorised
+:func:`~ecdsim.dynamics.solver._thermal_start` takes it.
+
+Each function names the vectorised function it mirrors; the equations are those of
+docs/dynamics.md (the segment equations, Eq. 1 and the Kloss law, Incropera's Eq. 5.2 in
+the log state of :mod:`ecdsim.physics.thermal`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from types import ModuleType
+
+import numpy as np
+
+from ecdsim._types import FloatArray
+from ecdsim.dynamics import integrate, linear
+from ecdsim.dynamics.damping import KlossEddy, LinearEddy
+from ecdsim.dynamics.equations import Model
+from ecdsim.dynamics.problem import DynamicProblem
+from ecdsim.dynamics.records import IntegratedRecord
+from ecdsim.dynamics.result import (
+    EVENT_KINDS,
+    STATUSES,
+    DynamicResult,
+    EnergyBalance,
+    EventLog,
+    TrajectoryData,
+)
+from ecdsim.dynamics.rosenbrock import Trajectory
+from ecdsim.dynamics.rules import KEEPING_SPEED, SETTLE_FRACTION, STICK_MARGIN
+from ecdsim.physics import thermal
+
+# Tests switch this off to run the same problem on the vectorised path.
+ENABLED = True
+
+_EV = {name: code for code, name in enumerate(EVENT_KINDS)}
+_ST = {name: code for code, name in enumerate(STATUSES)}
+_KEEPS = frozenset(_ST[name] for name in KEEPING_SPEED)
+_REACH, _ZERO, _CAP, _REST = linear.REACH, linear.ZERO, linear.CAP, linear.REST
+_TINY = float(np.finfo(float).tiny)
+# exp overflows above this argument; NumPy's expm1 then gives inf (with a warning).
+_EXP_LIMIT = 709.0
+
+
+def eligible(problem: DynamicProblem) -> bool:
+    """Whether :func:`solve` takes ``problem`` (the subset of the module notes).
+
+    Cheap: a few attribute reads and one-element tests, numba's module looked up last.
+    """
+    if not ENABLED or problem.friction.size != 1 or problem.angles.shape[0] != 2:
+        return False
+    if problem.integrator != integrate.BATCHED or not problem.nonlinear or problem.two_node:
+        return False
+    if problem.compliant or problem.has_gravity or problem.lossy or problem.stribeck:
+        return False
+    if not isinstance(problem.eddy, (LinearEddy, KlossEddy)):
+        return False
+    if not problem.lost_motion.item() <= 0.0:
+        return False
+    return integrate.compiled_kernel() is not None
+
+
+def _item(value: float | FloatArray) -> float:
+    """The one number of a one-case field (a float or an array of one element)."""
+    return float(value.item()) if isinstance(value, np.ndarray) else float(value)
+
+
+def _maximum(a: float, b: float) -> float:
+    """``np.maximum`` of two floats: NaN if either is, else the larger (b when equal)."""
+    return a if a > b or a != a else b
+
+
+def _minimum(a: float, b: float) -> float:
+    """``np.minimum`` of two floats: NaN if either is, else the smaller (b when equal)."""
+    return a if a < b or a != a else b
+
+
+def _sign(value: float) -> float:
+    """``np.sign`` of a float."""
+    if value > 0.0:
+        return 1.0
+    if value < 0.0:
+        return -1.0
+    return value  # 0 or NaN
+
+
+@dataclass(frozen=True, slots=True)
+class _Case:
+    """The case's constants (the one-element fields of solver._Cases, as floats)."""
+
+    lower: float  # the spring's first angle [rad]
+    upper: float  # its last angle [rad]
+    start_torque: float  # its torque at ``lower`` [N*m]
+    slope: float  # dT/dphi (solver._piece) [N*m/rad]
+    travel: float
+    load_inertia: float
+    total_inertia: float
+    ecd_friction: float
+    system_friction: float
+    factor: float
+    system_factor: float
+    restitution: float
+    angle0: float
+    speed0: float
+    ambient: float
+    linear_damping: float  # BECD_T at ambient, the integrator's speed scale
+    coefficient: float  # c of the damping law's temperature factor [1/K]
+    ambient_factor: float  # f_a (Model.ambient_factor)
+    zero: float  # the law's zero temperature T_ref - 1/c where c < 0, else inf [degC]
+    heating: bool
+
+    def temperature(self, state: float) -> float:
+        """:meth:`Model.temperature` of one state s: ``T_amb + f_a s E(c s)``, clipped.
+
+        ``thermal.temperature_from_factor_log`` with NumPy's expm1 (which differs from
+        ``math.expm1`` in the last place for some arguments) where ``c s != 0``.
+        """
+        z = self.coefficient * state
+        if z == 0.0:
+            growth = 1.0
+        elif z < _EXP_LIMIT:
+            growth = float(np.expm1(z)) / z
+        else:
+            with np.errstate(over="ignore"):  # inf, as thermal._exprel gives it
+                growth = float(np.expm1(z)) / z
+        return _minimum(self.ambient + self.ambient_factor * state * growth, self.zero)
+
+
+@dataclass(slots=True)
+class _Run:
+    """The running state of the case (solver._State, one case, as floats)."""
+
+    t: float
+    phi: float
+    w: float
+    temp: float
+    heat: float = 0.0  # the temperature state s
+    done: bool = False
+    status: int = 0
+    hold_from: float = 0.0
+    display_end: float = 0.0
+    arrival_time: float = math.inf
+    arrival_speed: float = 0.0
+    arrival_ke: float = 0.0
+    stuck: bool = False
+    stuck_angle: float = math.nan
+    stuck_time: float = math.nan
+    rebound_speed: float = 0.0
+    impacts: int = 0
+    max_speed: float = 0.0
+    max_temp: float = 0.0
+    spring_work: float = 0.0
+    friction_work: float = 0.0
+    damper_work: float = 0.0
+    impact_loss: float = 0.0
+    times: list[float] = field(default_factory=list)  # the event log, in order
+    kinds: list[int] = field(default_factory=list)
+    angles: list[float] = field(default_factory=list)
+    speeds: list[float] = field(default_factory=list)
+    records: list[IntegratedRecord] | None = None
+
+    def log(self, kind: str, time: float | None = None, speed: float | None = None) -> None:
+        """Log an event at the current angle (solver._Log.add), at t and w unless given."""
+        self.times.append(self.t if time is None else time)
+        self.kinds.append(_EV[kind])
+        self.angles.append(self.phi)
+        self.speeds.append(self.w if speed is None else speed)
+
+    def finish(self, status: str) -> None:
+        """solver._State.finish."""
+        self.done = True
+        self.status = _ST[status]
+
+
+@dataclass(slots=True)
+class _Kernel:
+    """The compiled kernel and the buffers it reads and writes (compiled._parameters)."""
+
+    segment: Callable[..., tuple[int, float, float, float, FloatArray, int]]
+    law: int  # the law's code (compiled.LINEAR_LAW, KLOSS_LAW)
+    drive: int  # the drive's column in the row
+    par: FloatArray  # the parameter row
+    y0: FloatArray  # [x, u, s, E] at the segment's start
+    atol: FloatArray
+    final: FloatArray
+    model: Callable[[], Model]  # the one-segment model, for recorded time series
+
+
+def _case(problem: DynamicProblem) -> _Case:
+    """The constants of the one case (solver._flatten, Model.__post_init__)."""
+    angles, torques = problem.angles.reshape(2), problem.torques.reshape(2)
+    a0, a1 = float(angles[0]), float(angles[1])
+    t0, t1 = float(torques[0]), float(torques[1])
+    width = a1 - a0
+    eddy = problem.eddy
+    coefficient = _item(eddy.coefficient)
+    load, damper = problem.load_inertia.item(), problem.damper_inertia.item()
+    return _Case(
+        lower=a0,
+        upper=a1,
+        start_torque=t0,
+        slope=(t1 - t0) / width if width > 0.0 else 0.0,
+        travel=a1,
+        load_inertia=load,
+        total_inertia=load + damper,
+        ecd_friction=problem.ecd_friction.item(),
+        system_friction=problem.system_friction.item(),
+        factor=problem.static_friction_factor.item(),
+        system_factor=problem.system_static_friction_factor.item(),
+        restitution=problem.restitution.item(),
+        angle0=problem.initial_angle.item(),
+        speed0=problem.initial_speed.item(),
+        ambient=problem.ambient_temperature.item(),
+        linear_damping=problem.damping_rate.item(),
+        coefficient=coefficient,
+        ambient_factor=_item(np.maximum(eddy.factor(problem.ambient_temperature), 0.0)),
+        zero=_item(eddy.reference_temperature) - 1.0 / coefficient
+        if coefficient < 0.0
+        else math.inf,
+        heating=problem.thermal,
+    )
+
+
+def _kernel(problem: DynamicProblem, case: _Case, module: ModuleType) -> _Kernel:
+    """The parameter row of :func:`ecdsim.dynamics.compiled._parameters` for the case.
+
+    J and k are the case's for every segment (engaged, one spring piece); the drive is
+    set per segment. The columns of a lossy gear, gravity, Stribeck friction and the
+    housing hold their "none" values, as ``_parameters`` writes them.
+    """
+    eddy = problem.eddy
+    par = np.empty(module._COLUMNS)
+    par[module._J] = case.total_inertia
+    par[module._K] = -case.slope
+    par[module._DRIVE] = math.nan  # set per segment
+    par[module._N] = problem.gear_ratio.item()
+    par[module._BG] = problem.gearbox_damping_rate.item()
+    par[module._C] = problem.heat_capacity.item()
+    par[module._R] = problem.thermal_resistance.item()
+    par[module._FA] = case.ambient_factor
+    par[module._COEF] = case.coefficient
+    par[module._FIXED] = math.nan  # set by _segment from the start state
+    par[module._DF] = 0.0
+    par[module._WS] = 1.0
+    par[module._CH] = math.inf
+    par[module._RHE] = math.inf
+    par[module._GW] = 0.0
+    par[module._GP] = 0.0
+    par[module._GD] = 1.0
+    par[module._MESH] = 1.0
+    par[module._FLOW] = 0.0
+    for column in (module._JL, module._JD, module._FQ, module._AL):
+        par[column] = 0.0
+    if isinstance(eddy, LinearEddy):
+        law = module.LINEAR_LAW
+        par[module._LAW_A] = _item(eddy.damping_rate)
+        par[module._LAW_B] = 0.0
+    else:
+        assert isinstance(eddy, KlossEddy)
+        law = module.KLOSS_LAW
+        par[module._LAW_A] = _item(eddy.peak_torque)
+        par[module._LAW_B] = _item(eddy.reference_peak_speed)
+    built: list[Model] = []
+
+    def model() -> Model:
+        # Built when a recorded segment is first sampled (most runs never are), once.
+        if not built:
+            one = np.ones(1)
+            built.append(
+                Model(
+                    inertia=one * case.total_inertia,
+                    stiffness=one * -case.slope,
+                    drive=one * 0.0,
+                    ratio=problem.gear_ratio.reshape(1),
+                    gearbox_damping=problem.gearbox_damping_rate.reshape(1),
+                    heat_capacity=problem.heat_capacity.reshape(1),
+                    thermal_resistance=problem.thermal_resistance.reshape(1),
+                    ambient=problem.ambient_temperature.reshape(1),
+                    eddy=eddy.flattened(problem.batch_shape),
+                    heating=problem.thermal,
+                    ambient_factor=one * case.ambient_factor,
+                )
+            )
+        return built[0]
+
+    return _Kernel(
+        module._segment, law, module._DRIVE, par, np.zeros(4), np.empty(4), np.empty(4), model
+    )
+
+
+class _Recorded(integrate._InTemperature):
+    """integrate._InTemperature whose one-segment model is built on first evaluation."""
+
+    def __init__(self, solution: Callable[[FloatArray], FloatArray], model: Callable[[], Model]):
+        self.solution = solution
+        self._build = model
+
+    @property
+    def model(self) -> Model:
+        """The model of this segment (its temperature law: the case's)."""
+        return self._build()
+
+
+def _start(problem: DynamicProblem, case: _Case) -> _Run:
+    """solver._State.initial and solver._thermal_start for the case (engaged at release)."""
+    run = _Run(
+        t=0.0,
+        phi=case.angle0,
+        w=case.speed0,
+        temp=case.ambient,
+        max_speed=_maximum(case.speed0, 0.0),
+        max_temp=case.ambient,
+    )
+    rise = problem.initial_rotor_rise.item()
+    if problem.thermal and rise != 0.0:
+        # The rotor's state is the damping law's log factor of its rise (thermal).
+        heat = thermal.factor_log_from_rise(
+            np.array([rise]), np.array([case.ambient_factor]), case.coefficient
+        )
+        run.heat = float(heat[0])
+        run.temp = case.ambient + rise
+        run.max_temp = run.temp
+    return run
+
+
+def _stick_or_break(case: _Case, run: _Run) -> float:
+    """solver._stick_or_break: the direction of a breakaway, 0 where the case sticks."""
+    drive = case.start_torque + case.slope * (run.phi - case.lower)
+    static = case.system_friction * case.system_factor + case.ecd_friction * case.factor
+    if abs(drive) <= static + STICK_MARGIN * _maximum(abs(drive), static):
+        run.finish("stuck")
+        run.stuck = True
+        run.stuck_angle = run.phi
+        run.stuck_time = run.t
+        run.log("stick")
+        return 0.0
+    run.log("breakaway")
+    return _sign(drive)
+
+
+@dataclass(frozen=True, slots=True)
+class _Segment:
+    """solver._Segment for the case: the segment's frame, its first geometric event."""
+
+    direction: float
+    torque: float  # spring torque at the start [N*m]
+    length: float
+    reach_kind: int
+    kinetic: float
+    drive: float
+    speed0: float
+    cap: float
+
+
+def _segment(case: _Case, run: _Run, direction: float, stop_time: float) -> _Segment:
+    """solver._segments for the engaged case on its one spring piece."""
+    phi = run.phi
+    torque = case.start_torque + case.slope * (phi - case.lower)
+    kinetic = case.ecd_friction + case.system_friction
+    if direction > 0.0:
+        length = case.upper - phi
+        reach = _EV["arrive"] if case.upper >= case.travel else _EV["breakpoint"]
+        drive = torque - kinetic
+    else:
+        length = phi - case.lower
+        reach = _EV["start_stop"] if case.lower <= 0.0 else _EV["breakpoint"]
+        drive = -(torque + kinetic)
+    return _Segment(
+        direction=direction,
+        torque=torque,
+        length=_maximum(length, 0.0),
+        reach_kind=reach,
+        kinetic=kinetic,
+        drive=drive,
+        # + 0.0: a backward breakaway from rest gives -0.0 (solver._segments).
+        speed0=direction * run.w + 0.0,
+        cap=_maximum(stop_time - run.t, 0.0),
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class _Step:
+    """solver._Step for the case, from integrate._advance_batched."""
+
+    kind: int
+    duration: float
+    x: float
+    v: float
+    damper_work: float
+    peak_speed: float
+    temperature: float
+    peak_temperature: float
+
+
+def _integrate(
+    case: _Case, run: _Run, seg: _Segment, kernel: _Kernel, rtol: float, record: bool
+) -> _Step:
+    """The segment integrated: integrate._scales, _start, compiled.integrate_batch and
+    integrate._advance_batched for one segment, then solver._step_integrated's record."""
+    inertia = case.total_inertia
+    stiffness = -case.slope
+    damping0 = _maximum(case.linear_damping, 1e-300)
+    drive = abs(seg.drive)
+    speed0 = seg.speed0
+    speed = _maximum(_maximum(abs(speed0), drive / damping0), 1e-300)
+    length = _maximum(seg.length, 1e-9)
+    energy = _maximum(_maximum(drive * seg.length, 0.5 * inertia * (speed0 * speed0)), 1e-300)
+    atol = kernel.atol
+    atol[0] = rtol * 1e-3 * length
+    atol[1] = min(rtol * 1e-3, 1e-12) * speed
+    atol[2] = rtol * 1e-3
+    atol[3] = rtol * 1e-3 * energy
+    equilibrium = seg.drive / stiffness if stiffness > 0.0 else math.inf
+    creeps = equilibrium > 0.0 and equilibrium <= seg.length
+    first = 1e-3 * _minimum(inertia / damping0, length / speed)
+    kernel.par[kernel.drive] = seg.drive
+    kernel.y0[1] = speed0
+    kernel.y0[2] = run.heat
+    code, duration, top_speed, top_temp, steps, count = kernel.segment(
+        kernel.par,
+        kernel.law,
+        case.heating,
+        kernel.y0,
+        seg.length,
+        seg.cap,
+        integrate.CREEP_FRACTION * speed,
+        creeps,
+        atol,
+        first,
+        rtol,
+        integrate.HORIZON_TIME,
+        integrate.HORIZON,
+        record,
+        kernel.final,
+    )
+    x, u, state, work = kernel.final.tolist()
+    if run.records is not None and count >= 2:
+        solution = Trajectory(
+            steps[0, :count].copy(), steps[1:5, :count].copy(), steps[5:, :count].copy()
+        )
+        run.records.append(
+            IntegratedRecord(
+                case=0,
+                start_time=run.t,
+                duration=duration,
+                start_angle=run.phi,
+                direction=seg.direction,
+                solution=_Recorded(solution, kernel.model),
+            )
+        )
+    run.heat = state
+    return _Step(
+        kind=code,
+        duration=duration,
+        x=x,
+        v=0.0 if code in (_ZERO, _REST) else u,
+        damper_work=work,
+        peak_speed=_maximum(top_speed, speed0),
+        temperature=case.temperature(state),
+        peak_temperature=case.temperature(_maximum(top_temp, state)),
+    )
+
+
+def _account(run: _Run, seg: _Segment, step: _Step, stiffness: float) -> None:
+    """solver._account: energy, extremes, and the new time, angle and speed."""
+    direction = seg.direction
+    displacement = direction * step.x
+    run.spring_work += seg.torque * displacement - 0.5 * stiffness * displacement * displacement
+    run.friction_work += seg.kinetic * abs(step.x)
+    run.damper_work += step.damper_work
+    if not math.isfinite(run.arrival_time) and direction > 0.0:
+        run.max_speed = _maximum(run.max_speed, step.peak_speed)
+    run.max_temp = _maximum(run.max_temp, step.peak_temperature)
+    run.temp = step.temperature
+    t_new = run.t + step.duration
+    run.hold_from = t_new
+    run.display_end = t_new  # the start plus the duration (solver._step_integrated)
+    run.t = t_new
+    if step.kind == _REACH:  # geometric events land exactly on their angle
+        run.phi = run.phi + direction * seg.length
+    else:
+        run.phi = run.phi + displacement
+    run.w = direction * step.v
+
+
+def _apply_event(case: _Case, run: _Run, seg: _Segment, kind: int) -> bool:
+    """solver._apply_events for the case; True where it passed a spring breakpoint."""
+    if kind == _ZERO:
+        run.w = 0.0  # the next pass decides stick or breakaway
+        run.log("zero_speed")
+    elif kind == _CAP:
+        run.finish("stop_time")
+        run.log("stop_time")
+    elif kind == _REST:
+        run.finish("creep")
+        run.stuck = True
+        run.stuck_angle = run.phi
+        run.stuck_time = math.inf
+        run.t = math.inf
+        run.w = 0.0
+        run.log("creep")
+    elif kind == integrate.HORIZON:
+        run.finish("horizon")
+        run.log("horizon")
+    elif kind == _REACH:
+        if seg.reach_kind == _EV["breakpoint"]:
+            run.log("breakpoint")
+            return True
+        _impact(case, run, "arrive" if seg.reach_kind == _EV["arrive"] else "start_stop")
+    return False
+
+
+def _impact(case: _Case, run: _Run, name: str) -> None:
+    """solver._impact: end of travel (latch or rebound) or the start stop."""
+    inertia = case.total_inertia
+    ke = 0.5 * inertia * run.w * run.w  # mechanics.kinetic_energy
+    run.log(name)
+    arriving = name == "arrive"
+    if arriving and not math.isfinite(run.arrival_time):
+        run.arrival_time = run.t
+        run.arrival_speed = run.w
+        run.arrival_ke = ke
+    e = case.restitution
+    if e <= 0.0:
+        if arriving:
+            run.finish("latched")
+            run.log("latch")
+        else:
+            run.impact_loss += ke
+            run.w = 0.0
+        return
+    # mechanics.rebound
+    w_after = -e * run.w
+    loss = (1.0 - e * e) * (0.5 * inertia * run.w * run.w)
+    reference = _maximum(_maximum(run.arrival_ke, ke), _TINY)
+    settle = ke - loss <= SETTLE_FRACTION * reference
+    if arriving and run.impacts == 0 and not settle:
+        run.rebound_speed = w_after
+    run.impacts += 1
+    run.impact_loss += ke if settle else loss
+    run.w = 0.0 if settle else w_after
+    if arriving and settle:
+        run.finish("settled")
+        run.log("settle")
+
+
+def solve(problem: DynamicProblem, record: bool = True) -> DynamicResult:
+    """Solve the one case of ``problem`` (:func:`eligible`) as solver.solve_dynamic does."""
+    module = integrate.compiled_kernel()
+    assert module is not None
+    case = _case(problem)
+    kernel = _kernel(problem, case, module)
+    run = _start(problem, case)
+    if record:
+        run.records = []
+    stiffness = -case.slope
+    run.log("release")
+    # Passes that ended in an event other than a breakpoint (solve_dynamic's event limit).
+    passes = 0
+    while not run.done:
+        if passes >= problem.max_events:
+            run.finish("event_limit")
+            run.log("event_limit")
+            break
+        direction = _stick_or_break(case, run) if run.w == 0.0 else _sign(run.w)
+        if direction == 0.0:  # stuck (the loop ends), as no case runs in solve_dynamic
+            continue
+        seg = _segment(case, run, direction, problem.stop_time)
+        step = _integrate(case, run, seg, kernel, problem.rtol, record)
+        _account(run, seg, step, stiffness)
+        if not _apply_event(case, run, seg, step.kind):
+            passes += 1
+    return _result(problem, case, run)
+
+
+def _result(problem: DynamicProblem, case: _Case, run: _Run) -> DynamicResult:
+    """solve_dynamic's result for the case: summaries, energy, events and trajectory."""
+    shape = problem.batch_shape
+    final_speed = run.w if run.status in _KEEPS else 0.0
+    inertia = case.total_inertia
+
+    def full(value: float) -> FloatArray:
+        return np.full(shape, value)
+
+    energy = EnergyBalance(
+        spring_work=full(run.spring_work),
+        initial_kinetic_energy=full(0.5 * inertia * case.speed0 * case.speed0),
+        damper_dissipation=full(run.damper_work),
+        friction_dissipation=full(run.friction_work),
+        engagement_loss=full(0.0),
+        impact_loss=full(run.impact_loss),
+        final_kinetic_energy=full(0.5 * inertia * final_speed * final_speed),
+        gravity_work=None,
+        gear_loss=full(0.0),
+    )
+    m = len(run.kinds)
+    events = EventLog(
+        np.zeros(m, dtype=np.intp),
+        np.array(run.times),
+        np.array(run.kinds, dtype=np.int8),
+        np.array(run.angles),
+        np.array(run.speeds),
+    )
+    trajectory = None
+    if run.records is not None:
+        trajectory = _trajectory(problem, case, run, final_speed)
+    return DynamicResult(
+        batch_shape=shape,
+        temperature=problem.ambient_temperature.reshape(shape),
+        deployment_time=full(run.arrival_time),
+        arrival_speed=full(run.arrival_speed),
+        arrival_kinetic_energy=full(run.arrival_ke),
+        final_time=full(run.t),
+        final_angle=full(run.phi),
+        final_speed=full(final_speed),
+        final_temperature=full(run.temp),
+        stuck=np.full(shape, run.stuck),
+        stuck_angle=full(run.stuck_angle),
+        stuck_time=full(run.stuck_time),
+        max_speed=full(run.max_speed),
+        max_damper_temperature=full(run.max_temp),
+        final_housing_temperature=None,
+        engagement_time=full(0.0),
+        rebound_speed=full(run.rebound_speed),
+        impacts=np.full(shape, run.impacts, dtype=np.int64),
+        status=np.full(shape, run.status, dtype=np.int8),
+        energy=energy,
+        events=events,
+        trajectory=trajectory,
+    )
+
+
+def _trajectory(
+    problem: DynamicProblem, case: _Case, run: _Run, final_speed: float
+) -> TrajectoryData:
+    """solve_dynamic's TrajectoryData for the case (one-element flat arrays)."""
+    assert run.records is not None
+
+    def flat(values: FloatArray) -> FloatArray:
+        return np.ascontiguousarray(values.reshape(1), dtype=float)
+
+    return TrajectoryData(
+        closed=[],
+        integrated=run.records,
+        initial=(
+            flat(problem.initial_angle),
+            flat(problem.initial_speed),
+            flat(problem.ambient_temperature),
+            np.ones(1, dtype=bool),  # engaged at release: no lost motion
+        ),
+        final=(
+            np.array([run.phi]),
+            np.array([final_speed]),
+            np.array([run.temp]),
+            np.ones(1, dtype=bool),
+            np.array([run.hold_from]),
+        ),
+        display_end=np.array([run.t if math.isfinite(run.t) else run.display_end]),
+        angles=np.ascontiguousarray(problem.angles.reshape(2, 1), dtype=float),
+        torques=np.ascontiguousarray(problem.torques.reshape(2, 1), dtype=float),
+        ecd_friction=flat(problem.ecd_friction),
+        system_friction=flat(problem.system_friction),
+        factor=flat(problem.static_friction_factor),
+        system_factor=flat(problem.system_static_friction_factor),
+        ratio=flat(problem.gear_ratio),
+        gearbox_damping=flat(problem.gearbox_damping_rate),
+        eddy=problem.eddy.flattened(problem.batch_shape),
+        stribeck_speed=flat(problem.stribeck_speed),
+    )
