@@ -67,17 +67,23 @@ _EXP_LIMIT = 709.0
 def eligible(problem: DynamicProblem) -> bool:
     """Whether :func:`solve` takes ``problem`` (the subset of the module notes).
 
-    Cheap: a few attribute reads and one-element tests, numba's module looked up last.
+    Cheap: attribute reads and tests of one-element fields (the problem's ``lossy``,
+    ``stribeck``, ``compliant`` and ``has_gravity`` for one case), numba's module last.
     """
     if not ENABLED or problem.friction.size != 1 or problem.angles.shape[0] != 2:
         return False
     if problem.integrator != integrate.BATCHED or not problem.nonlinear or problem.two_node:
         return False
-    if problem.compliant or problem.has_gravity or problem.lossy or problem.stribeck:
-        return False
     if not isinstance(problem.eddy, (LinearEddy, KlossEddy)):
         return False
-    if not problem.lost_motion.item() <= 0.0:
+    gravity = problem.gravity_amplitude
+    if (gravity is not None and gravity.item() != 0.0) or not problem.lost_motion.item() <= 0.0:
+        return False
+    if problem.forward_efficiency.item() != 1.0 or problem.backward_efficiency.item() != 1.0:
+        return False
+    if math.isfinite(problem.stribeck_speed.item()):
+        return False
+    if math.isfinite(problem.gear_stiffness.item()):
         return False
     return integrate.compiled_kernel() is not None
 
@@ -106,7 +112,7 @@ def _sign(value: float) -> float:
     return value  # 0 or NaN
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class _Case:
     """The case's constants (the one-element fields of solver._Cases, as floats)."""
 
@@ -210,9 +216,9 @@ class _Kernel:
 
 def _case(problem: DynamicProblem) -> _Case:
     """The constants of the one case (solver._flatten, Model.__post_init__)."""
-    angles, torques = problem.angles.reshape(2), problem.torques.reshape(2)
-    a0, a1 = float(angles[0]), float(angles[1])
-    t0, t1 = float(torques[0]), float(torques[1])
+    angles, torques = problem.angles, problem.torques  # (2, *batch), one case
+    a0, a1 = angles.item(0), angles.item(1)
+    t0, t1 = torques.item(0), torques.item(1)
     width = a1 - a0
     eddy = problem.eddy
     coefficient = _item(eddy.coefficient)
@@ -251,37 +257,32 @@ def _kernel(problem: DynamicProblem, case: _Case, module: ModuleType) -> _Kernel
     housing hold their "none" values, as ``_parameters`` writes them.
     """
     eddy = problem.eddy
-    par = np.empty(module._COLUMNS)
-    par[module._J] = case.total_inertia
-    par[module._K] = -case.slope
-    par[module._DRIVE] = math.nan  # set per segment
-    par[module._N] = problem.gear_ratio.item()
-    par[module._BG] = problem.gearbox_damping_rate.item()
-    par[module._C] = problem.heat_capacity.item()
-    par[module._R] = problem.thermal_resistance.item()
-    par[module._FA] = case.ambient_factor
-    par[module._COEF] = case.coefficient
-    par[module._FIXED] = math.nan  # set by _segment from the start state
-    par[module._DF] = 0.0
-    par[module._WS] = 1.0
-    par[module._CH] = math.inf
-    par[module._RHE] = math.inf
-    par[module._GW] = 0.0
-    par[module._GP] = 0.0
-    par[module._GD] = 1.0
-    par[module._MESH] = 1.0
-    par[module._FLOW] = 0.0
-    for column in (module._JL, module._JD, module._FQ, module._AL):
-        par[column] = 0.0
+    row = [0.0] * module._COLUMNS  # zero: no Stribeck excess, gravity, flow, J_L .. a_L
+    row[module._J] = case.total_inertia
+    row[module._K] = -case.slope
+    row[module._DRIVE] = math.nan  # set per segment
+    row[module._N] = problem.gear_ratio.item()
+    row[module._BG] = problem.gearbox_damping_rate.item()
+    row[module._C] = problem.heat_capacity.item()
+    row[module._R] = problem.thermal_resistance.item()
+    row[module._FA] = case.ambient_factor
+    row[module._COEF] = case.coefficient
+    row[module._FIXED] = math.nan  # set by _segment from the start state
+    row[module._WS] = 1.0  # w_St, unused without Stribeck friction
+    row[module._CH] = math.inf  # one node: C_h, R_he unused
+    row[module._RHE] = math.inf
+    row[module._GD] = 1.0  # the gravity direction, unused without gravity
+    row[module._MESH] = 1.0  # an ideal gear: m = 1
     if isinstance(eddy, LinearEddy):
         law = module.LINEAR_LAW
-        par[module._LAW_A] = _item(eddy.damping_rate)
-        par[module._LAW_B] = 0.0
+        row[module._LAW_A] = _item(eddy.damping_rate)
+        row[module._LAW_B] = 0.0
     else:
         assert isinstance(eddy, KlossEddy)
         law = module.KLOSS_LAW
-        par[module._LAW_A] = _item(eddy.peak_torque)
-        par[module._LAW_B] = _item(eddy.reference_peak_speed)
+        row[module._LAW_A] = _item(eddy.peak_torque)
+        row[module._LAW_B] = _item(eddy.reference_peak_speed)
+    par = np.array(row)
     built: list[Model] = []
 
     def model() -> Model:
@@ -298,7 +299,7 @@ def _kernel(problem: DynamicProblem, case: _Case, module: ModuleType) -> _Kernel
                     heat_capacity=problem.heat_capacity.reshape(1),
                     thermal_resistance=problem.thermal_resistance.reshape(1),
                     ambient=problem.ambient_temperature.reshape(1),
-                    eddy=eddy.flattened(problem.batch_shape),
+                    eddy=_flat_eddy(problem),
                     heating=problem.thermal,
                     ambient_factor=one * case.ambient_factor,
                 )
@@ -360,7 +361,7 @@ def _stick_or_break(case: _Case, run: _Run) -> float:
     return _sign(drive)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class _Segment:
     """solver._Segment for the case: the segment's frame, its first geometric event."""
 
@@ -400,7 +401,7 @@ def _segment(case: _Case, run: _Run, direction: float, stop_time: float) -> _Seg
     )
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class _Step:
     """solver._Step for the case, from integrate._advance_batched."""
 
@@ -568,10 +569,10 @@ def _impact(case: _Case, run: _Run, name: str) -> None:
 
 def solve(problem: DynamicProblem, record: bool = True) -> DynamicResult:
     """Solve the one case of ``problem`` (:func:`eligible`) as solver.solve_dynamic does."""
-    module = integrate.compiled_kernel()
-    assert module is not None
+    from ecdsim.dynamics import compiled  # numba: eligible() found it importable
+
     case = _case(problem)
-    kernel = _kernel(problem, case, module)
+    kernel = _kernel(problem, case, compiled)
     run = _start(problem, case)
     if record:
         run.records = []
@@ -596,71 +597,128 @@ def solve(problem: DynamicProblem, record: bool = True) -> DynamicResult:
 
 
 def _result(problem: DynamicProblem, case: _Case, run: _Run) -> DynamicResult:
-    """solve_dynamic's result for the case: summaries, energy, events and trajectory."""
+    """solve_dynamic's result for the case: summaries, energy, events and trajectory.
+
+    The float fields are views of one array (one NumPy call, not one per field), each
+    of the batch's shape; so are the event log's times, angles and speeds.
+    """
     shape = problem.batch_shape
     final_speed = run.w if run.status in _KEEPS else 0.0
     inertia = case.total_inertia
-
-    def full(value: float) -> FloatArray:
-        return np.full(shape, value)
-
-    energy = EnergyBalance(
-        spring_work=full(run.spring_work),
-        initial_kinetic_energy=full(0.5 * inertia * case.speed0 * case.speed0),
-        damper_dissipation=full(run.damper_work),
-        friction_dissipation=full(run.friction_work),
-        engagement_loss=full(0.0),
-        impact_loss=full(run.impact_loss),
-        final_kinetic_energy=full(0.5 * inertia * final_speed * final_speed),
-        gravity_work=None,
-        gear_loss=full(0.0),
-    )
-    m = len(run.kinds)
-    events = EventLog(
-        np.zeros(m, dtype=np.intp),
-        np.array(run.times),
-        np.array(run.kinds, dtype=np.int8),
-        np.array(run.angles),
-        np.array(run.speeds),
-    )
+    values = np.array(
+        (
+            run.arrival_time,
+            run.arrival_speed,
+            run.arrival_ke,
+            run.t,
+            run.phi,
+            final_speed,
+            run.temp,
+            run.stuck_angle,
+            run.stuck_time,
+            run.max_speed,
+            run.max_temp,
+            0.0,  # engagement_time: engaged at release
+            run.rebound_speed,
+            # The energy balance (mechanics.kinetic_energy for the kinetic energies).
+            run.spring_work,
+            0.5 * inertia * case.speed0 * case.speed0,
+            run.damper_work,
+            run.friction_work,
+            0.0,  # engagement_loss: no lost motion
+            run.impact_loss,
+            0.5 * inertia * final_speed * final_speed,
+            0.0,  # gear_loss: an ideal gear
+        )
+    ).reshape((21, *shape))
+    # Iterating over the first axis gives the views (but scalars for a 0-d batch).
+    v = list(values) if shape else [values[k, ...] for k in range(21)]
+    logged = np.array((run.times, run.angles, run.speeds))
     trajectory = None
     if run.records is not None:
         trajectory = _trajectory(problem, case, run, final_speed)
     return DynamicResult(
         batch_shape=shape,
         temperature=problem.ambient_temperature.reshape(shape),
-        deployment_time=full(run.arrival_time),
-        arrival_speed=full(run.arrival_speed),
-        arrival_kinetic_energy=full(run.arrival_ke),
-        final_time=full(run.t),
-        final_angle=full(run.phi),
-        final_speed=full(final_speed),
-        final_temperature=full(run.temp),
+        deployment_time=v[0],
+        arrival_speed=v[1],
+        arrival_kinetic_energy=v[2],
+        final_time=v[3],
+        final_angle=v[4],
+        final_speed=v[5],
+        final_temperature=v[6],
         stuck=np.full(shape, run.stuck),
-        stuck_angle=full(run.stuck_angle),
-        stuck_time=full(run.stuck_time),
-        max_speed=full(run.max_speed),
-        max_damper_temperature=full(run.max_temp),
+        stuck_angle=v[7],
+        stuck_time=v[8],
+        max_speed=v[9],
+        max_damper_temperature=v[10],
         final_housing_temperature=None,
-        engagement_time=full(0.0),
-        rebound_speed=full(run.rebound_speed),
+        engagement_time=v[11],
+        rebound_speed=v[12],
         impacts=np.full(shape, run.impacts, dtype=np.int64),
         status=np.full(shape, run.status, dtype=np.int8),
-        energy=energy,
-        events=events,
+        energy=EnergyBalance(
+            spring_work=v[13],
+            initial_kinetic_energy=v[14],
+            damper_dissipation=v[15],
+            friction_dissipation=v[16],
+            engagement_loss=v[17],
+            impact_loss=v[18],
+            final_kinetic_energy=v[19],
+            gear_loss=v[20],
+            gravity_work=None,
+        ),
+        events=EventLog(
+            np.zeros(len(run.kinds), dtype=np.intp),
+            logged[0],
+            np.array(run.kinds, dtype=np.int8),
+            logged[1],
+            logged[2],
+        ),
         trajectory=trajectory,
     )
+
+
+def _flat_eddy(problem: DynamicProblem) -> LinearEddy | KlossEddy:
+    """``problem.eddy.flattened(shape)`` for one case: each parameter as a (1,) array."""
+    eddy = problem.eddy
+
+    def one(value: float | FloatArray) -> FloatArray:
+        return np.array([_item(value)])
+
+    if isinstance(eddy, LinearEddy):
+        return LinearEddy(
+            one(eddy.damping_rate),
+            one(eddy.reference_temperature),
+            one(eddy.temperature_coefficient),
+        )
+    assert isinstance(eddy, KlossEddy)
+    return KlossEddy(
+        one(eddy.peak_torque),
+        one(eddy.reference_peak_speed),
+        one(eddy.resistivity_coefficient),
+        one(eddy.reference_temperature),
+    )
+
+
+def _same(values: FloatArray) -> FloatArray:
+    return values
+
+
+def _one_element(values: FloatArray) -> FloatArray:
+    return values.reshape(1)
 
 
 def _trajectory(
     problem: DynamicProblem, case: _Case, run: _Run, final_speed: float
 ) -> TrajectoryData:
-    """solve_dynamic's TrajectoryData for the case (one-element flat arrays)."""
+    """solve_dynamic's TrajectoryData for the case (one-element flat arrays: views of the
+    problem's fields, as solver._flatten takes them)."""
     assert run.records is not None
-
-    def flat(values: FloatArray) -> FloatArray:
-        return np.ascontiguousarray(values.reshape(1), dtype=float)
-
+    final = np.array((run.phi, final_speed, run.temp, run.hold_from))
+    engaged = np.ones(1, dtype=bool)  # engaged at release: no lost motion
+    # A batch of shape (1,) (predict's one temperature) needs no reshape.
+    flat = _same if problem.batch_shape == (1,) else _one_element
     return TrajectoryData(
         closed=[],
         integrated=run.records,
@@ -668,24 +726,18 @@ def _trajectory(
             flat(problem.initial_angle),
             flat(problem.initial_speed),
             flat(problem.ambient_temperature),
-            np.ones(1, dtype=bool),  # engaged at release: no lost motion
+            engaged,
         ),
-        final=(
-            np.array([run.phi]),
-            np.array([final_speed]),
-            np.array([run.temp]),
-            np.ones(1, dtype=bool),
-            np.array([run.hold_from]),
-        ),
+        final=(final[0:1], final[1:2], final[2:3], engaged.copy(), final[3:4]),
         display_end=np.array([run.t if math.isfinite(run.t) else run.display_end]),
-        angles=np.ascontiguousarray(problem.angles.reshape(2, 1), dtype=float),
-        torques=np.ascontiguousarray(problem.torques.reshape(2, 1), dtype=float),
+        angles=problem.angles.reshape(2, 1),
+        torques=problem.torques.reshape(2, 1),
         ecd_friction=flat(problem.ecd_friction),
         system_friction=flat(problem.system_friction),
         factor=flat(problem.static_friction_factor),
         system_factor=flat(problem.system_static_friction_factor),
         ratio=flat(problem.gear_ratio),
         gearbox_damping=flat(problem.gearbox_damping_rate),
-        eddy=problem.eddy.flattened(problem.batch_shape),
+        eddy=_flat_eddy(problem),
         stribeck_speed=flat(problem.stribeck_speed),
     )

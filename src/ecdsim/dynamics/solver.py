@@ -10,7 +10,9 @@ rebound), zero speed, stop time, asymptotic rest. See ``docs/dynamics.md``.
 One pass over the running cases is :func:`_advance_cases`: event finding
 (:func:`_segments`, with the spring piece found by walking from the previous one, O(1)
 per event), stepping (:func:`_step_closed_form`, :func:`_step_integrated`) and
-bookkeeping (:func:`_account`, :func:`_apply_events`, :func:`_impact`).
+bookkeeping (:func:`_account`, :func:`_apply_events`, :func:`_impact`). A single case
+in the common subset (:func:`ecdsim.dynamics.single.eligible`) takes the same loop
+written for one case in floats, :mod:`ecdsim.dynamics.single`.
 """
 
 from __future__ import annotations
@@ -348,12 +350,15 @@ def solve_dynamic(problem: DynamicProblem, record: bool = True) -> DynamicResult
 
     A compliant gear mesh (``gear_stiffness`` finite) makes the load and the damper side
     two bodies: :func:`ecdsim.dynamics.backlash.solve_compliant` solves those problems.
+    One case in the subset of :mod:`ecdsim.dynamics.single` (:func:`single.eligible`)
+    runs this loop there, in floats around the compiled segment: the same result bit
+    for bit, without the NumPy calls' fixed cost on arrays of one element.
     """
-    if problem.compliant:
-        return solve_compliant(problem, record=record)
-    if single.eligible(problem):
+    if single.eligible(problem):  # never compliant
         # One case in the single-case subset: the same loop in floats (dynamics.single).
         return single.solve(problem, record=record)
+    if problem.compliant:
+        return solve_compliant(problem, record=record)
     c = _flatten(problem)
     s = _State.initial(c)
     _thermal_start(c, s)
