@@ -403,3 +403,20 @@ def test_without_numba_the_vectorised_path_runs(monkeypatch: pytest.MonkeyPatch)
     problem = _problem(paper_system(), DynamicParameters(5.0, rolloff=ROLLOFF))
     monkeypatch.setenv("ECDSIM_NUMBA", "0")
     assert not single.eligible(problem)
+
+
+def test_recorded_segments_carry_their_own_model(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Each recorded segment's model (built on first use) is the segment's, as the
+    # vectorised path's integrate._InTemperature holds it: the same drive, stiffness,
+    # inertia and temperature law.
+    system, params, temperature = CASES["rebound e=0.3 to settle"]
+    problem = _problem(system(), params, temperature)
+    fast = _solve(problem, True, True, monkeypatch).trajectory
+    slow = _solve(problem, True, False, monkeypatch).trajectory
+    assert fast is not None
+    assert slow is not None
+    assert len(fast.integrated) > 2
+    for a, b in zip(fast.integrated, slow.integrated, strict=True):
+        ma, mb = a.solution.model, b.solution.model  # type: ignore[attr-defined]
+        for name in ("inertia", "stiffness", "drive", "ratio", "ambient", "ambient_factor"):
+            _same(getattr(ma, name), getattr(mb, name), f"model.{name}")

@@ -109,7 +109,7 @@ def _sign(value: float) -> float:
         return 1.0
     if value < 0.0:
         return -1.0
-    return value  # 0 or NaN
+    return 0.0 if value == 0.0 else value  # NaN stays NaN
 
 
 @dataclass(slots=True)
@@ -211,7 +211,7 @@ class _Kernel:
     y0: FloatArray  # [x, u, s, E] at the segment's start
     atol: FloatArray
     final: FloatArray
-    model: Callable[[], Model]  # the one-segment model, for recorded time series
+    model: Callable[[float], Model]  # a segment's model from its drive (time series)
 
 
 def _case(problem: DynamicProblem) -> _Case:
@@ -283,28 +283,24 @@ def _kernel(problem: DynamicProblem, case: _Case, module: ModuleType) -> _Kernel
         row[module._LAW_A] = _item(eddy.peak_torque)
         row[module._LAW_B] = _item(eddy.reference_peak_speed)
     par = np.array(row)
-    built: list[Model] = []
 
-    def model() -> Model:
-        # Built when a recorded segment is first sampled (most runs never are), once.
-        if not built:
-            one = np.ones(1)
-            built.append(
-                Model(
-                    inertia=one * case.total_inertia,
-                    stiffness=one * -case.slope,
-                    drive=one * 0.0,
-                    ratio=problem.gear_ratio.reshape(1),
-                    gearbox_damping=problem.gearbox_damping_rate.reshape(1),
-                    heat_capacity=problem.heat_capacity.reshape(1),
-                    thermal_resistance=problem.thermal_resistance.reshape(1),
-                    ambient=problem.ambient_temperature.reshape(1),
-                    eddy=_flat_eddy(problem),
-                    heating=problem.thermal,
-                    ambient_factor=one * case.ambient_factor,
-                )
-            )
-        return built[0]
+    def model(drive: float) -> Model:
+        # A recorded segment's own model (integrate._model of the segment), built when
+        # its trajectory is first sampled: most recorded runs never are.
+        one = np.ones(1)
+        return Model(
+            inertia=one * case.total_inertia,
+            stiffness=one * -case.slope,
+            drive=one * drive,
+            ratio=problem.gear_ratio.reshape(1),
+            gearbox_damping=problem.gearbox_damping_rate.reshape(1),
+            heat_capacity=problem.heat_capacity.reshape(1),
+            thermal_resistance=problem.thermal_resistance.reshape(1),
+            ambient=problem.ambient_temperature.reshape(1),
+            eddy=_flat_eddy(problem),
+            heating=problem.thermal,
+            ambient_factor=one * case.ambient_factor,
+        )
 
     return _Kernel(
         module._segment, law, module._DRIVE, par, np.zeros(4), np.empty(4), np.empty(4), model
@@ -314,14 +310,23 @@ def _kernel(problem: DynamicProblem, case: _Case, module: ModuleType) -> _Kernel
 class _Recorded(integrate._InTemperature):
     """integrate._InTemperature whose one-segment model is built on first evaluation."""
 
-    def __init__(self, solution: Callable[[FloatArray], FloatArray], model: Callable[[], Model]):
+    def __init__(
+        self,
+        solution: Callable[[FloatArray], FloatArray],
+        model: Callable[[float], Model],
+        drive: float,
+    ):
         self.solution = solution
         self._build = model
+        self._drive = drive
+        self._model: Model | None = None
 
     @property
     def model(self) -> Model:
-        """The model of this segment (its temperature law: the case's)."""
-        return self._build()
+        """The model of this segment alone."""
+        if self._model is None:
+            self._model = self._build(self._drive)
+        return self._model
 
 
 def _start(problem: DynamicProblem, case: _Case) -> _Run:
@@ -468,7 +473,7 @@ def _integrate(
                 duration=duration,
                 start_angle=run.phi,
                 direction=seg.direction,
-                solution=_Recorded(solution, kernel.model),
+                solution=_Recorded(solution, kernel.model, seg.drive),
             )
         )
     run.heat = state
