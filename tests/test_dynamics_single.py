@@ -244,6 +244,12 @@ CASES: dict[str, tuple[Callable[[], DeploymentSystem], DynamicParameters, float]
         25.0,
     ),
     "stop time": (_system, _params(0.2, stop_time=0.05, thermal=HEAT), 25.0),
+    # The drive is zero (spring = friction) and the speed decays without end: no event.
+    "horizon": (
+        lambda: _system(start_torque=0.1, end_torque=0.1, system_friction=0.1),
+        _params(0.2, initial_speed=0.5, rolloff=SMALL),
+        25.0,
+    ),
     "initial speed": (
         _system,
         _params(0.2, initial_speed=3.0, restitution=0.5, rolloff=SMALL, thermal=Thermal(0.01)),
@@ -302,6 +308,7 @@ def test_the_cases_reach_every_branch(monkeypatch: pytest.MonkeyPatch) -> None:
     assert int(seen["start stop rebound"].impacts.ravel()[0]) == 1
     assert status("creep to equilibrium") == "creep"
     assert status("stop time") == "stop_time"
+    assert status("horizon") == "horizon"
     assert status("event limit") == "event_limit"
     assert status("warm start") == "latched"
     warm = seen["warm start"]

@@ -463,9 +463,8 @@ def _integrate(
     )
     x, u, state, work = kernel.final.tolist()
     if run.records is not None and count >= 2:
-        solution = Trajectory(
-            steps[0, :count].copy(), steps[1:5, :count].copy(), steps[5:, :count].copy()
-        )
+        taken = steps[:, :count].copy()  # one copy: time, state and slope rows as views
+        solution = Trajectory(taken[0], taken[1:5], taken[5:])
         run.records.append(
             IntegratedRecord(
                 case=0,
