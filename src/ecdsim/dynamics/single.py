@@ -651,7 +651,7 @@ def _result(problem: DynamicProblem, case: _Case, run: _Run) -> DynamicResult:
         final_angle=v[4],
         final_speed=v[5],
         final_temperature=v[6],
-        stuck=np.full(shape, run.stuck),
+        stuck=np.array(run.stuck).reshape(shape),
         stuck_angle=v[7],
         stuck_time=v[8],
         max_speed=v[9],
@@ -659,8 +659,8 @@ def _result(problem: DynamicProblem, case: _Case, run: _Run) -> DynamicResult:
         final_housing_temperature=None,
         engagement_time=v[11],
         rebound_speed=v[12],
-        impacts=np.full(shape, run.impacts, dtype=np.int64),
-        status=np.full(shape, run.status, dtype=np.int8),
+        impacts=np.array(run.impacts, dtype=np.int64).reshape(shape),
+        status=np.array(run.status, dtype=np.int8).reshape(shape),
         energy=EnergyBalance(
             spring_work=v[13],
             initial_kinetic_energy=v[14],
@@ -720,7 +720,7 @@ def _trajectory(
     problem's fields, as solver._flatten takes them)."""
     assert run.records is not None
     final = np.array((run.phi, final_speed, run.temp, run.hold_from))
-    engaged = np.ones(1, dtype=bool)  # engaged at release: no lost motion
+    engaged = np.array([True])  # engaged at release: no lost motion
     # A batch of shape (1,) (predict's one temperature) needs no reshape.
     flat = _same if problem.batch_shape == (1,) else _one_element
     return TrajectoryData(
