@@ -10,7 +10,16 @@ FloatArray: TypeAlias = NDArray[np.float64]
 BoolArray: TypeAlias = NDArray[np.bool_]
 _Item = TypeVar("_Item", bound=np.generic)
 
-__all__ = ["ArrayLike", "BoolArray", "FloatArray", "as_float", "broadcast", "joint_shape"]
+__all__ = [
+    "ArrayLike",
+    "BoolArray",
+    "FloatArray",
+    "all_true",
+    "any_true",
+    "as_float",
+    "broadcast",
+    "joint_shape",
+]
 
 
 def as_float(value: object) -> FloatArray:
@@ -45,3 +54,23 @@ def joint_shape(*shapes: tuple[int, ...]) -> tuple[int, ...]:
     if len(distinct) <= 1:
         return distinct.pop() if distinct else ()
     return np.broadcast_shapes(*shapes)
+
+
+def any_true(mask: NDArray[np.bool_] | np.bool_) -> bool:
+    """``bool(np.any(mask))``, read straight off the element when there is one.
+
+    A reduction costs about 1 us (``np.any`` 2 us) whatever the size; a single
+    deployment asks a dozen of these questions of one-element masks (issue 13, single
+    cases), where ``item()`` answers in a few tens of nanoseconds.
+    """
+    if mask.size == 1:
+        return bool(mask.item())
+    return bool(mask.any())
+
+
+def all_true(mask: NDArray[np.bool_] | np.bool_) -> bool:
+    """``bool(np.all(mask))``, read straight off the element when there is one (see
+    :func:`any_true`)."""
+    if mask.size == 1:
+        return bool(mask.item())
+    return bool(mask.all())

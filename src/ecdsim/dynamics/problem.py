@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
+from functools import cache
 from typing import Any
 
 import numpy as np
 
-from ecdsim._types import FloatArray, broadcast, joint_shape
+from ecdsim._types import FloatArray, any_true, broadcast, joint_shape
 from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
 from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.model import DeploymentSystem, EcdState
@@ -50,6 +51,13 @@ _CASE_FIELDS = (
     "forward_efficiency",
     "backward_efficiency",
 )
+
+
+@cache
+def _field_names(kind: type) -> tuple[str, ...]:
+    """The field names of a dataclass, looked up once per class (``fields()`` costs a
+    microsecond per call, and every problem asks it of its eddy law)."""
+    return tuple(f.name for f in fields(kind))
 
 
 # The compliant mesh's two-inertia mode above this [rad/s] (a period under 60 ns), or its
@@ -147,16 +155,17 @@ class DynamicProblem(QuasiStaticProblem):
     max_events: int = 10_000
 
     def __post_init__(self) -> None:
-        own = {name: np.asarray(getattr(self, name), dtype=float) for name in _CASE_FIELDS}
+        own = [(name, np.asarray(getattr(self, name), dtype=float)) for name in _CASE_FIELDS]
         angles = np.asarray(self.angles, dtype=float)
+        eddy = self.eddy
         batch = joint_shape(
             angles.shape[1:],
             np.shape(self.torques)[1:],
             np.shape(self.friction),
             np.shape(self.damping_rate),
-            *(value.shape for value in own.values()),
+            *(value.shape for _, value in own),
             # The eddy law's own arrays (a Monte Carlo batch of roll-off peak speeds).
-            *(np.shape(getattr(self.eddy, f.name)) for f in fields(self.eddy)),  # type: ignore[arg-type]
+            *(np.shape(getattr(eddy, name)) for name in _field_names(type(eddy))),
         )
         # Widen the quasi-static fields to the joint batch first, then let the base class
         # align the breakpoint arrays with them.
@@ -165,7 +174,7 @@ class DynamicProblem(QuasiStaticProblem):
             self, "damping_rate", broadcast(np.asarray(self.damping_rate, float), batch)
         )
         super().__post_init__()
-        for name, value in own.items():
+        for name, value in own:
             object.__setattr__(self, name, broadcast(value, batch))
 
     @property
@@ -241,14 +250,14 @@ def dynamic_problem(
             params.rolloff.resistivity_coefficient,
             damper.reference_temperature,
         )
-        if np.asarray(peak <= 0.0).any():
+        if any_true(np.asarray(peak <= 0.0)):
             raise DynamicDomainError(
                 "damper.rolloff.resistivity_coefficient",
                 "the peak speed omega_peak(T) is <= 0 at an analysis temperature; the "
                 "resistivity law does not reach that far",
             )
         alpha = np.asarray(params.rolloff.resistivity_coefficient, dtype=float)
-        if params.thermal is not None and (alpha < 0.0).any():
+        if params.thermal is not None and any_true(alpha < 0.0):
             # Heating drives omega_peak = omega_peak_ref (1 + alpha (T - T_ref)) towards 0
             # and the low-speed damping BD / (1 + alpha (T - T_ref)) to infinity: the
             # damper would lock the load short of the end, approached without end.
@@ -261,22 +270,24 @@ def dynamic_problem(
             )
     travel = np.asarray(base.travel)
     start = np.asarray(params.initial_angle, dtype=float)
-    if (start < 0.0).any() or (start >= travel).any():
+    if any_true(start < 0.0) or any_true(start >= travel):
         raise DynamicDomainError(
             "initial.angle",
             f"must be >= 0 and below the travel ({float(np.min(travel)):.6g} rad), got "
             f"{float(np.max(start)):.6g} rad",
         )
     thermal = params.thermal
-    if thermal is not None and (np.asarray(thermal.initial_rotor_rise) != 0.0).any():
+    if thermal is not None and any_true(np.asarray(thermal.initial_rotor_rise) != 0.0):
         # A warm start (repeated deployments) must lie below the damping law's zero.
         warm = eddy.factor(np.asarray(temperatures, float) + thermal.initial_rotor_rise)
-        if np.any(warm <= 0.0):
+        if any_true(np.asarray(warm <= 0.0)):
             raise DynamicDomainError(
                 "damper.thermal.initial_rotor_rise",
                 "puts the damper at or beyond the temperature where its damping law reaches zero",
             )
-    lossy = bool(np.any(ecd.forward_efficiency != 1.0) or np.any(ecd.backward_efficiency != 1.0))
+    lossy = any_true(np.asarray(ecd.forward_efficiency != 1.0)) or any_true(
+        np.asarray(ecd.backward_efficiency != 1.0)
+    )
     if lossy and params.stribeck_speed is not None:
         # The Stribeck excess mixes the ECD's friction (through the mesh) with the
         # system's (not): its mesh loss is not separated yet (docs/dynamics.md).

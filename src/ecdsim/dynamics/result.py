@@ -146,9 +146,11 @@ class EnergyBalance:
     def error(self) -> FloatArray:
         """Relative imbalance ``(supplied - accounted) / max(|supplied|, |accounted|)``; 0
         where no energy moved."""
-        scale = np.maximum(np.abs(self.supplied), np.abs(self.accounted))
+        # Each sum once (they are properties: a single case pays every NumPy call).
+        supplied, accounted = self.supplied, self.accounted
+        scale = np.maximum(np.abs(supplied), np.abs(accounted))
         moved = scale > 0.0
-        return np.where(moved, (self.supplied - self.accounted) / np.where(moved, scale, 1.0), 0.0)
+        return np.where(moved, (supplied - accounted) / np.where(moved, scale, 1.0), 0.0)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,119 @@
+"""The shortcuts of a single deployment's fixed cost give the general path's answers.
+
+``predict`` of one case pays every NumPy call's dispatch in full (issue 13, single
+cases), so a few helpers answer the common question directly: one-element masks read
+off their element, two breakpoint rows filled into one array, the findings' status test
+done once. Each is checked here against the general NumPy expression it replaces, on
+the shapes a batch can have (empty, one element with 0, 1 or 2 axes, many).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+import pytest
+
+from ecdsim._types import all_true, any_true
+from ecdsim.deployment import ModelDomainError, _check_damping_positive
+from ecdsim.dynamics.method import REPORTED_FROM
+from ecdsim.dynamics.result import STATUSES
+from ecdsim.model import LinearSpring, _pair
+from tests.conftest import paper_system
+
+MASKS = [
+    np.zeros(0, dtype=bool),
+    np.asarray(True),
+    np.asarray(False),
+    np.bool_(True),
+    np.bool_(False),
+    np.array([True]),
+    np.array([False]),
+    np.array([[True]]),
+    np.array([[False]]),
+    np.array([False, False, True]),
+    np.array([True, True, False]),
+    np.array([[True, True], [True, True]]),
+    np.array([[False, False], [False, False]]),
+]
+
+
+@pytest.mark.parametrize("mask", MASKS, ids=lambda m: f"{np.shape(m)}-{np.ravel(m).tolist()}")
+def test_any_true_and_all_true_are_np_any_and_np_all(mask: np.ndarray) -> None:
+    assert any_true(mask) is bool(np.any(mask))
+    assert all_true(mask) is bool(np.all(mask))
+
+
+SHAPES = [(), (1,), (3,), (1, 1), (2, 3), (1, 3), (2, 1)]
+
+
+@pytest.mark.parametrize("first", SHAPES)
+@pytest.mark.parametrize("second", SHAPES)
+def test_pair_is_stack_of_broadcast_arrays(first: tuple[int, ...], second: tuple[int, ...]) -> None:
+    rng = np.random.default_rng(7)
+    a = rng.normal(size=first)
+    b = rng.normal(size=second)
+    try:
+        expected = np.stack(np.broadcast_arrays(a, b))
+    except ValueError:
+        with pytest.raises(ValueError, match="broadcast"):
+            _pair(np.asarray(a), np.asarray(b))
+        return
+    got = _pair(np.asarray(a), np.asarray(b))
+    assert got.shape == expected.shape
+    assert got.dtype == expected.dtype
+    assert got.tobytes() == expected.tobytes()  # bit for bit, NaN-free random values
+
+
+def test_linear_spring_breakpoints_are_the_stacked_rows() -> None:
+    # Eq. 7's two breakpoints, (0, Ts f) and (travel, Te f), f = 1 + k (T - T_ref), by hand.
+    spring = LinearSpring(np.array([3.7, 3.8]), 1.6, 0.01, 25.0)
+    temps = np.array([[-40.0], [25.0], [100.0]])
+    angles, torques = spring.breakpoints(1.57, temps)
+    factor = 1.0 + 0.01 * (temps - 25.0)
+    assert angles.shape == (2,)
+    np.testing.assert_array_equal(angles, [0.0, 1.57])
+    assert torques.shape == (2, 3, 2)
+    # Same operations in the same order as the spring: equal bit for bit.
+    np.testing.assert_array_equal(torques[0], np.array([3.7, 3.8]) * factor)
+    np.testing.assert_array_equal(torques[1], np.broadcast_to(1.6 * factor, (3, 2)))
+
+
+def test_reported_statuses_are_the_last_ones() -> None:
+    # The findings test status >= REPORTED_FROM once: that must be exactly the statuses
+    # they report (a new status appended after them would be reported by mistake).
+    assert set(STATUSES[REPORTED_FROM:]) == {"stop_time", "event_limit", "horizon"}
+
+
+@pytest.mark.parametrize("bad", ["damper", "ecd", "both"])
+@pytest.mark.parametrize("value", [math.nan, -1e-4])
+@pytest.mark.parametrize("temps", [[25.0], [-40.0, 25.0, 100.0]])
+def test_a_bad_damping_rate_is_refused_at_one_or_many_temperatures(
+    bad: str, value: float, temps: list[float]
+) -> None:
+    # The one-test shortcut of _check_damping_positive must still catch a NaN or a
+    # negative BD_T or BECD_T in any case, as the element-wise test after it does.
+    state = paper_system().ecd.at(np.asarray(temps))
+    last = len(temps) - 1
+    changes: dict[str, Any] = {}
+    if bad in ("damper", "both"):
+        damper = np.array(np.broadcast_to(state.damper_damping_rate, (len(temps),)))
+        damper[last] = value
+        changes["damper_damping_rate"] = damper
+    if bad in ("ecd", "both"):
+        ecd = np.array(state.ecd_damping_rate)
+        ecd[last] = value
+        changes["ecd_damping_rate"] = ecd
+    with pytest.raises(ModelDomainError) as caught:
+        _check_damping_positive(replace(state, **changes))
+    assert caught.value.key == "damper.damping_temperature_coefficient"
+    assert f"at {temps[last]:g} degC" in str(caught.value)
+
+
+def test_good_damping_rates_pass() -> None:
+    state = paper_system().ecd.at(np.array([-40.0, 25.0, 100.0]))
+    _check_damping_positive(state)  # raises if the shortcut refused a valid state
+    zero = np.zeros(3)  # zero is a real case (an undamped coast)
+    _check_damping_positive(replace(state, damper_damping_rate=zero, ecd_damping_rate=zero))
