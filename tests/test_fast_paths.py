@@ -16,9 +16,11 @@ from typing import Any
 import numpy as np
 import pytest
 
-from ecdsim._types import all_true, any_true
-from ecdsim.deployment import ModelDomainError, _check_damping_positive
+from ecdsim._types import all_true, any_true, one_case_views
+from ecdsim.deployment import ModelDomainError, _check_damping_positive, predict
+from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff
 from ecdsim.dynamics.method import REPORTED_FROM
+from ecdsim.dynamics.problem import _CASE_FIELDS
 from ecdsim.dynamics.result import STATUSES
 from ecdsim.model import LinearSpring, _pair
 from tests.conftest import paper_system
@@ -117,3 +119,46 @@ def test_good_damping_rates_pass() -> None:
     _check_damping_positive(state)  # raises if the shortcut refused a valid state
     zero = np.zeros(3)  # zero is a real case (an undamped coast)
     _check_damping_positive(replace(state, damper_damping_rate=zero, ecd_damping_rate=zero))
+
+
+@pytest.mark.parametrize("shape", [(), (1,), (1, 1), (1, 1, 1)])
+def test_one_case_views_are_the_broadcast_values(shape: tuple[int, ...]) -> None:
+    values = [
+        np.asarray(1.5),
+        np.array([-0.0]),
+        np.array([[math.inf]]),
+        np.asarray(math.nan),
+        np.array([2.0]),
+    ]
+    got = one_case_views(values, shape)
+    assert len(got) == len(values)
+    for value, view in zip(values, got, strict=True):
+        expected = np.broadcast_to(value.reshape(()), shape)
+        assert type(view) is np.ndarray  # a 0-d array, not a NumPy scalar, for shape ()
+        assert view.shape == expected.shape
+        assert view.dtype == np.float64
+        assert not view.flags.writeable  # read-only, as broadcast() returns
+        assert view.tobytes() == expected.tobytes()  # -0.0, inf and NaN kept bit for bit
+
+
+def test_a_one_case_dynamic_problem_is_the_broadcast_one() -> None:
+    # The one-case path of DynamicProblem.__post_init__ against the general one: the same
+    # problem built for two cases and for one gives the first case's values, shapes and
+    # read-only fields for every per-case field.
+    system = paper_system()
+    params = DynamicParameters(load_inertia=np.array([5.0, 6.0]), rolloff=Rolloff(60.0, 0.0039))
+    one = replace(params, load_inertia=np.array([5.0]))
+    two_cases = predict(system, [25.0, 25.0], ["dynamic"], dynamics=params)
+    one_case = predict(system, [25.0], ["dynamic"], dynamics=one)
+    p2 = two_cases.solutions["dynamic"].problem  # type: ignore[attr-defined]
+    p1 = one_case.solutions["dynamic"].problem  # type: ignore[attr-defined]
+    assert isinstance(p1, DynamicProblem)
+    assert isinstance(p2, DynamicProblem)
+    for name in (*_CASE_FIELDS, "friction", "damping_rate"):
+        general, single = getattr(p2, name), getattr(p1, name)
+        assert single.shape == (1,)
+        assert not single.flags.writeable
+        assert single.dtype == general.dtype == np.float64
+        assert single.tobytes() == general[:1].tobytes(), name
+    assert p1.angles.tobytes() == p2.angles[:, :1].tobytes()
+    assert p1.torques.tobytes() == p2.torques[:, :1].tobytes()

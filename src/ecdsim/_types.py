@@ -1,6 +1,7 @@
 """Array type aliases shared by the physics and solver layers."""
 
 import math
+from collections.abc import Sequence
 from typing import TypeAlias, TypeVar
 
 import numpy as np
@@ -19,6 +20,7 @@ __all__ = [
     "as_float",
     "broadcast",
     "joint_shape",
+    "one_case_views",
 ]
 
 
@@ -45,6 +47,22 @@ def broadcast(value: NDArray[_Item], shape: tuple[int, ...]) -> NDArray[_Item]:
         return np.broadcast_to(value, shape)
     view.flags.writeable = False
     return view
+
+
+def one_case_views(values: Sequence[FloatArray], shape: tuple[int, ...]) -> list[FloatArray]:
+    """``[broadcast(v, shape) for v in values]`` for one case (``shape`` of size 1).
+
+    Each value holds one number; they are read into one read-only float64 array and
+    each is handed its own row, a read-only view of ``shape``: the same values, shape
+    and dtype as :func:`broadcast` returns, for one NumPy call instead of one per value
+    (a single deployment's problem has some 30 per-case fields; issue 13).
+    """
+    packed = np.array([value.item() for value in values], dtype=np.float64)
+    packed.flags.writeable = False
+    rows = packed.reshape((len(values), *shape))
+    if not shape:  # iterating would give NumPy scalars: index 0-d views instead
+        return [rows[i, ...] for i in range(len(values))]
+    return list(rows)  # the rows as views, iterated in C
 
 
 def joint_shape(*shapes: tuple[int, ...]) -> tuple[int, ...]:

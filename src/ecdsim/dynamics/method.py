@@ -175,8 +175,8 @@ def solution_from_result(
 _NONE = np.empty(0, dtype=np.intp)
 _STOP_TIME = STATUSES.index("stop_time")
 _CUT_SHORT = {code: STATUSES.index(code) for code in ("event_limit", "horizon")}
-# The statuses reported as findings are the last of STATUSES (tests/test_dynamics_
-# integration.py checks it): one comparison tells whether any case has one.
+# The statuses reported as findings are the last of STATUSES (tests/test_fast_paths.py
+# checks it): one comparison tells whether any case has one.
 REPORTED_FROM = min(_STOP_TIME, *_CUT_SHORT.values())
 
 
@@ -185,10 +185,10 @@ def _findings(
 ) -> list[tuple[str, str, int]]:
     """Outcomes a user must hear about, as (code, message, flat case index)."""
     out: list[tuple[str, str, int]] = []
-    status = np.ravel(result.status)
+    status = result.status.ravel()
     if any_true(status >= REPORTED_FROM):
         out.extend(_status_findings(result, status))
-    error = np.ravel(energy_error)
+    error = energy_error.ravel()
     unbalanced = np.abs(error) > 1e-6
     if any_true(unbalanced):
         for i in np.flatnonzero(unbalanced):
@@ -206,8 +206,8 @@ def _findings(
         ambient = broadcast(problem.ambient_temperature, shape)
         peak = eddy.peak_speed(ambient)
         slope = rolloff.kloss_speed_derivative(0.0, eddy.peak_torque, peak)
-        kloss_becd = np.ravel(n * n * (slope + problem.gearbox_damping_rate))
-        eq1_becd = np.ravel(broadcast(problem.damping_rate, shape))
+        kloss_becd = (n * n * (slope + problem.gearbox_damping_rate)).ravel()
+        eq1_becd = broadcast(problem.damping_rate, shape).ravel()
         mismatch = kloss_becd / eq1_becd - 1.0
         # A batch can hold thousands of these findings: the values are formatted as Python
         # floats (NumPy scalars format several times slower; the same text).
@@ -229,7 +229,7 @@ def _findings(
                     case,
                 )
             )
-        shaft = np.ravel(result.max_speed * n)
+        shaft = (result.max_speed * n).ravel()
         peaks = broadcast(peak, shape).ravel()
         past = shaft > peaks
         beyond = np.flatnonzero(past) if any_true(past) else _NONE
@@ -248,29 +248,33 @@ def _findings(
 
 
 def _status_findings(result: DynamicResult, status: NDArray[np.int8]) -> list[tuple[str, str, int]]:
-    """The cases that ended at the stop time or were cut short, those first, in order."""
+    """The cases that ended at the stop time, then those cut short, each in case order."""
     out: list[tuple[str, str, int]] = []
-    final_time = np.ravel(result.final_time)
-    final_angle = np.ravel(result.final_angle)
-    for i in np.flatnonzero(status == _STOP_TIME):
-        out.append(
-            (
-                "stop_time",
-                f"the end of travel was not reached by the stop time ({final_time[i]:.4g} s; "
-                f"angle {final_angle[i]:.4g} rad)",
-                int(i),
-            )
-        )
-    for code, value in _CUT_SHORT.items():
-        for i in np.flatnonzero(status == value):
+    flagged = np.flatnonzero(status >= REPORTED_FROM)
+    cases = list(zip(flagged.tolist(), status[flagged].tolist(), strict=True))
+    final_time = result.final_time.ravel()
+    final_angle = result.final_angle.ravel()
+    for i, status_of_i in cases:
+        if status_of_i == _STOP_TIME:
             out.append(
                 (
-                    code,
-                    f"the dynamic run was cut short ({code.replace('_', ' ')}) at "
-                    f"{final_time[i]:.4g} s; its result is incomplete",
-                    int(i),
+                    "stop_time",
+                    f"the end of travel was not reached by the stop time "
+                    f"({final_time[i]:.4g} s; angle {final_angle[i]:.4g} rad)",
+                    i,
                 )
             )
+    for code, value in _CUT_SHORT.items():
+        for i, status_of_i in cases:
+            if status_of_i == value:
+                out.append(
+                    (
+                        code,
+                        f"the dynamic run was cut short ({code.replace('_', ' ')}) at "
+                        f"{final_time[i]:.4g} s; its result is incomplete",
+                        i,
+                    )
+                )
     return out
 
 

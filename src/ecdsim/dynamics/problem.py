@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim._types import FloatArray, any_true, broadcast, joint_shape
+from ecdsim._types import FloatArray, any_true, broadcast, joint_shape, one_case_views
 from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
 from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.model import DeploymentSystem, EcdState
@@ -58,6 +58,11 @@ def _field_names(kind: type) -> tuple[str, ...]:
     """The field names of a dataclass, looked up once per class (``fields()`` costs a
     microsecond per call, and every problem asks it of its eddy law)."""
     return tuple(f.name for f in fields(kind))
+
+
+def _shape(value: float | FloatArray) -> tuple[int, ...]:
+    """``np.shape(value)``; at once for a float (np.shape makes it an array first)."""
+    return () if type(value) is float else np.shape(value)
 
 
 # The compliant mesh's two-inertia mode above this [rad/s] (a period under 60 ns), or its
@@ -155,27 +160,35 @@ class DynamicProblem(QuasiStaticProblem):
     max_events: int = 10_000
 
     def __post_init__(self) -> None:
-        own = [(name, np.asarray(getattr(self, name), dtype=float)) for name in _CASE_FIELDS]
+        own = [np.asarray(getattr(self, name), dtype=float) for name in _CASE_FIELDS]
         angles = np.asarray(self.angles, dtype=float)
+        friction = np.asarray(self.friction, dtype=float)
+        damping = np.asarray(self.damping_rate, dtype=float)
         eddy = self.eddy
         batch = joint_shape(
             angles.shape[1:],
             np.shape(self.torques)[1:],
-            np.shape(self.friction),
-            np.shape(self.damping_rate),
-            *(value.shape for _, value in own),
+            friction.shape,
+            damping.shape,
+            *(value.shape for value in own),
             # The eddy law's own arrays (a Monte Carlo batch of roll-off peak speeds).
-            *(np.shape(getattr(eddy, name)) for name in _field_names(type(eddy))),
+            *(_shape(getattr(eddy, name)) for name in _field_names(type(eddy))),
         )
+        if math.prod(batch) == 1:
+            # One case (a single deployment): the same read-only views of the batch shape
+            # as broadcast() makes, from one array for all the fields.
+            friction, damping, *own = one_case_views([friction, damping, *own], batch)
+        else:
+            friction = broadcast(friction, batch)
+            damping = broadcast(damping, batch)
+            own = [broadcast(value, batch) for value in own]
         # Widen the quasi-static fields to the joint batch first, then let the base class
         # align the breakpoint arrays with them.
-        object.__setattr__(self, "friction", broadcast(np.asarray(self.friction, float), batch))
-        object.__setattr__(
-            self, "damping_rate", broadcast(np.asarray(self.damping_rate, float), batch)
-        )
+        object.__setattr__(self, "friction", friction)
+        object.__setattr__(self, "damping_rate", damping)
         super().__post_init__()
-        for name, value in own:
-            object.__setattr__(self, name, broadcast(value, batch))
+        for name, value in zip(_CASE_FIELDS, own, strict=True):
+            object.__setattr__(self, name, value)
 
     @property
     def nonlinear(self) -> bool:
@@ -185,20 +198,17 @@ class DynamicProblem(QuasiStaticProblem):
     @property
     def lossy(self) -> bool:
         """True when some case's gear has a mesh efficiency below 1 (issue 16 item 5)."""
-        # ndarray.any: np.any's dispatch costs more than the test on one case's arrays.
-        return bool(
-            (self.forward_efficiency != 1.0).any() or (self.backward_efficiency != 1.0).any()
-        )
+        return any_true(self.forward_efficiency != 1.0) or any_true(self.backward_efficiency != 1.0)
 
     @property
     def stribeck(self) -> bool:
         """True when some case's sliding friction depends on speed (a Stribeck speed)."""
-        return bool(np.isfinite(self.stribeck_speed).any())
+        return any_true(np.isfinite(self.stribeck_speed))
 
     @property
     def compliant(self) -> bool:
         """True when some case has a compliant gear mesh (compliant backlash)."""
-        return bool(np.isfinite(self.gear_stiffness).any())
+        return any_true(np.isfinite(self.gear_stiffness))
 
     @property
     def total_inertia(self) -> FloatArray:

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ecdsim._types import BoolArray, FloatArray
+from ecdsim._types import BoolArray, FloatArray, all_true
 from ecdsim.dynamics.damping import EddyLaw
 from ecdsim.dynamics.equations import stribeck_excess
 from ecdsim.dynamics.records import ClosedFormRecord, IntegratedRecord, sample
@@ -150,6 +150,8 @@ class EnergyBalance:
         supplied, accounted = self.supplied, self.accounted
         scale = np.maximum(np.abs(supplied), np.abs(accounted))
         moved = scale > 0.0
+        if all_true(moved):  # energy moved in every case (the usual answer): no guard
+            return np.asarray((supplied - accounted) / scale)
         return np.where(moved, (supplied - accounted) / np.where(moved, scale, 1.0), 0.0)
 
 

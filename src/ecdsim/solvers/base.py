@@ -61,12 +61,13 @@ class QuasiStaticProblem:
             *((gravity[0].shape, gravity[1].shape) if gravity is not None else ()),
         )
         points = (angles.shape[0], *batch)
-        object.__setattr__(
-            self, "angles", broadcast(angles.reshape(_aligned(angles, batch)), points)
-        )
-        object.__setattr__(
-            self, "torques", broadcast(torques.reshape(_aligned(torques, batch)), points)
-        )
+        # Already aligned (the problem of a problem: a DynamicProblem built from one): kept.
+        if angles.shape != points:
+            angles = angles.reshape(_aligned(angles, batch))
+        if torques.shape != points:
+            torques = torques.reshape(_aligned(torques, batch))
+        object.__setattr__(self, "angles", broadcast(angles, points))
+        object.__setattr__(self, "torques", broadcast(torques, points))
         object.__setattr__(self, "friction", broadcast(friction, batch))
         object.__setattr__(self, "damping_rate", broadcast(damping, batch))
         if gravity is not None:
