@@ -23,6 +23,7 @@ from ecdsim.dynamics.method import REPORTED_FROM
 from ecdsim.dynamics.problem import _CASE_FIELDS
 from ecdsim.dynamics.result import STATUSES
 from ecdsim.model import LinearSpring, _pair
+from ecdsim.solvers.base import QuasiStaticProblem
 from tests.conftest import paper_system
 
 MASKS = [
@@ -162,3 +163,39 @@ def test_a_one_case_dynamic_problem_is_the_broadcast_one() -> None:
         assert single.tobytes() == general[:1].tobytes(), name
     assert p1.angles.tobytes() == p2.angles[:, :1].tobytes()
     assert p1.torques.tobytes() == p2.torques[:, :1].tobytes()
+
+
+def test_a_problem_built_from_a_normalized_one_is_the_same() -> None:
+    # QuasiStaticProblem keeps fields that are already aligned, read-only float64 arrays
+    # (the early return of __post_init__): the result equals the general path's.
+    general = QuasiStaticProblem(
+        angles=np.array([0.0, 1.57]),
+        torques=np.array([[3.7, 3.8], [1.6, 1.5]]),
+        friction=np.array([1.0, 1.1]),
+        damping_rate=np.asarray(20.0),
+    )
+    again = QuasiStaticProblem(
+        general.angles, general.torques, general.friction, general.damping_rate
+    )
+    assert again.angles is general.angles  # kept as it is
+    for name in ("angles", "torques", "friction", "damping_rate"):
+        a, b = getattr(general, name), getattr(again, name)
+        assert a.shape == b.shape == ((2, 2) if name in ("angles", "torques") else (2,))
+        assert not b.flags.writeable
+        assert a.tobytes() == b.tobytes()
+    # A writeable field, or gravity, takes the general path (which makes it read-only).
+    writeable = QuasiStaticProblem(
+        np.array(general.angles), general.torques, general.friction, general.damping_rate
+    )
+    assert not writeable.angles.flags.writeable
+    with_gravity = QuasiStaticProblem(
+        general.angles,
+        general.torques,
+        general.friction,
+        general.damping_rate,
+        gravity_amplitude=np.asarray(0.5),
+    )
+    assert with_gravity.gravity_amplitude is not None
+    assert with_gravity.gravity_amplitude.shape == (2,)
+    assert with_gravity.gravity_angle is not None
+    assert with_gravity.gravity_angle.shape == (2,)
