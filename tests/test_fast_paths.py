@@ -19,7 +19,7 @@ import pytest
 from ecdsim._types import all_true, any_true, one_case_views
 from ecdsim.deployment import ModelDomainError, _check_damping_positive, predict
 from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff
-from ecdsim.dynamics.method import REPORTED_FROM
+from ecdsim.dynamics.method import REPORTED_FROM, _findings
 from ecdsim.dynamics.problem import _CASE_FIELDS
 from ecdsim.dynamics.result import STATUSES
 from ecdsim.model import LinearSpring, _pair
@@ -199,3 +199,67 @@ def test_a_problem_built_from_a_normalized_one_is_the_same() -> None:
     assert with_gravity.gravity_amplitude.shape == (2,)
     assert with_gravity.gravity_angle is not None
     assert with_gravity.gravity_angle.shape == (2,)
+
+
+def _findings_as_before(result: Any, error: np.ndarray) -> list[tuple[str, str, int]]:
+    """The status and energy findings as they were written before the shortcuts: one
+    search per status, then the energy balance (the texts of dynamics/method.py)."""
+    out: list[tuple[str, str, int]] = []
+    status = np.ravel(result.status)
+    final_time = np.ravel(result.final_time)
+    final_angle = np.ravel(result.final_angle)
+    for i in np.flatnonzero(status == STATUSES.index("stop_time")):
+        out.append(
+            (
+                "stop_time",
+                f"the end of travel was not reached by the stop time ({final_time[i]:.4g} s; "
+                f"angle {final_angle[i]:.4g} rad)",
+                int(i),
+            )
+        )
+    for code in ("event_limit", "horizon"):
+        for i in np.flatnonzero(status == STATUSES.index(code)):
+            out.append(
+                (
+                    code,
+                    f"the dynamic run was cut short ({code.replace('_', ' ')}) at "
+                    f"{final_time[i]:.4g} s; its result is incomplete",
+                    int(i),
+                )
+            )
+    flat = np.ravel(error)
+    for i in np.flatnonzero(np.abs(flat) > 1e-6):
+        out.append(
+            (
+                "energy_balance",
+                f"the energy balance closes only to {flat[i]:.2g} (relative); tighten rtol",
+                int(i),
+            )
+        )
+    return out
+
+
+@pytest.mark.parametrize(
+    "statuses",
+    [
+        ["latched"] * 6,  # nothing to report: the one comparison answers
+        ["stop_time", "event_limit", "horizon", "latched", "stop_time", "horizon"],
+        ["horizon", "horizon", "event_limit", "stuck", "creep", "stop_time"],
+    ],
+)
+def test_status_and_energy_findings_are_the_per_status_searches(statuses: list[str]) -> None:
+    # A real six-case result (linear law: no Kloss findings) with its statuses and
+    # energy errors replaced: the findings, in order and word for word, are those of a
+    # search per status.
+    system = paper_system()
+    temps = [-40.0, 25.0, 100.0, -40.0, 25.0, 100.0]
+    prediction = predict(system, temps, ["dynamic"], dynamics=DynamicParameters(load_inertia=5.0))
+    solution = prediction.solutions["dynamic"]
+    result = replace(
+        solution.result,  # type: ignore[attr-defined]
+        status=np.array([STATUSES.index(s) for s in statuses], dtype=np.int8),
+    )
+    error = np.array([0.0, 2e-6, -1e-9, -3e-6, 1e-6, 0.5])
+    got = _findings(solution.problem, result, error)  # type: ignore[attr-defined]
+    assert got == _findings_as_before(result, error)
+    assert sum(code == "energy_balance" for code, _, _ in got) == 3  # 2e-6, -3e-6, 0.5
