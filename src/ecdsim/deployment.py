@@ -388,9 +388,14 @@ def _check_damping_positive(ecd: EcdState) -> None:
         )
 
 
-def _temperature_at(prediction: Prediction, mask: BoolArray) -> list[float]:
+def _temperature_at(
+    prediction: Prediction, mask: BoolArray, shape: tuple[int, ...] | None = None
+) -> list[float]:
+    """The distinct temperatures where ``mask`` (broadcast to ``shape`` if given) holds."""
     if not any_true(mask):  # the usual answer, at once (a single case pays every call)
         return []
+    if shape is not None:
+        mask = np.broadcast_to(mask, shape)
     temps = np.broadcast_to(prediction.temperatures, mask.shape)
     return sorted({float(t) for t in temps[mask]})
 
@@ -420,8 +425,8 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
         "FS": prediction.system_friction,
     }
     for label, values in negative.items():
-        below = broadcast(np.asarray(values < 0.0), prediction.problem.batch_shape)
-        for t in _temperature_at(prediction, below):
+        below = np.asarray(values < 0.0)
+        for t in _temperature_at(prediction, below, prediction.problem.batch_shape):
             found.append(
                 ModelWarning(
                     "negative_friction",

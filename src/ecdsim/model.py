@@ -319,7 +319,9 @@ class LinearSpring:
             temperature, self.temperature_coefficient, self.reference_temperature
         )
         trav = np.asarray(travel, dtype=float)
-        angles = _pair(np.zeros_like(trav), trav)
+        angles = np.empty((2, *trav.shape), dtype=np.float64)
+        angles[0] = 0.0  # what np.zeros_like(trav) stacked above trav gives
+        angles[1] = trav
         torques = _pair(
             np.asarray(self.start_torque, dtype=float) * factor,
             np.asarray(self.end_torque, dtype=float) * factor,

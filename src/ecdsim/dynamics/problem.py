@@ -314,8 +314,8 @@ def dynamic_problem(
         damping_rate=base.damping_rate,
         load_inertia=np.asarray(params.load_inertia, dtype=float),
         damper_inertia=reflected,
-        ecd_friction=np.asarray(ecd.ecd_friction, dtype=float),
-        system_friction=np.asarray(system_friction, dtype=float),
+        ecd_friction=ecd.ecd_friction,
+        system_friction=system_friction,
         static_friction_factor=np.asarray(params.static_friction_factor, dtype=float),
         system_static_friction_factor=np.asarray(
             params.static_friction_factor
@@ -327,9 +327,9 @@ def dynamic_problem(
         lost_motion=np.asarray(gearbox.lost_motion, dtype=float),
         initial_angle=start,
         initial_speed=np.asarray(params.initial_speed, dtype=float),
-        ambient_temperature=np.asarray(temperatures, dtype=float),
-        gear_ratio=np.asarray(n, dtype=float),
-        gearbox_damping_rate=np.asarray(ecd.gearbox_damping_rate, dtype=float),
+        ambient_temperature=temperatures,
+        gear_ratio=n,
+        gearbox_damping_rate=ecd.gearbox_damping_rate,
         heat_capacity=np.asarray(
             math.inf if thermal is None else thermal.heat_capacity, dtype=float
         ),
@@ -352,8 +352,8 @@ def dynamic_problem(
         rtol=params.rtol,
         integrator=params.integrator,
         max_events=params.max_events,
-        forward_efficiency=np.asarray(ecd.forward_efficiency, dtype=float),
-        backward_efficiency=np.asarray(ecd.backward_efficiency, dtype=float),
+        forward_efficiency=ecd.forward_efficiency,
+        backward_efficiency=ecd.backward_efficiency,
     )
 
 
