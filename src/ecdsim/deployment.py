@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, BoolArray, FloatArray
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, all_true, any_true, broadcast
 from ecdsim._version import __version__
 from ecdsim.dynamics.params import DynamicParameters
 from ecdsim.dynamics.problem import DynamicDomainError, DynamicProblem, dynamic_problem
@@ -344,8 +344,7 @@ def _check_finite(ecd: EcdState) -> None:
         "FECD_T (Eq. 4)": ecd.ecd_friction,
     }
     for label, values in derived.items():
-        values = np.asarray(values, dtype=float)
-        if np.all(np.isfinite(values)):
+        if all_true(np.isfinite(values)):
             continue
         ratio = float(np.max(np.abs(ecd.gear_ratio)))
         gearbox = float(np.max(np.abs(ecd.gearbox_damping_rate)))
@@ -371,8 +370,13 @@ def _check_damping_positive(ecd: EcdState) -> None:
     # hidden by the gearbox's BG is still a temperature law used beyond its range. Zero is
     # a real case (an undamped coast, a damper removed): the methods that cannot solve it
     # say so per case (DeploymentSolution.solved).
-    damper = np.broadcast_to(ecd.damper_damping_rate, np.shape(ecd.ecd_damping_rate))
-    bad = ~(damper >= 0.0) | ~(ecd.ecd_damping_rate >= 0.0)
+    rate = ecd.ecd_damping_rate
+    # One test first, the usual answer: min(BD_T, BECD_T) >= 0 holds exactly where both
+    # do (np.minimum propagates a NaN, which fails the test as it fails either).
+    if all_true(np.minimum(ecd.damper_damping_rate, rate) >= 0.0):
+        return
+    damper = np.broadcast_to(ecd.damper_damping_rate, np.shape(rate))
+    bad = ~(damper >= 0.0) | ~(rate >= 0.0)
     if np.any(bad):
         where = np.broadcast_to(ecd.temperature, bad.shape)[bad]
         value = damper[bad]
@@ -384,9 +388,14 @@ def _check_damping_positive(ecd: EcdState) -> None:
         )
 
 
-def _temperature_at(prediction: Prediction, mask: BoolArray) -> list[float]:
-    if not mask.any():  # the usual answer, at once (a single case pays every call)
+def _temperature_at(
+    prediction: Prediction, mask: BoolArray, shape: tuple[int, ...] | None = None
+) -> list[float]:
+    """The distinct temperatures where ``mask`` (broadcast to ``shape`` if given) holds."""
+    if not any_true(mask):  # the usual answer, at once (a single case pays every call)
         return []
+    if shape is not None:
+        mask = np.broadcast_to(mask, shape)
     temps = np.broadcast_to(prediction.temperatures, mask.shape)
     return sorted({float(t) for t in temps[mask]})
 
@@ -416,8 +425,8 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
         "FS": prediction.system_friction,
     }
     for label, values in negative.items():
-        below = np.broadcast_to(values < 0.0, prediction.problem.batch_shape)
-        for t in _temperature_at(prediction, below):
+        below = np.asarray(values < 0.0)
+        for t in _temperature_at(prediction, below, prediction.problem.batch_shape):
             found.append(
                 ModelWarning(
                     "negative_friction",
@@ -432,7 +441,7 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
         found.extend(_linear_range_warnings(prediction, name, solution))
         own = solution.findings()
         if own:
-            flat_temps = np.ravel(np.broadcast_to(temps, solution.deployment_time.shape))
+            flat_temps = broadcast(temps, solution.deployment_time.shape).ravel()
             found.extend(
                 ModelWarning(code, message, float(flat_temps[i]), name) for code, message, i in own
             )
@@ -478,7 +487,7 @@ def _stall_warnings(
 ) -> list[ModelWarning]:
     out: list[ModelWarning] = []
     stalled = solution.stalled
-    if not stalled.any():
+    if not any_true(stalled):
         return out
     shape = stalled.shape
     temps = np.broadcast_to(prediction.temperatures, shape)

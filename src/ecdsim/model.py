@@ -13,7 +13,7 @@ from typing import Protocol, TypeAlias
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float, joint_shape
 from ecdsim.physics import assembly, gearing, gravity, laws, load
 
 Param: TypeAlias = float | FloatArray
@@ -319,12 +319,12 @@ class LinearSpring:
             temperature, self.temperature_coefficient, self.reference_temperature
         )
         trav = np.asarray(travel, dtype=float)
-        angles = np.stack(np.broadcast_arrays(np.zeros_like(trav), trav))
-        torques = np.stack(
-            np.broadcast_arrays(
-                np.asarray(self.start_torque, dtype=float) * factor,
-                np.asarray(self.end_torque, dtype=float) * factor,
-            )
+        angles = np.empty((2, *trav.shape), dtype=np.float64)
+        angles[0] = 0.0  # what np.zeros_like(trav) stacked above trav gives
+        angles[1] = trav
+        torques = _pair(
+            np.asarray(self.start_torque, dtype=float) * factor,
+            np.asarray(self.end_torque, dtype=float) * factor,
         )
         return angles, torques
 
@@ -341,6 +341,19 @@ class LinearSpring:
     def describe(self) -> str:
         """One-line description."""
         return "linear from start_torque to end_torque (Eq. 7)"
+
+
+def _pair(first: FloatArray, second: FloatArray) -> FloatArray:
+    """``np.stack(np.broadcast_arrays(first, second))``: the two on a new axis 0.
+
+    Filled into one array (two assignments broadcast as ``broadcast_arrays`` would):
+    the same values, without the 4 us of NumPy's general stacking that a single
+    deployment pays twice per call (issue 13, single cases).
+    """
+    out = np.empty((2, *joint_shape(first.shape, second.shape)), dtype=np.float64)
+    out[0] = first
+    out[1] = second
+    return out
 
 
 @dataclass(frozen=True)

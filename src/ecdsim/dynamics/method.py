@@ -10,12 +10,14 @@ plots treat every method alike) that also carries the full :class:`DynamicResult
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from ecdsim._types import ArrayLike, BoolArray, FloatArray, broadcast
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, any_true, broadcast
 from ecdsim.dynamics.damping import KlossEddy
 from ecdsim.dynamics.problem import DynamicProblem
 from ecdsim.dynamics.result import STATUSES, DynamicResult
@@ -119,7 +121,7 @@ class DynamicMethod:
     def solve(self, problem: QuasiStaticProblem) -> DynamicSolution:
         """Solve every case; ``problem`` must be a :class:`DynamicProblem`."""
         dynamic = _require_dynamic(problem)
-        size = int(np.prod(dynamic.batch_shape))
+        size = math.prod(dynamic.batch_shape)
         # Closed-form records are small; integrated ones hold every step of every case.
         record = (
             not (dynamic.nonlinear or dynamic.stribeck or dynamic.compliant) or size <= RECORD_LIMIT
@@ -169,8 +171,13 @@ def solution_from_result(
     )
 
 
+# No case flagged: the usual answer, without NumPy's search for the indices.
+_NONE = np.empty(0, dtype=np.intp)
 _STOP_TIME = STATUSES.index("stop_time")
 _CUT_SHORT = {code: STATUSES.index(code) for code in ("event_limit", "horizon")}
+# The statuses reported as findings are the last of STATUSES (tests/test_fast_paths.py
+# checks it): one comparison tells whether any case has one.
+REPORTED_FROM = min(_STOP_TIME, *_CUT_SHORT.values())
 
 
 def _findings(
@@ -178,37 +185,20 @@ def _findings(
 ) -> list[tuple[str, str, int]]:
     """Outcomes a user must hear about, as (code, message, flat case index)."""
     out: list[tuple[str, str, int]] = []
-    status = np.ravel(result.status)
-    final_time = np.ravel(result.final_time)
-    final_angle = np.ravel(result.final_angle)
-    for i in np.flatnonzero(status == _STOP_TIME):
-        out.append(
-            (
-                "stop_time",
-                f"the end of travel was not reached by the stop time ({final_time[i]:.4g} s; "
-                f"angle {final_angle[i]:.4g} rad)",
-                int(i),
-            )
-        )
-    for code, value in _CUT_SHORT.items():
-        for i in np.flatnonzero(status == value):
+    status = result.status.ravel()
+    if any_true(status >= REPORTED_FROM):
+        out.extend(_status_findings(result, status))
+    error = energy_error.ravel()
+    unbalanced = np.abs(error) > 1e-6
+    if any_true(unbalanced):
+        for i in np.flatnonzero(unbalanced):
             out.append(
                 (
-                    code,
-                    f"the dynamic run was cut short ({code.replace('_', ' ')}) at "
-                    f"{final_time[i]:.4g} s; its result is incomplete",
+                    "energy_balance",
+                    f"the energy balance closes only to {error[i]:.2g} (relative); tighten rtol",
                     int(i),
                 )
             )
-    error = np.ravel(energy_error)
-    for i in np.flatnonzero(np.abs(error) > 1e-6):
-        out.append(
-            (
-                "energy_balance",
-                f"the energy balance closes only to {error[i]:.2g} (relative); tighten rtol",
-                int(i),
-            )
-        )
     eddy = problem.eddy
     if isinstance(eddy, KlossEddy):
         shape = result.batch_shape
@@ -216,12 +206,13 @@ def _findings(
         ambient = broadcast(problem.ambient_temperature, shape)
         peak = eddy.peak_speed(ambient)
         slope = rolloff.kloss_speed_derivative(0.0, eddy.peak_torque, peak)
-        kloss_becd = np.ravel(n * n * (slope + problem.gearbox_damping_rate))
-        eq1_becd = np.ravel(broadcast(problem.damping_rate, shape))
+        kloss_becd = (n * n * (slope + problem.gearbox_damping_rate)).ravel()
+        eq1_becd = broadcast(problem.damping_rate, shape).ravel()
         mismatch = kloss_becd / eq1_becd - 1.0
         # A batch can hold thousands of these findings: the values are formatted as Python
         # floats (NumPy scalars format several times slower; the same text).
-        off = np.flatnonzero(np.abs(mismatch) > 0.01)
+        mismatched = np.abs(mismatch) > 0.01
+        off = np.flatnonzero(mismatched) if any_true(mismatched) else _NONE
         for case, becd, eq1, ratio in zip(
             off.tolist(),
             kloss_becd[off].tolist(),
@@ -238,9 +229,10 @@ def _findings(
                     case,
                 )
             )
-        shaft = np.ravel(result.max_speed * n)
-        peaks = np.ravel(np.broadcast_to(peak, shape))
-        beyond = np.flatnonzero(shaft > peaks)
+        shaft = (result.max_speed * n).ravel()
+        peaks = broadcast(peak, shape).ravel()
+        past = shaft > peaks
+        beyond = np.flatnonzero(past) if any_true(past) else _NONE
         for case, reached, limit in zip(
             beyond.tolist(), shaft[beyond].tolist(), peaks[beyond].tolist(), strict=True
         ):
@@ -252,6 +244,37 @@ def _findings(
                     case,
                 )
             )
+    return out
+
+
+def _status_findings(result: DynamicResult, status: NDArray[np.int8]) -> list[tuple[str, str, int]]:
+    """The cases that ended at the stop time, then those cut short, each in case order."""
+    out: list[tuple[str, str, int]] = []
+    flagged = np.flatnonzero(status >= REPORTED_FROM)
+    cases = list(zip(flagged.tolist(), status[flagged].tolist(), strict=True))
+    final_time = result.final_time.ravel()
+    final_angle = result.final_angle.ravel()
+    for i, status_of_i in cases:
+        if status_of_i == _STOP_TIME:
+            out.append(
+                (
+                    "stop_time",
+                    f"the end of travel was not reached by the stop time "
+                    f"({final_time[i]:.4g} s; angle {final_angle[i]:.4g} rad)",
+                    i,
+                )
+            )
+    for code, value in _CUT_SHORT.items():
+        for i, status_of_i in cases:
+            if status_of_i == value:
+                out.append(
+                    (
+                        code,
+                        f"the dynamic run was cut short ({code.replace('_', ' ')}) at "
+                        f"{final_time[i]:.4g} s; its result is incomplete",
+                        i,
+                    )
+                )
     return out
 
 

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
+from functools import cache
 from typing import Any
 
 import numpy as np
 
-from ecdsim._types import FloatArray, broadcast, joint_shape
+from ecdsim._types import FloatArray, any_true, broadcast, joint_shape, one_case_views
 from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
 from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.model import DeploymentSystem, EcdState
@@ -50,6 +51,18 @@ _CASE_FIELDS = (
     "forward_efficiency",
     "backward_efficiency",
 )
+
+
+@cache
+def _field_names(kind: type) -> tuple[str, ...]:
+    """The field names of a dataclass, looked up once per class (``fields()`` costs a
+    microsecond per call, and every problem asks it of its eddy law)."""
+    return tuple(f.name for f in fields(kind))
+
+
+def _shape(value: float | FloatArray) -> tuple[int, ...]:
+    """``np.shape(value)``; at once for a float (np.shape makes it an array first)."""
+    return () if type(value) is float else np.shape(value)
 
 
 # The compliant mesh's two-inertia mode above this [rad/s] (a period under 60 ns), or its
@@ -147,26 +160,35 @@ class DynamicProblem(QuasiStaticProblem):
     max_events: int = 10_000
 
     def __post_init__(self) -> None:
-        own = {name: np.asarray(getattr(self, name), dtype=float) for name in _CASE_FIELDS}
+        own = [np.asarray(getattr(self, name), dtype=float) for name in _CASE_FIELDS]
         angles = np.asarray(self.angles, dtype=float)
+        friction = np.asarray(self.friction, dtype=float)
+        damping = np.asarray(self.damping_rate, dtype=float)
+        eddy = self.eddy
         batch = joint_shape(
             angles.shape[1:],
             np.shape(self.torques)[1:],
-            np.shape(self.friction),
-            np.shape(self.damping_rate),
-            *(value.shape for value in own.values()),
+            friction.shape,
+            damping.shape,
+            *(value.shape for value in own),
             # The eddy law's own arrays (a Monte Carlo batch of roll-off peak speeds).
-            *(np.shape(getattr(self.eddy, f.name)) for f in fields(self.eddy)),  # type: ignore[arg-type]
+            *(_shape(getattr(eddy, name)) for name in _field_names(type(eddy))),
         )
+        if math.prod(batch) == 1:
+            # One case (a single deployment): the same read-only views of the batch shape
+            # as broadcast() makes, from one array for all the fields.
+            friction, damping, *own = one_case_views([friction, damping, *own], batch)
+        else:
+            friction = broadcast(friction, batch)
+            damping = broadcast(damping, batch)
+            own = [broadcast(value, batch) for value in own]
         # Widen the quasi-static fields to the joint batch first, then let the base class
         # align the breakpoint arrays with them.
-        object.__setattr__(self, "friction", broadcast(np.asarray(self.friction, float), batch))
-        object.__setattr__(
-            self, "damping_rate", broadcast(np.asarray(self.damping_rate, float), batch)
-        )
+        object.__setattr__(self, "friction", friction)
+        object.__setattr__(self, "damping_rate", damping)
         super().__post_init__()
-        for name, value in own.items():
-            object.__setattr__(self, name, broadcast(value, batch))
+        for name, value in zip(_CASE_FIELDS, own, strict=True):
+            object.__setattr__(self, name, value)
 
     @property
     def nonlinear(self) -> bool:
@@ -176,20 +198,17 @@ class DynamicProblem(QuasiStaticProblem):
     @property
     def lossy(self) -> bool:
         """True when some case's gear has a mesh efficiency below 1 (issue 16 item 5)."""
-        # ndarray.any: np.any's dispatch costs more than the test on one case's arrays.
-        return bool(
-            (self.forward_efficiency != 1.0).any() or (self.backward_efficiency != 1.0).any()
-        )
+        return any_true(self.forward_efficiency != 1.0) or any_true(self.backward_efficiency != 1.0)
 
     @property
     def stribeck(self) -> bool:
         """True when some case's sliding friction depends on speed (a Stribeck speed)."""
-        return bool(np.isfinite(self.stribeck_speed).any())
+        return any_true(np.isfinite(self.stribeck_speed))
 
     @property
     def compliant(self) -> bool:
         """True when some case has a compliant gear mesh (compliant backlash)."""
-        return bool(np.isfinite(self.gear_stiffness).any())
+        return any_true(np.isfinite(self.gear_stiffness))
 
     @property
     def total_inertia(self) -> FloatArray:
@@ -241,14 +260,14 @@ def dynamic_problem(
             params.rolloff.resistivity_coefficient,
             damper.reference_temperature,
         )
-        if np.asarray(peak <= 0.0).any():
+        if any_true(np.asarray(peak <= 0.0)):
             raise DynamicDomainError(
                 "damper.rolloff.resistivity_coefficient",
                 "the peak speed omega_peak(T) is <= 0 at an analysis temperature; the "
                 "resistivity law does not reach that far",
             )
         alpha = np.asarray(params.rolloff.resistivity_coefficient, dtype=float)
-        if params.thermal is not None and (alpha < 0.0).any():
+        if params.thermal is not None and any_true(alpha < 0.0):
             # Heating drives omega_peak = omega_peak_ref (1 + alpha (T - T_ref)) towards 0
             # and the low-speed damping BD / (1 + alpha (T - T_ref)) to infinity: the
             # damper would lock the load short of the end, approached without end.
@@ -261,22 +280,24 @@ def dynamic_problem(
             )
     travel = np.asarray(base.travel)
     start = np.asarray(params.initial_angle, dtype=float)
-    if (start < 0.0).any() or (start >= travel).any():
+    if any_true(start < 0.0) or any_true(start >= travel):
         raise DynamicDomainError(
             "initial.angle",
             f"must be >= 0 and below the travel ({float(np.min(travel)):.6g} rad), got "
             f"{float(np.max(start)):.6g} rad",
         )
     thermal = params.thermal
-    if thermal is not None and (np.asarray(thermal.initial_rotor_rise) != 0.0).any():
+    if thermal is not None and any_true(np.asarray(thermal.initial_rotor_rise) != 0.0):
         # A warm start (repeated deployments) must lie below the damping law's zero.
         warm = eddy.factor(np.asarray(temperatures, float) + thermal.initial_rotor_rise)
-        if np.any(warm <= 0.0):
+        if any_true(np.asarray(warm <= 0.0)):
             raise DynamicDomainError(
                 "damper.thermal.initial_rotor_rise",
                 "puts the damper at or beyond the temperature where its damping law reaches zero",
             )
-    lossy = bool(np.any(ecd.forward_efficiency != 1.0) or np.any(ecd.backward_efficiency != 1.0))
+    lossy = any_true(np.asarray(ecd.forward_efficiency != 1.0)) or any_true(
+        np.asarray(ecd.backward_efficiency != 1.0)
+    )
     if lossy and params.stribeck_speed is not None:
         # The Stribeck excess mixes the ECD's friction (through the mesh) with the
         # system's (not): its mesh loss is not separated yet (docs/dynamics.md).
@@ -293,8 +314,8 @@ def dynamic_problem(
         damping_rate=base.damping_rate,
         load_inertia=np.asarray(params.load_inertia, dtype=float),
         damper_inertia=reflected,
-        ecd_friction=np.asarray(ecd.ecd_friction, dtype=float),
-        system_friction=np.asarray(system_friction, dtype=float),
+        ecd_friction=ecd.ecd_friction,
+        system_friction=system_friction,
         static_friction_factor=np.asarray(params.static_friction_factor, dtype=float),
         system_static_friction_factor=np.asarray(
             params.static_friction_factor
@@ -306,9 +327,9 @@ def dynamic_problem(
         lost_motion=np.asarray(gearbox.lost_motion, dtype=float),
         initial_angle=start,
         initial_speed=np.asarray(params.initial_speed, dtype=float),
-        ambient_temperature=np.asarray(temperatures, dtype=float),
-        gear_ratio=np.asarray(n, dtype=float),
-        gearbox_damping_rate=np.asarray(ecd.gearbox_damping_rate, dtype=float),
+        ambient_temperature=temperatures,
+        gear_ratio=n,
+        gearbox_damping_rate=ecd.gearbox_damping_rate,
         heat_capacity=np.asarray(
             math.inf if thermal is None else thermal.heat_capacity, dtype=float
         ),
@@ -331,8 +352,8 @@ def dynamic_problem(
         rtol=params.rtol,
         integrator=params.integrator,
         max_events=params.max_events,
-        forward_efficiency=np.asarray(ecd.forward_efficiency, dtype=float),
-        backward_efficiency=np.asarray(ecd.backward_efficiency, dtype=float),
+        forward_efficiency=ecd.forward_efficiency,
+        backward_efficiency=ecd.backward_efficiency,
     )
 
 

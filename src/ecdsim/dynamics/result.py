@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ecdsim._types import BoolArray, FloatArray
+from ecdsim._types import BoolArray, FloatArray, all_true
 from ecdsim.dynamics.damping import EddyLaw
 from ecdsim.dynamics.equations import stribeck_excess
 from ecdsim.dynamics.records import ClosedFormRecord, IntegratedRecord, sample
@@ -146,9 +146,13 @@ class EnergyBalance:
     def error(self) -> FloatArray:
         """Relative imbalance ``(supplied - accounted) / max(|supplied|, |accounted|)``; 0
         where no energy moved."""
-        scale = np.maximum(np.abs(self.supplied), np.abs(self.accounted))
+        # Each sum once (they are properties: a single case pays every NumPy call).
+        supplied, accounted = self.supplied, self.accounted
+        scale = np.maximum(np.abs(supplied), np.abs(accounted))
         moved = scale > 0.0
-        return np.where(moved, (self.supplied - self.accounted) / np.where(moved, scale, 1.0), 0.0)
+        if all_true(moved):  # energy moved in every case (the usual answer): no guard
+            return np.asarray((supplied - accounted) / scale)
+        return np.where(moved, (supplied - accounted) / np.where(moved, scale, 1.0), 0.0)
 
 
 @dataclass(frozen=True)

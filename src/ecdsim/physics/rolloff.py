@@ -26,7 +26,7 @@ All speeds and torques here are at the high-speed damper shaft.
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, all_true, as_float
 
 
 def peak_torque_from_damping(damping_rate: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
@@ -89,7 +89,8 @@ def _kloss_parts(
     scale = 2.0 * np.asarray(peak_torque, dtype=float)
     den = w * w + p * p
     defined = den > 0.0
-    return w, p, scale, np.where(defined, den, 1.0), defined
+    # Where every case is defined (the usual answer) the guard is den itself.
+    return w, p, scale, den if all_true(defined) else np.where(defined, den, 1.0), defined
 
 
 def kloss_torque(speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
@@ -132,7 +133,8 @@ def kloss_speed_derivative(
     peak_speed : omega_peak [rad/s], >= 0
     """
     w, p, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
-    return as_float(np.where(defined, scale * p * (p * p - w * w) / den / den, 0.0))
+    slope = scale * p * (p * p - w * w) / den / den
+    return as_float(slope if all_true(defined) else np.where(defined, slope, 0.0))
 
 
 def kloss_peak_speed_derivative(

@@ -39,6 +39,8 @@ class QuasiStaticProblem:
     gravity_angle: FloatArray | None = None
 
     def __post_init__(self) -> None:
+        if self._normalized():
+            return  # what the code below would leave as it is (a problem built from one)
         # Right-align the batch axes of the breakpoint arrays with the scalar fields and
         # broadcast everything to one shape, so that every solver sees (n_points, *batch).
         angles = np.asarray(self.angles, dtype=float)
@@ -61,17 +63,40 @@ class QuasiStaticProblem:
             *((gravity[0].shape, gravity[1].shape) if gravity is not None else ()),
         )
         points = (angles.shape[0], *batch)
-        object.__setattr__(
-            self, "angles", broadcast(angles.reshape(_aligned(angles, batch)), points)
-        )
-        object.__setattr__(
-            self, "torques", broadcast(torques.reshape(_aligned(torques, batch)), points)
-        )
+        # Already aligned (the problem of a problem: a DynamicProblem built from one): kept.
+        if angles.shape != points:
+            angles = angles.reshape(_aligned(angles, batch))
+        if torques.shape != points:
+            torques = torques.reshape(_aligned(torques, batch))
+        object.__setattr__(self, "angles", broadcast(angles, points))
+        object.__setattr__(self, "torques", broadcast(torques, points))
         object.__setattr__(self, "friction", broadcast(friction, batch))
         object.__setattr__(self, "damping_rate", broadcast(damping, batch))
         if gravity is not None:
             object.__setattr__(self, "gravity_amplitude", broadcast(gravity[0], batch))
             object.__setattr__(self, "gravity_angle", broadcast(gravity[1], batch))
+
+    def _normalized(self) -> bool:
+        """True when the fields are what :meth:`__post_init__` makes of them already.
+
+        Read-only float64 arrays, the breakpoints ``(n_points, *batch)``, friction and
+        damping of the batch shape, no gravity: the fields of a problem passed on to a new
+        one (``dynamic_problem``), which a single deployment would otherwise align and
+        broadcast again for nothing (issue 13, single cases).
+        """
+        values = (self.angles, self.torques, self.friction, self.damping_rate)
+        for value in values:
+            if type(value) is not np.ndarray or value.dtype != np.float64:
+                return False
+            if value.flags.writeable:
+                return False
+        angles, torques, friction, damping = values
+        return (
+            self.gravity_amplitude is None
+            and angles.ndim >= 1
+            and angles.shape == torques.shape
+            and angles.shape[1:] == friction.shape == damping.shape
+        )
 
     @property
     def has_gravity(self) -> bool:

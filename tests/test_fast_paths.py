@@ -1,0 +1,265 @@
+"""The shortcuts of a single deployment's fixed cost give the general path's answers.
+
+``predict`` of one case pays every NumPy call's dispatch in full (issue 13, single
+cases), so a few helpers answer the common question directly: one-element masks read
+off their element, two breakpoint rows filled into one array, the findings' status test
+done once. Each is checked here against the general NumPy expression it replaces, on
+the shapes a batch can have (empty, one element with 0, 1 or 2 axes, many).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+import pytest
+
+from ecdsim._types import all_true, any_true, one_case_views
+from ecdsim.deployment import ModelDomainError, _check_damping_positive, predict
+from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff
+from ecdsim.dynamics.method import REPORTED_FROM, _findings
+from ecdsim.dynamics.problem import _CASE_FIELDS
+from ecdsim.dynamics.result import STATUSES
+from ecdsim.model import LinearSpring, _pair
+from ecdsim.solvers.base import QuasiStaticProblem
+from tests.conftest import paper_system
+
+MASKS = [
+    np.zeros(0, dtype=bool),
+    np.asarray(True),
+    np.asarray(False),
+    np.bool_(True),
+    np.bool_(False),
+    np.array([True]),
+    np.array([False]),
+    np.array([[True]]),
+    np.array([[False]]),
+    np.array([False, False, True]),
+    np.array([True, True, False]),
+    np.array([[True, True], [True, True]]),
+    np.array([[False, False], [False, False]]),
+]
+
+
+@pytest.mark.parametrize("mask", MASKS, ids=lambda m: f"{np.shape(m)}-{np.ravel(m).tolist()}")
+def test_any_true_and_all_true_are_np_any_and_np_all(mask: np.ndarray) -> None:
+    assert any_true(mask) is bool(np.any(mask))
+    assert all_true(mask) is bool(np.all(mask))
+
+
+SHAPES = [(), (1,), (3,), (1, 1), (2, 3), (1, 3), (2, 1)]
+
+
+@pytest.mark.parametrize("first", SHAPES)
+@pytest.mark.parametrize("second", SHAPES)
+def test_pair_is_stack_of_broadcast_arrays(first: tuple[int, ...], second: tuple[int, ...]) -> None:
+    rng = np.random.default_rng(7)
+    a = rng.normal(size=first)
+    b = rng.normal(size=second)
+    try:
+        expected = np.stack(np.broadcast_arrays(a, b))
+    except ValueError:
+        with pytest.raises(ValueError, match="broadcast"):
+            _pair(np.asarray(a), np.asarray(b))
+        return
+    got = _pair(np.asarray(a), np.asarray(b))
+    assert got.shape == expected.shape
+    assert got.dtype == expected.dtype
+    assert got.tobytes() == expected.tobytes()  # bit for bit, NaN-free random values
+
+
+def test_linear_spring_breakpoints_are_the_stacked_rows() -> None:
+    # Eq. 7's two breakpoints, (0, Ts f) and (travel, Te f), f = 1 + k (T - T_ref), by hand.
+    spring = LinearSpring(np.array([3.7, 3.8]), 1.6, 0.01, 25.0)
+    temps = np.array([[-40.0], [25.0], [100.0]])
+    angles, torques = spring.breakpoints(1.57, temps)
+    factor = 1.0 + 0.01 * (temps - 25.0)
+    assert angles.shape == (2,)
+    np.testing.assert_array_equal(angles, [0.0, 1.57])
+    assert torques.shape == (2, 3, 2)
+    # Same operations in the same order as the spring: equal bit for bit.
+    np.testing.assert_array_equal(torques[0], np.array([3.7, 3.8]) * factor)
+    np.testing.assert_array_equal(torques[1], np.broadcast_to(1.6 * factor, (3, 2)))
+
+
+def test_reported_statuses_are_the_last_ones() -> None:
+    # The findings test status >= REPORTED_FROM once: that must be exactly the statuses
+    # they report (a new status appended after them would be reported by mistake).
+    assert set(STATUSES[REPORTED_FROM:]) == {"stop_time", "event_limit", "horizon"}
+
+
+@pytest.mark.parametrize("bad", ["damper", "ecd", "both"])
+@pytest.mark.parametrize("value", [math.nan, -1e-4])
+@pytest.mark.parametrize("temps", [[25.0], [-40.0, 25.0, 100.0]])
+def test_a_bad_damping_rate_is_refused_at_one_or_many_temperatures(
+    bad: str, value: float, temps: list[float]
+) -> None:
+    # The one-test shortcut of _check_damping_positive must still catch a NaN or a
+    # negative BD_T or BECD_T in any case, as the element-wise test after it does.
+    state = paper_system().ecd.at(np.asarray(temps))
+    last = len(temps) - 1
+    changes: dict[str, Any] = {}
+    if bad in ("damper", "both"):
+        damper = np.array(np.broadcast_to(state.damper_damping_rate, (len(temps),)))
+        damper[last] = value
+        changes["damper_damping_rate"] = damper
+    if bad in ("ecd", "both"):
+        ecd = np.array(state.ecd_damping_rate)
+        ecd[last] = value
+        changes["ecd_damping_rate"] = ecd
+    with pytest.raises(ModelDomainError) as caught:
+        _check_damping_positive(replace(state, **changes))
+    assert caught.value.key == "damper.damping_temperature_coefficient"
+    assert f"at {temps[last]:g} degC" in str(caught.value)
+
+
+def test_good_damping_rates_pass() -> None:
+    state = paper_system().ecd.at(np.array([-40.0, 25.0, 100.0]))
+    _check_damping_positive(state)  # raises if the shortcut refused a valid state
+    zero = np.zeros(3)  # zero is a real case (an undamped coast)
+    _check_damping_positive(replace(state, damper_damping_rate=zero, ecd_damping_rate=zero))
+
+
+@pytest.mark.parametrize("shape", [(), (1,), (1, 1), (1, 1, 1)])
+def test_one_case_views_are_the_broadcast_values(shape: tuple[int, ...]) -> None:
+    values = [
+        np.asarray(1.5),
+        np.array([-0.0]),
+        np.array([[math.inf]]),
+        np.asarray(math.nan),
+        np.array([2.0]),
+    ]
+    got = one_case_views(values, shape)
+    assert len(got) == len(values)
+    for value, view in zip(values, got, strict=True):
+        expected = np.broadcast_to(value.reshape(()), shape)
+        assert type(view) is np.ndarray  # a 0-d array, not a NumPy scalar, for shape ()
+        assert view.shape == expected.shape
+        assert view.dtype == np.float64
+        assert not view.flags.writeable  # read-only, as broadcast() returns
+        assert view.tobytes() == expected.tobytes()  # -0.0, inf and NaN kept bit for bit
+
+
+def test_a_one_case_dynamic_problem_is_the_broadcast_one() -> None:
+    # The one-case path of DynamicProblem.__post_init__ against the general one: the same
+    # problem built for two cases and for one gives the first case's values, shapes and
+    # read-only fields for every per-case field.
+    system = paper_system()
+    params = DynamicParameters(load_inertia=np.array([5.0, 6.0]), rolloff=Rolloff(60.0, 0.0039))
+    one = replace(params, load_inertia=np.array([5.0]))
+    two_cases = predict(system, [25.0, 25.0], ["dynamic"], dynamics=params)
+    one_case = predict(system, [25.0], ["dynamic"], dynamics=one)
+    p2 = two_cases.solutions["dynamic"].problem  # type: ignore[attr-defined]
+    p1 = one_case.solutions["dynamic"].problem  # type: ignore[attr-defined]
+    assert isinstance(p1, DynamicProblem)
+    assert isinstance(p2, DynamicProblem)
+    for name in (*_CASE_FIELDS, "friction", "damping_rate"):
+        general, single = getattr(p2, name), getattr(p1, name)
+        assert single.shape == (1,)
+        assert not single.flags.writeable
+        assert single.dtype == general.dtype == np.float64
+        assert single.tobytes() == general[:1].tobytes(), name
+    assert p1.angles.tobytes() == p2.angles[:, :1].tobytes()
+    assert p1.torques.tobytes() == p2.torques[:, :1].tobytes()
+
+
+def test_a_problem_built_from_a_normalized_one_is_the_same() -> None:
+    # QuasiStaticProblem keeps fields that are already aligned, read-only float64 arrays
+    # (the early return of __post_init__): the result equals the general path's.
+    general = QuasiStaticProblem(
+        angles=np.array([0.0, 1.57]),
+        torques=np.array([[3.7, 3.8], [1.6, 1.5]]),
+        friction=np.array([1.0, 1.1]),
+        damping_rate=np.asarray(20.0),
+    )
+    again = QuasiStaticProblem(
+        general.angles, general.torques, general.friction, general.damping_rate
+    )
+    assert again.angles is general.angles  # kept as it is
+    for name in ("angles", "torques", "friction", "damping_rate"):
+        a, b = getattr(general, name), getattr(again, name)
+        assert a.shape == b.shape == ((2, 2) if name in ("angles", "torques") else (2,))
+        assert not b.flags.writeable
+        assert a.tobytes() == b.tobytes()
+    # A writeable field, or gravity, takes the general path (which makes it read-only).
+    writeable = QuasiStaticProblem(
+        np.array(general.angles), general.torques, general.friction, general.damping_rate
+    )
+    assert not writeable.angles.flags.writeable
+    with_gravity = QuasiStaticProblem(
+        general.angles,
+        general.torques,
+        general.friction,
+        general.damping_rate,
+        gravity_amplitude=np.asarray(0.5),
+    )
+    assert with_gravity.gravity_amplitude is not None
+    assert with_gravity.gravity_amplitude.shape == (2,)
+    assert with_gravity.gravity_angle is not None
+    assert with_gravity.gravity_angle.shape == (2,)
+
+
+def _findings_as_before(result: Any, error: np.ndarray) -> list[tuple[str, str, int]]:
+    """The status and energy findings as they were written before the shortcuts: one
+    search per status, then the energy balance (the texts of dynamics/method.py)."""
+    out: list[tuple[str, str, int]] = []
+    status = np.ravel(result.status)
+    final_time = np.ravel(result.final_time)
+    final_angle = np.ravel(result.final_angle)
+    for i in np.flatnonzero(status == STATUSES.index("stop_time")):
+        out.append(
+            (
+                "stop_time",
+                f"the end of travel was not reached by the stop time ({final_time[i]:.4g} s; "
+                f"angle {final_angle[i]:.4g} rad)",
+                int(i),
+            )
+        )
+    for code in ("event_limit", "horizon"):
+        for i in np.flatnonzero(status == STATUSES.index(code)):
+            out.append(
+                (
+                    code,
+                    f"the dynamic run was cut short ({code.replace('_', ' ')}) at "
+                    f"{final_time[i]:.4g} s; its result is incomplete",
+                    int(i),
+                )
+            )
+    flat = np.ravel(error)
+    for i in np.flatnonzero(np.abs(flat) > 1e-6):
+        out.append(
+            (
+                "energy_balance",
+                f"the energy balance closes only to {flat[i]:.2g} (relative); tighten rtol",
+                int(i),
+            )
+        )
+    return out
+
+
+@pytest.mark.parametrize(
+    "statuses",
+    [
+        ["latched"] * 6,  # nothing to report: the one comparison answers
+        ["stop_time", "event_limit", "horizon", "latched", "stop_time", "horizon"],
+        ["horizon", "horizon", "event_limit", "stuck", "creep", "stop_time"],
+    ],
+)
+def test_status_and_energy_findings_are_the_per_status_searches(statuses: list[str]) -> None:
+    # A real six-case result (linear law: no Kloss findings) with its statuses and
+    # energy errors replaced: the findings, in order and word for word, are those of a
+    # search per status.
+    system = paper_system()
+    temps = [-40.0, 25.0, 100.0, -40.0, 25.0, 100.0]
+    prediction = predict(system, temps, ["dynamic"], dynamics=DynamicParameters(load_inertia=5.0))
+    solution = prediction.solutions["dynamic"]
+    result = replace(
+        solution.result,  # type: ignore[attr-defined]
+        status=np.array([STATUSES.index(s) for s in statuses], dtype=np.int8),
+    )
+    error = np.array([0.0, 2e-6, -1e-9, -3e-6, 1e-6, 0.5])
+    got = _findings(solution.problem, result, error)  # type: ignore[attr-defined]
+    assert got == _findings_as_before(result, error)
+    assert sum(code == "energy_balance" for code, _, _ in got) == 3  # 2e-6, -3e-6, 0.5
