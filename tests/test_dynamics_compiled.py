@@ -170,7 +170,10 @@ def test_the_thermal_terms_match_numpy_on_both_sides_of_the_polynomial(
     )
     z = np.append(z, 1e-300)
     for s in z / coefficient:
-        factor, drop, grown = compiled._thermal(par, s)
+        factor, drop, grown = compiled._thermal(par, s, True)
+        # Without cooling (adiabatic, or the Jacobian) the rise is not computed: 0, and
+        # the factor and e^{cs} are the same numbers.
+        assert compiled._thermal(par, s, False) == (factor, 0.0, grown)
         cs = coefficient * s
         exact_drop = s if cs == 0.0 else s * (np.expm1(-cs) / -cs)
         # 2e-15 (about 9 units in the last place): the polynomial and the library each

@@ -188,7 +188,7 @@ def _expm1_small(z: float) -> float:
 
 
 @_jit
-def _thermal(par: Params, s: float) -> tuple[float, float, float]:
+def _thermal(par: Params, s: float, cooling: bool) -> tuple[float, float, float]:
     """``f_a e^{cs}``, ``s E(-cs) = (1 - e^{-cs}) / c`` and ``e^{cs}`` at the log state s.
 
     The damping factor (thermal.damping_factor_from_log) and the cooling's temperature
@@ -196,15 +196,20 @@ def _thermal(par: Params, s: float) -> tuple[float, float, float]:
     ``|cs| <= 2^-5`` (a damper within about 8 K of its ambient for Eq. 1's c = -0.004/K;
     ``1 + (e^{cs} - 1)`` then keeps every digit of e^{cs}); an exp and an expm1 beyond.
     A stage of a heating segment needs both, so this spares it two library calls.
+    Without ``cooling`` (an adiabatic damper, R = inf, or the Jacobian, which reads only
+    the factor and e^{cs}) the rise is not used and not computed: 0 in its place, and
+    an expm1 less per stage beyond the polynomial's range.
     """
     c = par[_COEF]
     z = c * s
     if abs(z) <= _SMALL:
         grown = _expm1_small(z)
         e = 1.0 + grown
+        if not cooling:
+            return par[_FA] * e, 0.0, e
         return par[_FA] * e, s if z == 0.0 else grown / (c * e), e
     e = math.exp(z)
-    return par[_FA] * e, s * _exprel(-z), e
+    return par[_FA] * e, s * _exprel(-z) if cooling else 0.0, e
 
 
 @_jit
@@ -249,7 +254,7 @@ def _slope(par: Params, kind: int, heating: bool, two_node: bool, y: State) -> S
     f = par[_FIXED]
     drop = 0.0
     if heating:
-        f, drop, _ = _thermal(par, s)
+        f, drop, _ = _thermal(par, s, math.isfinite(par[_R]))
     shaft = par[_N] * u
     eddy, power = _torque(kind, heating, par[_LAW_A], par[_LAW_B], shaft, f)
     torque = par[_N] * (eddy + par[_BG] * shaft)
@@ -309,7 +314,7 @@ def _jacobian(par: Params, kind: int, heating: bool, y: State | FloatArray) -> t
     f = par[_FIXED]
     e = 1.0
     if heating:
-        f, _, e = _thermal(par, s)
+        f, _, e = _thermal(par, s, False)
     shaft = n * u
     eddy, d_speed, d_factor, _, by_speed, by_factor = _law(kind, par[_LAW_A], par[_LAW_B], shaft, f)
     torque = n * (eddy + par[_BG] * shaft)
