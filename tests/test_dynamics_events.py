@@ -25,6 +25,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 from ecdsim.deployment import build_problem
 from ecdsim.dynamics import (
@@ -33,8 +34,11 @@ from ecdsim.dynamics import (
     DynamicResult,
     Rolloff,
     Thermal,
+    integrate,
+    linear,
     single,
 )
+from ecdsim.dynamics.damping import LinearEddy
 from ecdsim.dynamics.problem import dynamic_problem
 from ecdsim.dynamics.result import STATUSES
 from ecdsim.dynamics.solver import solve_dynamic
@@ -304,3 +308,60 @@ def test_a_backward_launch_on_the_start_stop_stops_at_once(
     assert float(result.final_time.ravel()[0]) == 0.0
     assert float(result.final_angle.ravel()[0]) == 0.0
     assert float(result.energy.impact_loss.ravel()[0]) == 0.5 * J_STOP * 1.0**2
+
+
+def _swing_under_gravity() -> integrate.NonlinearSegments:
+    """One segment, J = 1 kg*m^2, B = 0.05 N*m*s/rad (N = 1, linear law at ambient), a
+    constant drive a = 0.5 N*m against gravity W sin(x), W = 1 N*m, from rest at x = 0."""
+    one = np.ones(1)
+    return integrate.NonlinearSegments(
+        inertia=one,
+        stiffness=0.0 * one,
+        drive=0.5 * one,
+        speed0=0.0 * one,
+        length=3.0 * one,
+        cap=np.full(1, np.inf),
+        state0=0.0 * one,
+        ambient=25.0 * one,
+        ratio=one,
+        gearbox_damping=0.0 * one,
+        heat_capacity=np.full(1, np.inf),
+        thermal_resistance=np.full(1, np.inf),
+        linear_damping=0.05 * one,
+        eddy=LinearEddy(0.05 * one, 25.0 * one, 0.0 * one),
+        case=np.zeros(1, dtype=np.intp),
+        thermal=False,
+        gravity_amplitude=one,
+        gravity_phase=0.0 * one,
+        gravity_direction=one,
+    )
+
+
+@pytest.mark.parametrize("path", ["compiled", "numpy", "Radau"])
+def test_a_swing_against_gravity_turns_round(path: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    # Under gravity every segment may creep (the sine moves the equilibrium), so the rule
+    # matters on every turnaround: here the load swings past sin x = a/W (0.524 rad) and
+    # turns round near 1.1 rad, at a finite time. Reference: x'' = 0.5 - 0.05 x' - sin x
+    # by scipy DOP853 at rtol 1e-12, to the zero of the speed.
+    def rhs(_t: float, y: np.ndarray) -> list[float]:
+        return [float(y[1]), 0.5 - 0.05 * float(y[1]) - math.sin(float(y[0]))]
+
+    def turns(_t: float, y: np.ndarray) -> float:
+        return float(y[1])
+
+    turns.terminal = True  # type: ignore[attr-defined]
+    turns.direction = -1.0  # type: ignore[attr-defined]
+    ref = solve_ivp(
+        rhs, (0.0, 100.0), [0.0, 0.0], method="DOP853", events=turns, rtol=1e-12, atol=1e-14
+    )
+    t_turn, x_turn = float(ref.t_events[0][0]), float(ref.y_events[0][0][0])
+    assert math.sin(x_turn) > 0.5  # past the equilibrium: gravity sends it back
+    if path == "numpy":
+        monkeypatch.setenv("ECDSIM_NUMBA", "0")
+    method = "Radau" if path == "Radau" else "RODAS4"
+    out = integrate.advance_nonlinear(_swing_under_gravity(), 1e-10, method, False)
+    assert int(out.kind[0]) == linear.ZERO
+    # 1e-7: the integrator at rtol 1e-10 (the event on its interpolant), the reference at
+    # 1e-12
+    assert float(out.duration[0]) == pytest.approx(t_turn, rel=1e-7)
+    assert float(out.x[0]) == pytest.approx(x_turn, rel=1e-7)

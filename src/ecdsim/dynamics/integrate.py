@@ -9,7 +9,8 @@ installed, else the whole batch at once in NumPy by :mod:`ecdsim.dynamics.rosenb
 see :func:`compiled_kernel`) or case by case with scipy's ``solve_ivp`` (stiff methods
 ``"Radau"``, ``"BDF"`` or ``"LSODA"``), until the first event: the segment's length is
 reached, the speed falls to zero, the speed falls below ``1e-9`` of its scale while the
-static equilibrium lies ahead (asymptotic approach to rest, "creep"), or the time cap.
+static equilibrium lies ahead and the load is still short of it (asymptotic approach to
+rest, "creep": :meth:`~ecdsim.dynamics.equations.Model.rest_push` > 0), or the time cap.
 The damper cannot heat beyond its damping law's zero (Eq. 1's ``BD_T = 0``): the state s
 keeps it out of reach.
 """
