@@ -382,11 +382,12 @@ def _integrate_one(
         # at rest forward); past it (a swing's turnaround) the zero-speed event comes
         # instead (rosenbrock._creeping). As one continuous function: the push in speed
         # units over the linear damping, whose sign alone matters.
+        damping0 = max(float(segs.linear_damping[j]), 1e-300)
+
         def creep_event(_t: float, y: FloatArray) -> float:
             push = float(one.rest_push(np.array([float(y[0])]))[0]) / damping0
             return max(float(y[1]) - creep_speed, -push)
 
-        damping0 = max(float(segs.linear_damping[j]), 1e-300)
         events.append(_Event(creep_event, True, -1.0))
     switches = one.flow is not None and float(one.flow[0]) != 0.0
     if switches:
