@@ -190,6 +190,11 @@ def _falling(system_friction: float, ecd_friction: float = 0.0) -> DeploymentSys
     )
 
 
+def _pushing_back() -> DeploymentSystem:
+    """A spring that pulls back everywhere (-0.5 to -1 N*m), against 0.1 N*m friction."""
+    return _system(start_torque=-0.5, end_torque=-1.0, system_friction=0.1)
+
+
 def _pulling_back() -> DeploymentSystem:
     """A spring whose torque crosses zero at 0.375 rad and pulls back beyond it."""
     return _system(start_torque=1.0, end_torque=-3.0, system_friction=0.05)
@@ -236,6 +241,23 @@ CASES: dict[str, tuple[Callable[[], DeploymentSystem], DynamicParameters, float]
     "start stop rebound": (
         _pulling_back,
         _params(0.5, initial_angle=1.2, restitution=0.5, rolloff=SMALL),
+        25.0,
+    ),
+    # Lightly damped: the swing passes the equilibrium (0.675 rad) and turns round.
+    "swing past the equilibrium": (
+        lambda: _system(damping=1e-5, start_torque=1.0, end_torque=-1.0, system_friction=0.1),
+        _params(0.2, rolloff=Rolloff(500.0, 0.0039)),
+        25.0,
+    ),
+    "held on the start stop": (_pushing_back, _params(0.5, initial_angle=1.0, rolloff=SMALL), 25.0),
+    "start stop rebounds, held": (
+        _pushing_back,
+        _params(0.5, initial_angle=1.0, restitution=0.5, rolloff=SMALL, thermal=Thermal(0.01)),
+        25.0,
+    ),
+    "backward launch on the start stop": (
+        _pushing_back,
+        _params(0.5, initial_speed=-1.0, rolloff=SMALL),
         25.0,
     ),
     "creep to equilibrium": (
@@ -304,8 +326,29 @@ def test_the_cases_reach_every_branch(monkeypatch: pytest.MonkeyPatch) -> None:
     assert seen["zero speed, breakaway backward"].events.names()[1:3] == ["zero_speed", "breakaway"]
     assert _names(seen["breakaway backward, start stop latch"]) >= {"breakaway", "start_stop"}
     assert int(seen["breakaway backward, start stop latch"].impacts.ravel()[0]) == 0
-    assert "start_stop" in _names(seen["start stop rebound"])
-    assert int(seen["start stop rebound"].impacts.ravel()[0]) == 1
+    # The rebound off the start stop swings past the equilibrium (T = 1 - 8 phi / 3 = 0.05
+    # at 0.356 rad) and turns round at a finite time (zero speed, not creep), then swings
+    # on until it sticks where the spring is within the friction of 0.05 N*m.
+    rebound = seen["start stop rebound"]
+    assert "start_stop" in _names(rebound)
+    assert int(rebound.impacts.ravel()[0]) >= 1
+    assert status("start stop rebound") == "stuck"
+    assert "creep" not in _names(rebound)
+    assert abs(1.0 - 8.0 / 3.0 * float(rebound.stuck_angle.ravel()[0])) <= 0.05
+    # Past the equilibrium the speed reaches zero in finite time: no creep (the spring
+    # there, below -0.1 N*m, sends it back), until it sticks within the friction.
+    swing = seen["swing past the equilibrium"]
+    assert swing.events.names()[1:4] == ["breakaway", "zero_speed", "breakaway"]
+    assert status("swing past the equilibrium") == "stuck"
+    # At rest on the start stop with the spring pulling back: the stop holds it.
+    for name in ("held on the start stop", "start stop rebounds, held"):
+        assert seen[name].events.names()[-2:] == ["start_stop", "stick"]
+        assert status(name) == "stuck"
+        assert float(seen[name].final_angle.ravel()[0]) == 0.0
+        assert float(np.min(seen[name].events.angle)) == 0.0
+    assert int(seen["start stop rebounds, held"].impacts.ravel()[0]) >= 2
+    launch = seen["backward launch on the start stop"]
+    assert launch.events.names() == ["release", "start_stop", "stick"]
     assert status("creep to equilibrium") == "creep"
     assert status("stop time") == "stop_time"
     assert status("horizon") == "horizon"

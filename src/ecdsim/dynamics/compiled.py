@@ -537,6 +537,18 @@ def _root(c0: float, c1: float, c2: float, c3: float, degree: int) -> float:
 
 
 @_jit
+def _rest_push(par: Params, x: float) -> float:
+    """``J u'`` at ``u = 0+`` and displacement x (:meth:`Model.rest_push`): the drive less
+    the spring, the Stribeck excess at rest and gravity; the damping vanishes at rest."""
+    push = par[_DRIVE] - par[_K] * x
+    if par[_DF] > 0.0:
+        push = push - par[_DF]
+    if par[_GW] != 0.0:
+        push = push - par[_GD] * par[_GW] * math.sin(par[_GP] + par[_GD] * x)
+    return push
+
+
+@_jit
 def _crossing(ya: float, fa: float, yb: float, fb: float, h: float, target: float) -> float:
     """Fraction of the step at which the interpolant of a row crosses ``target``."""
     hf0 = h * fa
@@ -642,9 +654,16 @@ def _segment(
     ``final``. The state has 4 rows, or 5 with two-node heating (the housing rise).
     """
     par[_FIXED] = par[_FA] * math.exp(par[_COEF] * y0[2])
+    rows = y0.shape[0]
+    if length <= 0.0:
+        # No length (a backward motion from the start stop): its end is reached at once
+        # (rosenbrock.integrate_batch); the crossing test below needs x short of it.
+        for r in range(rows):
+            final[r] = y0[r]
+        final[0] = length
+        return _REACH, 0.0, y0[1], y0[2], np.empty((1 + 2 * rows, 1)), 0
     # The parameters and the state as tuples in the step loop (see State).
     p = _as_tuple(par, _COLUMNS)
-    rows = y0.shape[0]
     two_node = rows > 4
     y = (y0[0], y0[1], y0[2], y0[3], y0[4] if two_node else 0.0)
     tol = (atol[0], atol[1], atol[2], atol[3], atol[4] if two_node else 1.0)
@@ -695,8 +714,12 @@ def _segment(
                 event_s, event = s_hit, _ZERO
         if creeps and y[1] > creep and y1[1] <= creep:
             s_hit = _crossing(y[1], f[1], y1[1], fb[1], h, creep)
+            # Creep only short of the equilibrium: past it (the turnaround of a swing)
+            # the speed reaches zero in finite time (rosenbrock._creeping).
             if s_hit < event_s:
-                event_s, event = s_hit, _REST
+                x_hit = _hermite(y[0], f[0], y1[0], fb[0], h, s_hit)
+                if _rest_push(p, x_hit) > 0.0:
+                    event_s, event = s_hit, _REST
         if flow:
             s_hit = _switch(p, kind, heating, y, f, y1, fb, h)
             if s_hit < event_s:

@@ -273,6 +273,23 @@ class Model:
         torque = self.gravity_direction * gravity_torque(0.0, self.gravity_amplitude, angle)
         return torque, gravity_torque_slope(0.0, self.gravity_amplitude, angle)
 
+    def rest_push(self, x: FloatArray) -> FloatArray:
+        """``J u'`` at ``u = 0+`` and displacement x: ``a - k x - g(0) - G(x)`` [N*m].
+
+        The damping torque vanishes at rest (both laws and BG are zero at zero speed), the
+        Stribeck excess is its breakaway value ``g(0) = F_brk - F_C``. Positive while the
+        load is short of its static equilibrium: a speed that falls towards zero there
+        is an asymptotic approach to rest (creep); zero or negative once the load is past
+        it, where the speed reaches zero in finite time (docs/dynamics.md, the events).
+        """
+        push = self.drive - self.stiffness * x
+        if self.stribeck_excess is not None:
+            push = push - self.stribeck_excess
+        weight = self.gravity(x)
+        if weight is not None:
+            push = push - weight[0]
+        return np.asarray(push)
+
     def _stribeck(self, u: FloatArray) -> tuple[FloatArray, FloatArray] | None:
         if self.stribeck_excess is None or self.stribeck_speed is None:
             return None

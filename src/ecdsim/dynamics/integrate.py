@@ -9,7 +9,8 @@ installed, else the whole batch at once in NumPy by :mod:`ecdsim.dynamics.rosenb
 see :func:`compiled_kernel`) or case by case with scipy's ``solve_ivp`` (stiff methods
 ``"Radau"``, ``"BDF"`` or ``"LSODA"``), until the first event: the segment's length is
 reached, the speed falls to zero, the speed falls below ``1e-9`` of its scale while the
-static equilibrium lies ahead (asymptotic approach to rest, "creep"), or the time cap.
+static equilibrium lies ahead and the load is still short of it (asymptotic approach to
+rest, "creep": :meth:`~ecdsim.dynamics.equations.Model.rest_push` > 0), or the time cap.
 The damper cannot heat beyond its damping law's zero (Eq. 1's ``BD_T = 0``): the state s
 keeps it out of reach.
 """
@@ -377,7 +378,17 @@ def _integrate_one(
         _Event(lambda t, y: float(rhs(t, y)[2]), False, -1.0),  # temperature maxima
     ]
     if creeps:
-        events.append(_Event(lambda _t, y: float(y[1]) - creep_speed, True, -1.0))
+        # The speed falling through the creep threshold short of the equilibrium (the push
+        # at rest forward); past it (a swing's turnaround) the zero-speed event comes
+        # instead (rosenbrock._creeping). As one continuous function: the push in speed
+        # units over the linear damping, whose sign alone matters.
+        damping0 = max(float(segs.linear_damping[j]), 1e-300)
+
+        def creep_event(_t: float, y: FloatArray) -> float:
+            push = float(one.rest_push(np.array([float(y[0])]))[0]) / damping0
+            return max(float(y[1]) - creep_speed, -push)
+
+        events.append(_Event(creep_event, True, -1.0))
     switches = one.flow is not None and float(one.flow[0]) != 0.0
     if switches:
         # A lossy gear's power flow reverses (equations.SWITCH), last in the list.

@@ -501,10 +501,30 @@ def _find_events(
             c0, c1, c2, c3 = _cubic(ya[row, hit], fa[row, hit], y1[row, hit], f1[row, hit], h[hit])
             if target is not None:
                 c0 = c0 - target[hit]
-            _earliest(event_s, event_kind, hit, _root((c0, c1, c2, c3)), code)
+            s_hit = _root((c0, c1, c2, c3))
+            if code == linear.REST:
+                s_hit = _creeping(run, y1, f1, hit, s_hit)
+            _earliest(event_s, event_kind, hit, s_hit, code)
     if run.model.mesh is not None:
         _find_switch(run, y1, f1, event_s, event_kind)
     return event_s, event_kind
+
+
+def _creeping(
+    run: _Running, y1: FloatArray, f1: FloatArray, hit: NDArray[np.intp], s_hit: FloatArray
+) -> FloatArray:
+    """The creep crossings ``s_hit`` of the segments ``hit`` that are an approach to rest.
+
+    The speed falls through the creep threshold either approaching the static equilibrium
+    from short of it (the net drive at rest still pushes forward, :meth:`Model.rest_push`
+    > 0, balanced by the damping: creep) or at the turnaround of a swing past it (the
+    push is backward and the speed reaches zero in finite time: the ZERO event follows).
+    The latter crossings are dropped (inf).
+    """
+    h = run.h[hit]
+    x = _hermite(run.y[0, hit], run.f[0, hit], y1[0, hit], f1[0, hit], h, s_hit)
+    push = run.model.take(hit).rest_push(x)
+    return np.where(push > 0.0, s_hit, np.inf)
 
 
 def _find_switch(
@@ -631,6 +651,14 @@ def integrate_batch(model: Model, segments: Segments, control: Control) -> Outco
     peaks: _Peaks = []
     if steps is not None:
         steps.append((run.work.copy(), run.t.copy(), run.y.copy(), run.f.copy()))
+    # A segment of no length (a backward motion from the start stop) reaches its end at
+    # once: the crossing test below needs x to start short of it.
+    instant = segments.length <= 0.0
+    if np.any(instant):
+        at_once = np.flatnonzero(instant)
+        out.kind[at_once] = linear.REACH
+        out.final[0, at_once] = segments.length[at_once]
+        end = run.keep(np.flatnonzero(~instant), end)
     for _ in range(MAX_STEPS):
         if run.work.size == 0:
             break

@@ -181,6 +181,7 @@ class _Run:
     friction_work: float = 0.0
     damper_work: float = 0.0
     impact_loss: float = 0.0
+    start_ke: float = 0.0  # the largest impact's kinetic energy on the start stop [J]
     times: list[float] = field(default_factory=list)  # the event log, in order
     kinds: list[int] = field(default_factory=list)
     angles: list[float] = field(default_factory=list)
@@ -352,10 +353,13 @@ def _start(problem: DynamicProblem, case: _Case) -> _Run:
 
 
 def _stick_or_break(case: _Case, run: _Run) -> float:
-    """solver._stick_or_break: the direction of a breakaway, 0 where the case sticks."""
+    """solver._stick_or_break: the direction of a breakaway, 0 where the case sticks
+    (held by static friction, or by the start stop against a backward drive)."""
     drive = case.start_torque + case.slope * (run.phi - case.lower)
     static = case.system_friction * case.system_factor + case.ecd_friction * case.factor
-    if abs(drive) <= static + STICK_MARGIN * _maximum(abs(drive), static):
+    holds = abs(drive) <= static + STICK_MARGIN * _maximum(abs(drive), static)
+    # On the start stop a backward drive presses the load into the stop, which holds it.
+    if holds or (drive < 0.0 and run.phi <= 0.0):
         run.finish("stuck")
         run.stuck = True
         run.stuck_angle = run.phi
@@ -559,7 +563,12 @@ def _impact(case: _Case, run: _Run, name: str) -> None:
     # mechanics.rebound
     w_after = -e * run.w
     loss = (1.0 - e * e) * (0.5 * inertia * run.w * run.w)
-    reference = _maximum(_maximum(run.arrival_ke, ke), _TINY)
+    largest = ke
+    if not arriving:
+        # On the start stop: the largest impact there so far (solver._impact).
+        largest = _maximum(run.start_ke, ke)
+        run.start_ke = largest
+    reference = _maximum(_maximum(run.arrival_ke, largest), _TINY)
     settle = ke - loss <= SETTLE_FRACTION * reference
     if arriving and run.impacts == 0 and not settle:
         run.rebound_speed = w_after

@@ -281,6 +281,9 @@ class _State:
     # The power flow to take on the next segment after a power_flow event (+1 forward,
     # -1 back-driven), 0 to decide from the state: at the switch sigma is 0 to rounding.
     flow_hint: NDArray[np.int8]
+    # The largest kinetic energy of an impact on the start stop so far [J]: the reference
+    # of a rebound sequence there (the first arrival's is the end stop's).
+    start_ke: FloatArray
     housing: FloatArray | None = None  # two nodes: the housing's rise over ambient [K]
 
     @classmethod
@@ -318,6 +321,7 @@ class _State:
             piece=_first_piece(c, c.angle0),
             gear_loss=np.zeros(n),
             flow_hint=np.zeros(n, dtype=np.int8),
+            start_ke=np.zeros(n),
         )
 
     def finish(self, idx: NDArray[np.intp], status: str) -> None:
@@ -472,7 +476,10 @@ class _Records:
 def _stick_or_break(
     c: _Cases, s: _State, resting: NDArray[np.intp], direction: FloatArray, log: _Log
 ) -> None:
-    """At rest: stick for good if the spring cannot beat static friction, else break away."""
+    """At rest: stick for good if the spring cannot beat static friction, else break away.
+
+    On the start stop a backward drive is held by the stop: the case sticks there too.
+    """
     piece = _piece(c, resting, s.phi[resting], np.ones(resting.size, dtype=bool), s.piece[resting])
     s.piece[resting] = piece.index
     # Each friction breaks away at its own factor: the ECD's (when engaged) and the
@@ -491,6 +498,9 @@ def _stick_or_break(
             s.phi[resting], c.gravity_amplitude[resting], c.gravity_angle[resting]
         )
     holds = np.abs(drive) <= static + _STICK_MARGIN * np.maximum(np.abs(drive), static)
+    # On the start stop (angle 0) a backward drive presses the load into the stop, which
+    # holds it: at rest for good as a stick (nothing changes at rest afterwards).
+    holds = holds | ((drive < 0.0) & (s.phi[resting] <= 0.0))
     sticking = resting[holds]
     s.finish(sticking, "stuck")
     s.stuck[sticking] = True
@@ -1267,7 +1277,14 @@ def _impact(c: _Cases, s: _State, hit: NDArray[np.intp], name: str, log: _Log) -
     idx = hit[bouncing]
     w_after, loss = mechanics.rebound(s.w[idx], e[bouncing], inertia[bouncing])
     rebound_ke = ke[bouncing] - loss
-    reference = np.maximum(np.maximum(s.arrival_ke[idx], ke[bouncing]), np.finfo(float).tiny)
+    if arriving:
+        largest = ke[bouncing]
+    else:
+        # On the start stop a rebound sequence's reference is the largest impact there
+        # so far, as the first arrival is the end stop's.
+        largest = np.maximum(s.start_ke[idx], ke[bouncing])
+        s.start_ke[idx] = largest
+    reference = np.maximum(np.maximum(s.arrival_ke[idx], largest), np.finfo(float).tiny)
     settle = rebound_ke <= _SETTLE_FRACTION * reference
     if arriving:
         first_rebound = s.impacts[idx] == 0
