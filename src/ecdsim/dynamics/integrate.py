@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
@@ -282,6 +283,9 @@ class _InTemperature:
         return y
 
 
+_COMPILED = "ecdsim.dynamics.compiled"
+
+
 def compiled_kernel() -> ModuleType | None:
     """:mod:`ecdsim.dynamics.compiled` when numba is installed and not switched off.
 
@@ -291,6 +295,12 @@ def compiled_kernel() -> ModuleType | None:
     """
     if os.environ.get("ECDSIM_NUMBA", "1").strip() == "0":
         return None
+    # Once imported, the module is read off sys.modules: a dictionary look-up where the
+    # import statement runs importlib's from-list handling (some microseconds, cold, in
+    # a single deployment's dispatch: dynamics.single.eligible).
+    imported = sys.modules.get(_COMPILED)
+    if imported is not None:
+        return imported
     try:
         from ecdsim.dynamics import compiled
     except ImportError:
