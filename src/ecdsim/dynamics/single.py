@@ -475,11 +475,11 @@ def _integrate(
     )
     x, u, state, work = kernel.final.tolist()
     if run.records is not None and count >= 2:
-        # The kernel's buffer is its own (allocated per call): the time, state and slope
-        # rows are taken as views of it, not copied.
+        # The kernel's buffer is its own (allocated per call), a step a row: the time,
+        # state and slope columns are taken as views of it (transposed), not copied.
+        taken = steps[:count]
         solution = _frozen(
-            Trajectory,
-            {"times": steps[0, :count], "states": steps[1:5, :count], "slopes": steps[5:, :count]},
+            Trajectory, {"times": taken[:, 0], "states": taken[:, 1:5].T, "slopes": taken[:, 5:].T}
         )
         run.records.append(
             _frozen(
