@@ -283,7 +283,8 @@ class _InTemperature:
         return y
 
 
-_COMPILED = "ecdsim.dynamics.compiled"
+# The compiled kernels' module (dynamics.single reads it off sys.modules too).
+COMPILED_MODULE = "ecdsim.dynamics.compiled"
 
 
 def compiled_kernel() -> ModuleType | None:
@@ -298,7 +299,7 @@ def compiled_kernel() -> ModuleType | None:
     # Once imported, the module is read off sys.modules: a dictionary look-up where the
     # import statement runs importlib's from-list handling (some microseconds, cold, in
     # a single deployment's dispatch: dynamics.single.eligible).
-    imported = sys.modules.get(_COMPILED)
+    imported = sys.modules.get(COMPILED_MODULE)
     if imported is not None:
         return imported
     try:

@@ -28,6 +28,7 @@ the log state of :mod:`ecdsim.physics.thermal`).
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from types import ModuleType
@@ -495,6 +496,8 @@ def _integrate(
             )
         )
     run.heat = state
+    temperature = case.temperature(state)
+    peak = _maximum(top_temp, state)
     return _Step(
         kind=code,
         duration=duration,
@@ -502,8 +505,9 @@ def _integrate(
         v=0.0 if code in (_ZERO, _REST) else u,
         damper_work=work,
         peak_speed=_maximum(top_speed, speed0),
-        temperature=case.temperature(state),
-        peak_temperature=case.temperature(_maximum(top_temp, state)),
+        temperature=temperature,
+        # The peak is the end state unless the damper cooled: one expm1 fewer.
+        peak_temperature=temperature if peak == state else case.temperature(peak),
     )
 
 
@@ -592,8 +596,9 @@ def _impact(case: _Case, run: _Run, name: str) -> None:
 
 def solve(problem: DynamicProblem, record: bool = True) -> DynamicResult:
     """Solve the one case of ``problem`` (:func:`eligible`) as solver.solve_dynamic does."""
-    # numba's kernels: eligible() found the module importable (and imported it).
-    compiled = integrate.compiled_kernel()
+    # numba's kernels: eligible() found the module importable and imported it (read
+    # off sys.modules, without asking the environment twice: integrate.compiled_kernel).
+    compiled = sys.modules.get(integrate.COMPILED_MODULE) or integrate.compiled_kernel()
     assert compiled is not None
     case = _case(problem)
     kernel = _kernel(problem, case, compiled)
