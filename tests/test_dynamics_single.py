@@ -470,3 +470,25 @@ def test_recorded_segments_carry_their_own_model(monkeypatch: pytest.MonkeyPatch
         ma, mb = a.solution.model, b.solution.model  # type: ignore[attr-defined]
         for name in ("inertia", "stiffness", "drive", "ratio", "ambient", "ambient_factor"):
             _same(getattr(ma, name), getattr(mb, name), f"model.{name}")
+
+
+@pytest.mark.parametrize("law", ["linear", "kloss"])
+def test_frozen_records_carry_every_field(law: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    # single._frozen builds the frozen records from their instance dictionaries, past
+    # __init__: each must name every field (defaults included), and no class may have a
+    # __post_init__ that would be skipped. A field added to one of these classes fails
+    # here until the single-case path fills it in.
+    rolloff = SMALL if law == "kloss" else None
+    params = _params(0.2, restitution=0.3, rolloff=rolloff, thermal=Thermal(0.01))
+    result = _solve(_problem(_system(), params), True, True, monkeypatch)
+    data = result.trajectory
+    assert data is not None
+    assert len(data.integrated) > 2  # rebounds: several recorded segments
+    steps = [record.solution.solution for record in data.integrated]  # type: ignore[attr-defined]
+    for built in (result, result.energy, result.events, data, *data.integrated, *steps):
+        kind = type(built)
+        assert dataclasses.is_dataclass(kind)
+        assert kind.__dataclass_params__.frozen  # type: ignore[attr-defined]
+        assert not hasattr(kind, "__post_init__"), kind
+        assert set(vars(built)) == {f.name for f in dataclasses.fields(built)}, kind
+    assert type(data.eddy).__name__ == ("KlossEddy" if law == "kloss" else "LinearEddy")

@@ -37,7 +37,7 @@ def _append(
         bigger[:, :count] = steps[:, :count]
         steps = bigger
     for j in range(m):
-        steps[:, count + j] = piece[:, j]
+        steps[:, count + j] = piece[j, :]  # the piece's steps are rows (compiled._store)
         steps[0, count + j] += dt
         steps[1, count + j] += dx
     return steps, count + m

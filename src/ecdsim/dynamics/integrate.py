@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
@@ -283,6 +284,10 @@ class _InTemperature:
         return y
 
 
+# The compiled kernels' module (dynamics.single reads it off sys.modules too).
+COMPILED_MODULE = "ecdsim.dynamics.compiled"
+
+
 def compiled_kernel() -> ModuleType | None:
     """:mod:`ecdsim.dynamics.compiled` when numba is installed and not switched off.
 
@@ -292,6 +297,12 @@ def compiled_kernel() -> ModuleType | None:
     """
     if os.environ.get("ECDSIM_NUMBA", "1").strip() == "0":
         return None
+    # Once imported, the module is read off sys.modules: a dictionary look-up where the
+    # import statement runs importlib's from-list handling (some microseconds, cold, in
+    # a single deployment's dispatch: dynamics.single.eligible).
+    imported = sys.modules.get(COMPILED_MODULE)
+    if imported is not None:
+        return imported
     try:
         from ecdsim.dynamics import compiled
     except ImportError:

@@ -28,9 +28,11 @@ the log state of :mod:`ecdsim.physics.thermal`).
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from types import ModuleType
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -62,6 +64,7 @@ _REACH, _ZERO, _CAP, _REST = linear.REACH, linear.ZERO, linear.CAP, linear.REST
 _TINY = float(np.finfo(float).tiny)
 # exp overflows above this argument; NumPy's expm1 then gives inf (with a warning).
 _EXP_LIMIT = 709.0
+_T = TypeVar("_T")
 
 
 def eligible(problem: DynamicProblem) -> bool:
@@ -222,31 +225,41 @@ def _case(problem: DynamicProblem) -> _Case:
     t0, t1 = torques.item(0), torques.item(1)
     width = a1 - a0
     eddy = problem.eddy
-    coefficient = _item(eddy.coefficient)
-    load, damper = problem.load_inertia.item(), problem.damper_inertia.item()
+    # c: LinearEddy.coefficient and KlossEddy.coefficient (the law's only two classes
+    # here: eligible), read as a float rather than through np.asarray.
+    if isinstance(eddy, LinearEddy):
+        coefficient = _item(eddy.temperature_coefficient)
+    else:
+        assert isinstance(eddy, KlossEddy)
+        coefficient = _item(eddy.resistivity_coefficient)
+    reference = _item(eddy.reference_temperature)
+    ambient = problem.ambient_temperature.item()
+    # max(eddy.factor(T), 0) in floats: both laws' factor is ``1 * (1 + c (T - T_ref))``
+    # (assembly.damper_damping_rate at BD = 1, rolloff.peak_speed_at at w_ref = 1), the
+    # same IEEE operations on the same operands as NumPy's (solver._thermal_start).
+    ambient_factor = _maximum(1.0 * (1.0 + coefficient * (ambient - reference)), 0.0)
+    load = problem.load_inertia.item()
     return _Case(
-        lower=a0,
-        upper=a1,
-        start_torque=t0,
-        slope=(t1 - t0) / width if width > 0.0 else 0.0,
-        travel=a1,
-        load_inertia=load,
-        total_inertia=load + damper,
-        ecd_friction=problem.ecd_friction.item(),
-        system_friction=problem.system_friction.item(),
-        factor=problem.static_friction_factor.item(),
-        system_factor=problem.system_static_friction_factor.item(),
-        restitution=problem.restitution.item(),
-        angle0=problem.initial_angle.item(),
-        speed0=problem.initial_speed.item(),
-        ambient=problem.ambient_temperature.item(),
-        linear_damping=problem.damping_rate.item(),
-        coefficient=coefficient,
-        ambient_factor=_item(np.maximum(eddy.factor(problem.ambient_temperature), 0.0)),
-        zero=_item(eddy.reference_temperature) - 1.0 / coefficient
-        if coefficient < 0.0
-        else math.inf,
-        heating=problem.thermal,
+        a0,  # lower
+        a1,  # upper
+        t0,  # start_torque
+        (t1 - t0) / width if width > 0.0 else 0.0,  # slope
+        a1,  # travel
+        load,  # load_inertia
+        load + problem.damper_inertia.item(),  # total_inertia
+        problem.ecd_friction.item(),
+        problem.system_friction.item(),
+        problem.static_friction_factor.item(),  # factor
+        problem.system_static_friction_factor.item(),  # system_factor
+        problem.restitution.item(),
+        problem.initial_angle.item(),  # angle0
+        problem.initial_speed.item(),  # speed0
+        ambient,
+        problem.damping_rate.item(),  # linear_damping
+        coefficient,
+        ambient_factor,
+        reference - 1.0 / coefficient if coefficient < 0.0 else math.inf,  # zero
+        problem.thermal,  # heating
     )
 
 
@@ -467,19 +480,28 @@ def _integrate(
     )
     x, u, state, work = kernel.final.tolist()
     if run.records is not None and count >= 2:
-        taken = steps[:, :count].copy()  # one copy: time, state and slope rows as views
-        solution = Trajectory(taken[0], taken[1:5], taken[5:])
+        # The kernel's buffer is its own (allocated per call), a step a row: the time,
+        # state and slope columns are taken as views of it (transposed), not copied.
+        taken = steps[:count]
+        solution = _frozen(
+            Trajectory, {"times": taken[:, 0], "states": taken[:, 1:5].T, "slopes": taken[:, 5:].T}
+        )
         run.records.append(
-            IntegratedRecord(
-                case=0,
-                start_time=run.t,
-                duration=duration,
-                start_angle=run.phi,
-                direction=seg.direction,
-                solution=_Recorded(solution, kernel.model, seg.drive),
+            _frozen(
+                IntegratedRecord,
+                {
+                    "case": 0,
+                    "start_time": run.t,
+                    "duration": duration,
+                    "start_angle": run.phi,
+                    "direction": seg.direction,
+                    "solution": _Recorded(solution, kernel.model, seg.drive),
+                },
             )
         )
     run.heat = state
+    temperature = case.temperature(state)
+    peak = _maximum(top_temp, state)
     return _Step(
         kind=code,
         duration=duration,
@@ -487,8 +509,9 @@ def _integrate(
         v=0.0 if code in (_ZERO, _REST) else u,
         damper_work=work,
         peak_speed=_maximum(top_speed, speed0),
-        temperature=case.temperature(state),
-        peak_temperature=case.temperature(_maximum(top_temp, state)),
+        temperature=temperature,
+        # The peak is the end state unless the damper cooled: one expm1 fewer.
+        peak_temperature=temperature if peak == state else case.temperature(peak),
     )
 
 
@@ -582,8 +605,10 @@ def _impact(case: _Case, run: _Run, name: str) -> None:
 
 def solve(problem: DynamicProblem, record: bool = True) -> DynamicResult:
     """Solve the one case of ``problem`` (:func:`eligible`) as solver.solve_dynamic does."""
-    from ecdsim.dynamics import compiled  # numba: eligible() found it importable
-
+    # numba's kernels: eligible() found the module importable and imported it (read
+    # off sys.modules, without asking the environment twice: integrate.compiled_kernel).
+    compiled = sys.modules.get(integrate.COMPILED_MODULE) or integrate.compiled_kernel()
+    assert compiled is not None
     case = _case(problem)
     kernel = _kernel(problem, case, compiled)
     run = _start(problem, case)
@@ -613,7 +638,8 @@ def _result(problem: DynamicProblem, case: _Case, run: _Run) -> DynamicResult:
     """solve_dynamic's result for the case: summaries, energy, events and trajectory.
 
     The float fields are views of one array (one NumPy call, not one per field), each
-    of the batch's shape; so are the event log's times, angles and speeds.
+    of the batch's shape; so are the event log's times, angles and speeds. The frozen
+    records are built by :func:`_frozen` (every field named here).
     """
     shape = problem.batch_shape
     final_speed = run.w if run.status in _KEEPS else 0.0
@@ -647,71 +673,103 @@ def _result(problem: DynamicProblem, case: _Case, run: _Run) -> DynamicResult:
     # Iterating over the first axis gives the views (but scalars for a 0-d batch).
     v = list(values) if shape else [values[k, ...] for k in range(21)]
     logged = np.array((run.times, run.angles, run.speeds))
+    energy = _frozen(
+        EnergyBalance,
+        {
+            "spring_work": v[13],
+            "initial_kinetic_energy": v[14],
+            "damper_dissipation": v[15],
+            "friction_dissipation": v[16],
+            "engagement_loss": v[17],
+            "impact_loss": v[18],
+            "final_kinetic_energy": v[19],
+            "gear_loss": v[20],
+            "gravity_work": None,
+            "mesh_dissipation": None,
+            "elastic_energy": None,
+        },
+    )
+    events = _frozen(
+        EventLog,
+        {
+            "case": np.zeros(len(run.kinds), dtype=np.intp),
+            "time": logged[0],
+            "kind": np.array(run.kinds, dtype=np.int8),
+            "angle": logged[1],
+            "speed": logged[2],
+        },
+    )
     trajectory = None
     if run.records is not None:
         trajectory = _trajectory(problem, case, run, final_speed)
-    return DynamicResult(
-        batch_shape=shape,
-        temperature=problem.ambient_temperature.reshape(shape),
-        deployment_time=v[0],
-        arrival_speed=v[1],
-        arrival_kinetic_energy=v[2],
-        final_time=v[3],
-        final_angle=v[4],
-        final_speed=v[5],
-        final_temperature=v[6],
-        stuck=np.array(run.stuck).reshape(shape),
-        stuck_angle=v[7],
-        stuck_time=v[8],
-        max_speed=v[9],
-        max_damper_temperature=v[10],
-        final_housing_temperature=None,
-        engagement_time=v[11],
-        rebound_speed=v[12],
-        impacts=np.array(run.impacts, dtype=np.int64).reshape(shape),
-        status=np.array(run.status, dtype=np.int8).reshape(shape),
-        energy=EnergyBalance(
-            spring_work=v[13],
-            initial_kinetic_energy=v[14],
-            damper_dissipation=v[15],
-            friction_dissipation=v[16],
-            engagement_loss=v[17],
-            impact_loss=v[18],
-            final_kinetic_energy=v[19],
-            gear_loss=v[20],
-            gravity_work=None,
-        ),
-        events=EventLog(
-            np.zeros(len(run.kinds), dtype=np.intp),
-            logged[0],
-            np.array(run.kinds, dtype=np.int8),
-            logged[1],
-            logged[2],
-        ),
-        trajectory=trajectory,
+    return _frozen(
+        DynamicResult,
+        {
+            "batch_shape": shape,
+            "temperature": problem.ambient_temperature.reshape(shape),
+            "deployment_time": v[0],
+            "arrival_speed": v[1],
+            "arrival_kinetic_energy": v[2],
+            "final_time": v[3],
+            "final_angle": v[4],
+            "final_speed": v[5],
+            "final_temperature": v[6],
+            "stuck": np.array(run.stuck).reshape(shape),
+            "stuck_angle": v[7],
+            "stuck_time": v[8],
+            "max_speed": v[9],
+            "max_damper_temperature": v[10],
+            "engagement_time": v[11],
+            "rebound_speed": v[12],
+            "impacts": np.array(run.impacts, dtype=np.int64).reshape(shape),
+            "status": np.array(run.status, dtype=np.int8).reshape(shape),
+            "energy": energy,
+            "events": events,
+            "trajectory": trajectory,
+            "final_housing_temperature": None,  # one node
+            "max_mesh_torque": None,  # a rigid mesh
+            "latch_mesh_torque": None,
+        },
     )
+
+
+def _frozen(cls: type[_T], values: dict[str, Any]) -> _T:
+    """``cls(**values)`` for a frozen dataclass, its instance dictionary set at once.
+
+    A frozen dataclass's ``__init__`` sets each field through ``object.__setattr__``
+    (some 0.1 us a field; a result has about 50 over its records). ``values`` must name
+    every field, defaults included, and ``cls`` must have no ``__post_init__``:
+    tests/test_dynamics_single.py asserts both for each class built here, so that a
+    field added to one of them fails there until it is filled in.
+    """
+    built = object.__new__(cls)
+    object.__setattr__(built, "__dict__", values)
+    return built
 
 
 def _flat_eddy(problem: DynamicProblem) -> LinearEddy | KlossEddy:
-    """``problem.eddy.flattened(shape)`` for one case: each parameter as a (1,) array."""
+    """``problem.eddy.flattened(shape)`` for one case: each parameter as a (1,) array
+    (rows of one array: one NumPy call)."""
     eddy = problem.eddy
-
-    def one(value: float | FloatArray) -> FloatArray:
-        return np.array([_item(value)])
-
     if isinstance(eddy, LinearEddy):
-        return LinearEddy(
-            one(eddy.damping_rate),
-            one(eddy.reference_temperature),
-            one(eddy.temperature_coefficient),
-        )
+        rate, reference, coefficient = np.array(
+            (
+                _item(eddy.damping_rate),
+                _item(eddy.reference_temperature),
+                _item(eddy.temperature_coefficient),
+            )
+        ).reshape(3, 1)
+        return LinearEddy(rate, reference, coefficient)
     assert isinstance(eddy, KlossEddy)
-    return KlossEddy(
-        one(eddy.peak_torque),
-        one(eddy.reference_peak_speed),
-        one(eddy.resistivity_coefficient),
-        one(eddy.reference_temperature),
-    )
+    peak, speed, coefficient, reference = np.array(
+        (
+            _item(eddy.peak_torque),
+            _item(eddy.reference_peak_speed),
+            _item(eddy.resistivity_coefficient),
+            _item(eddy.reference_temperature),
+        )
+    ).reshape(4, 1)
+    return KlossEddy(peak, speed, coefficient, reference)
 
 
 def _same(values: FloatArray) -> FloatArray:
@@ -728,29 +786,34 @@ def _trajectory(
     """solve_dynamic's TrajectoryData for the case (one-element flat arrays: views of the
     problem's fields, as solver._flatten takes them)."""
     assert run.records is not None
-    final = np.array((run.phi, final_speed, run.temp, run.hold_from))
+    end = run.t if math.isfinite(run.t) else run.display_end
+    # The final state and the display end as rows of one array (views of shape (1,)).
+    final = np.array((run.phi, final_speed, run.temp, run.hold_from, end)).reshape(5, 1)
     engaged = np.array([True])  # engaged at release: no lost motion
     # A batch of shape (1,) (predict's one temperature) needs no reshape.
     flat = _same if problem.batch_shape == (1,) else _one_element
-    return TrajectoryData(
-        closed=[],
-        integrated=run.records,
-        initial=(
-            flat(problem.initial_angle),
-            flat(problem.initial_speed),
-            flat(problem.ambient_temperature),
-            engaged,
-        ),
-        final=(final[0:1], final[1:2], final[2:3], engaged.copy(), final[3:4]),
-        display_end=np.array([run.t if math.isfinite(run.t) else run.display_end]),
-        angles=problem.angles.reshape(2, 1),
-        torques=problem.torques.reshape(2, 1),
-        ecd_friction=flat(problem.ecd_friction),
-        system_friction=flat(problem.system_friction),
-        factor=flat(problem.static_friction_factor),
-        system_factor=flat(problem.system_static_friction_factor),
-        ratio=flat(problem.gear_ratio),
-        gearbox_damping=flat(problem.gearbox_damping_rate),
-        eddy=_flat_eddy(problem),
-        stribeck_speed=flat(problem.stribeck_speed),
+    return _frozen(
+        TrajectoryData,
+        {
+            "closed": [],
+            "integrated": run.records,
+            "initial": (
+                flat(problem.initial_angle),
+                flat(problem.initial_speed),
+                flat(problem.ambient_temperature),
+                engaged,
+            ),
+            "final": (final[0], final[1], final[2], engaged.copy(), final[3]),
+            "display_end": final[4],
+            "angles": problem.angles.reshape(2, 1),
+            "torques": problem.torques.reshape(2, 1),
+            "ecd_friction": flat(problem.ecd_friction),
+            "system_friction": flat(problem.system_friction),
+            "factor": flat(problem.static_friction_factor),
+            "system_factor": flat(problem.system_static_friction_factor),
+            "ratio": flat(problem.gear_ratio),
+            "gearbox_damping": flat(problem.gearbox_damping_rate),
+            "eddy": _flat_eddy(problem),
+            "stribeck_speed": flat(problem.stribeck_speed),
+        },
     )
