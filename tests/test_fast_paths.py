@@ -10,17 +10,24 @@ the shapes a batch can have (empty, one element with 0, 1 or 2 axes, many).
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import Any
 
 import numpy as np
 import pytest
 
+import ecdsim.dynamics.problem as problem_module
 from ecdsim._types import all_true, any_true, one_case_views
-from ecdsim.deployment import ModelDomainError, _check_damping_positive, predict
-from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff
-from ecdsim.dynamics.method import REPORTED_FROM, _findings
-from ecdsim.dynamics.problem import _CASE_FIELDS
+from ecdsim.deployment import ModelDomainError, _check_damping_positive, build_problem, predict
+from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff, Thermal
+from ecdsim.dynamics.method import REPORTED_FROM, _batch_findings, _findings
+from ecdsim.dynamics.problem import (
+    _BASE_FIELDS,
+    _CASE_FIELDS,
+    _NO_GRAVITY,
+    _SETTING_FIELDS,
+    dynamic_problem,
+)
 from ecdsim.dynamics.result import STATUSES
 from ecdsim.model import LinearSpring, _pair
 from ecdsim.solvers.base import QuasiStaticProblem
@@ -263,3 +270,126 @@ def test_status_and_energy_findings_are_the_per_status_searches(statuses: list[s
     got = _findings(solution.problem, result, error)  # type: ignore[attr-defined]
     assert got == _findings_as_before(result, error)
     assert sum(code == "energy_balance" for code, _, _ in got) == 3  # 2e-6, -3e-6, 0.5
+
+
+def _same_field(name: str, fast: object, general: object) -> None:
+    """Asserts ``fast`` is ``general``'s value bit for bit: type, shape, dtype, read-only
+    flag and bytes for an array; equality (and type) for everything else."""
+    assert type(fast) is type(general), name
+    if isinstance(general, np.ndarray):
+        assert isinstance(fast, np.ndarray)
+        assert fast.shape == general.shape, name
+        assert fast.dtype == general.dtype, name
+        assert fast.flags.writeable == general.flags.writeable, name
+        assert fast.tobytes() == general.tobytes(), name  # -0.0, inf and NaN kept
+    else:
+        assert fast == general, name
+
+
+def test_the_one_case_problem_covers_every_field() -> None:
+    # _one_case_problem sets the fields it lists and nothing else: a field added to
+    # DynamicProblem (or QuasiStaticProblem) without adding it there fails here.
+    listed = (*_BASE_FIELDS, *_NO_GRAVITY, *_CASE_FIELDS, *_SETTING_FIELDS)
+    names = [f.name for f in fields(DynamicProblem)]
+    assert sorted(listed) == sorted(names)
+    system = paper_system()
+    problem = predict(system, [25.0], ["dynamic"], dynamics=DynamicParameters(5.0)).problem
+    assert type(problem) is DynamicProblem
+    assert sorted(vars(problem)) == sorted(names)
+
+
+ONE_CASE_INPUTS: list[tuple[str, Any, DynamicParameters]] = [
+    ("linear", [25.0], DynamicParameters(5.0, initial_speed=0.3)),
+    ("scalar temperature", 25.0, DynamicParameters(5.0, rotor_inertia=1e-6)),
+    ("two axes", [[-40.0]], DynamicParameters(5.0, restitution=0.4)),
+    ("rolloff", [60.0], DynamicParameters(5.0, rolloff=Rolloff(60.0, 0.0039))),
+    (
+        "two-node heating",
+        [25.0],
+        DynamicParameters(
+            5.0,
+            rolloff=Rolloff(60.0, 0.0039),
+            thermal=Thermal(2.0, 50.0, housing_heat_capacity=20.0, initial_rotor_rise=3.0),
+        ),
+    ),
+    ("stribeck", [25.0], DynamicParameters(5.0, stribeck_speed=0.05, static_friction_factor=1.5)),
+    ("compliant", [25.0], DynamicParameters(5.0, rotor_inertia=1e-6, gear_stiffness=1e3)),
+    # A one-element array parameter: one case at a scalar temperature, (1,) at [25.0] and
+    # (1, 1) at [[25.0]] (the general path, the parameter widening the batch).
+    ("array parameter", 25.0, DynamicParameters(np.array([5.0]))),
+    ("array parameter (1,)", [25.0], DynamicParameters(np.array([5.0]))),
+    ("array parameter (1, 1)", [25.0], DynamicParameters(np.array([[5.0]]))),
+    ("integer parameter", [25.0], DynamicParameters(np.array([5]), initial_speed=np.array(1))),
+    ("two cases", [25.0, 80.0], DynamicParameters(5.0)),
+]
+
+
+@pytest.mark.parametrize(
+    ("temperatures", "params"),
+    [case[1:] for case in ONE_CASE_INPUTS],
+    ids=[case[0] for case in ONE_CASE_INPUTS],
+)
+def test_the_one_case_problem_is_the_dataclass_one(
+    temperatures: Any, params: DynamicParameters, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # dynamic_problem's one-case construction against DynamicProblem(...) (its __init__
+    # and __post_init__), on the same inputs: every field bit for bit, read-only flags
+    # included. Where it declines (several cases, a widening parameter) the general path
+    # answers, so both sides agree there too.
+    system = paper_system()
+    temps = np.asarray(temperatures, dtype=float)
+    ecd = system.ecd.at(temps)
+    base, fs = build_problem(system, ecd, temps)
+    taken: list[bool] = []
+    one_case = problem_module._one_case_problem
+
+    def spy(*args: Any) -> DynamicProblem | None:
+        answer = one_case(*args)
+        taken.append(answer is not None)
+        return answer
+
+    monkeypatch.setattr(problem_module, "_one_case_problem", spy)
+    fast = dynamic_problem(system, ecd, temps, base, fs, params)
+    # The shortcut answers one case that keeps the temperatures' shape, and only that.
+    widened = np.shape(params.load_inertia) != () and temps.ndim == 0
+    assert taken == [temps.size == 1 and not widened and np.ndim(params.load_inertia) < 2]
+    monkeypatch.setattr(problem_module, "_one_case_problem", lambda *args: None)
+    general = dynamic_problem(system, ecd, temps, base, fs, params)
+    assert type(fast) is type(general) is DynamicProblem
+    for f in fields(DynamicProblem):
+        _same_field(f.name, getattr(fast, f.name), getattr(general, f.name))
+
+
+def test_one_case_findings_are_the_batch_findings() -> None:
+    # _findings of one case (Python floats) against the general path's on the same
+    # one-case results: a roll-off damper at three temperatures (its temperature law off
+    # Eq. 1's away from T_ref) with a low and a high peak speed (the damper beyond its
+    # peak or not), each with every status and energy errors on both sides of 1e-6.
+    system = paper_system()
+    seen: set[str] = set()
+    for peak_speed in (0.5, 1e4):
+        params = DynamicParameters(load_inertia=5.0, rolloff=Rolloff(peak_speed, 0.0039))
+        for temperature in (-40.0, 25.0, 100.0):
+            prediction = predict(system, [temperature], ["dynamic"], dynamics=params)
+            solution = prediction.solutions["dynamic"]
+            problem = solution.problem  # type: ignore[attr-defined]
+            for status in range(len(STATUSES)):
+                result = replace(
+                    solution.result,  # type: ignore[attr-defined]
+                    status=np.array([status], dtype=np.int8),
+                )
+                for value in (0.0, 2e-6, -3e-6, -1e-9, math.nan):
+                    error = np.array([value])
+                    got = _findings(problem, result, error)
+                    assert got == _batch_findings(problem, result, error)
+                    assert all(type(i) is int for _, _, i in got)
+                    seen.update(code for code, _, _ in got)
+    # Every finding was produced (and so compared) at least once.
+    assert seen == {
+        "stop_time",
+        "event_limit",
+        "horizon",
+        "energy_balance",
+        "rolloff_temperature_law",
+        "rolloff_beyond_peak",
+    }
