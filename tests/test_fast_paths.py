@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import ecdsim.dynamics.problem as problem_module
+import ecdsim.model as model_module
 from ecdsim._types import all_true, any_true, one_case_views
 from ecdsim.deployment import ModelDomainError, _check_damping_positive, build_problem, predict
 from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff, Thermal
@@ -29,7 +30,15 @@ from ecdsim.dynamics.problem import (
     dynamic_problem,
 )
 from ecdsim.dynamics.result import STATUSES
-from ecdsim.model import LinearSpring, _pair
+from ecdsim.model import (
+    Ecd,
+    EcdState,
+    Gearbox,
+    GearEfficiency,
+    LinearSpring,
+    TabulatedTemperatureLaw,
+    _pair,
+)
 from ecdsim.solvers.base import QuasiStaticProblem
 from tests.conftest import paper_system
 
@@ -393,3 +402,84 @@ def test_one_case_findings_are_the_batch_findings() -> None:
         "rolloff_temperature_law",
         "rolloff_beyond_peak",
     }
+
+
+_PAPER_ECD = paper_system().ecd
+ONE_TEMPERATURE_ECDS: list[tuple[str, Ecd, Any, bool]] = [
+    # (label, assembly, temperature, the float path answers)
+    ("paper, cold", _PAPER_ECD, [-40.0], True),
+    ("paper, scalar", _PAPER_ECD, 25.0, True),
+    ("paper, two axes", _PAPER_ECD, [[100.0]], True),
+    (
+        "given BG",
+        replace(_PAPER_ECD, gearbox=Gearbox(120.0, 1e-3, damping_rate=3e-5)),
+        [60.0],
+        True,
+    ),
+    ("NaN temperature", _PAPER_ECD, [math.nan], False),
+    ("overflow", replace(_PAPER_ECD, gearbox=Gearbox(1e200, damping_rate=0.0)), [25.0], False),
+    (
+        "lossy gear",
+        replace(_PAPER_ECD, gearbox=Gearbox(380.0, 0.0, 0.0, efficiency=GearEfficiency(0.9, 0.8))),
+        [25.0],
+        False,
+    ),
+    (
+        "table law",
+        replace(
+            _PAPER_ECD,
+            damper=replace(
+                _PAPER_ECD.damper,
+                lubrication_friction=TabulatedTemperatureLaw((-50.0, 50.0), (4e-4, 1e-4)),
+            ),
+        ),
+        [25.0],
+        False,
+    ),
+    (
+        "array parameter",
+        replace(_PAPER_ECD, damper=replace(_PAPER_ECD.damper, damping_rate=np.array([1.3e-4]))),
+        [25.0],
+        False,
+    ),
+    ("two temperatures", _PAPER_ECD, [-40.0, 100.0], False),
+]
+
+
+@pytest.mark.parametrize(
+    ("ecd", "temperature", "fast"),
+    [case[1:] for case in ONE_TEMPERATURE_ECDS],
+    ids=[case[0] for case in ONE_TEMPERATURE_ECDS],
+)
+def test_ecd_at_one_temperature_is_the_general_path(
+    ecd: Ecd, temperature: Any, fast: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # Ecd.at's float path (Eq. 1-4 written out) against the NumPy path on the same
+    # inputs: every field bit for bit, shapes and writeable flags included. It declines
+    # (None) where it does not apply, and the general path answers.
+    t = np.asarray(temperature, dtype=float)
+    assert (ecd._one_case_at(t) is not None if t.size == 1 else False) is fast
+    with np.errstate(over="ignore"):  # the overflow case, as predict evaluates it
+        got = ecd.at(t)
+        monkeypatch.setattr(Ecd, "_one_case_at", lambda self, t: None)
+        general = ecd.at(t)
+    for f in fields(EcdState):
+        _same_field(f.name, getattr(got, f.name), getattr(general, f.name))
+    # The two efficiencies are one array in both (the ideal gear's 1).
+    assert (got.forward_efficiency is got.backward_efficiency) is (
+        general.forward_efficiency is general.backward_efficiency
+    )
+
+
+def test_ecd_at_one_temperature_sets_every_field(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The float path names every field of EcdState: one added to the class (with a
+    # default, so that the constructor would not complain) fails here until handled.
+    passed: list[str] = []
+
+    def record(**kwargs: Any) -> EcdState:
+        passed.extend(kwargs)
+        return EcdState(**kwargs)
+
+    monkeypatch.setattr(model_module, "EcdState", record)
+    assert _PAPER_ECD._one_case_at(np.array([25.0])) is not None
+    assert sorted(passed) == sorted(f.name for f in fields(EcdState))
