@@ -16,10 +16,17 @@ from typing import Any
 import numpy as np
 import pytest
 
+import ecdsim.deployment as deployment_module
 import ecdsim.dynamics.problem as problem_module
 import ecdsim.model as model_module
 from ecdsim._types import all_true, any_true, one_case_views
-from ecdsim.deployment import ModelDomainError, _check_damping_positive, build_problem, predict
+from ecdsim.deployment import (
+    ModelDomainError,
+    ModelWarning,
+    _check_damping_positive,
+    build_problem,
+    predict,
+)
 from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff, Thermal
 from ecdsim.dynamics.method import REPORTED_FROM, _batch_findings, _findings
 from ecdsim.dynamics.problem import (
@@ -29,17 +36,18 @@ from ecdsim.dynamics.problem import (
     _SETTING_FIELDS,
     dynamic_problem,
 )
-from ecdsim.dynamics.result import STATUSES
+from ecdsim.dynamics.result import _TERMS, STATUSES, EnergyBalance
 from ecdsim.model import (
     Ecd,
     EcdState,
     Gearbox,
     GearEfficiency,
     LinearSpring,
+    LinearTemperatureLaw,
     TabulatedTemperatureLaw,
     _pair,
 )
-from ecdsim.solvers.base import QuasiStaticProblem
+from ecdsim.solvers.base import ONE_CASE_FIELDS, QuasiStaticProblem, one_case_problem
 from tests.conftest import paper_system
 
 MASKS = [
@@ -483,3 +491,220 @@ def test_ecd_at_one_temperature_sets_every_field(monkeypatch: pytest.MonkeyPatch
     monkeypatch.setattr(model_module, "EcdState", record)
     assert _PAPER_ECD._one_case_at(np.array([25.0])) is not None
     assert sorted(passed) == sorted(f.name for f in fields(EcdState))
+
+
+def test_the_one_case_quasi_static_problem_covers_every_field() -> None:
+    # one_case_problem sets the fields it lists, which are the class's: a field added to
+    # QuasiStaticProblem without adding it there fails here.
+    assert sorted(ONE_CASE_FIELDS) == sorted(f.name for f in fields(QuasiStaticProblem))
+    problem = one_case_problem(np.array([0.0, 1.5]), np.array([[2.0], [1.0]]), *np.ones((2, 1)))
+    assert problem is not None
+    assert sorted(vars(problem)) == sorted(ONE_CASE_FIELDS)
+
+
+QUASI_STATIC_ONE_CASE: list[tuple[str, tuple[Any, ...], bool]] = [
+    # (label, (angles, torques, friction, damping_rate), the shortcut answers)
+    ("linear spring", ([0.0, 1.57], [[3.7], [1.6]], [0.5], [20.0]), True),
+    ("scalar batch", ([0.0, 1.57], [3.7, 1.6], 0.5, 20.0), True),
+    ("two axes", ([0.0, 1.0, 1.57], [[[3.7]], [[2.0]], [[1.6]]], [[0.5]], 20.0), True),
+    ("aligned angles", ([[0.0], [1.57]], [[3.7], [1.6]], [-0.0], [math.inf]), True),
+    ("NaN damping", ([0.0, 1.57], [[3.7], [1.6]], [0.5], [math.nan]), True),
+    ("two cases", ([0.0, 1.57], [[3.7, 3.8], [1.6, 1.5]], [0.5, 0.6], [20.0]), False),
+    ("widening", ([0.0, 1.57], [[3.7], [1.6]], [[0.5]], [20.0]), True),
+    ("integer angles", (np.array([0, 2]), [[3.7], [1.6]], [0.5], [20.0]), False),
+]
+
+
+@pytest.mark.parametrize(
+    ("arrays", "fast"),
+    [case[1:] for case in QUASI_STATIC_ONE_CASE],
+    ids=[case[0] for case in QUASI_STATIC_ONE_CASE],
+)
+def test_the_one_case_quasi_static_problem_is_the_dataclass_one(
+    arrays: tuple[Any, ...], fast: bool
+) -> None:
+    # one_case_problem against QuasiStaticProblem(...) on the same arrays: every field
+    # bit for bit, read-only flags included; None where it does not apply.
+    angles, torques, friction, damping = (
+        value if isinstance(value, np.ndarray) else np.asarray(value, dtype=float)
+        for value in arrays
+    )
+    general = QuasiStaticProblem(angles, torques, friction, damping)
+    got = one_case_problem(angles, torques, friction, damping)
+    assert (got is not None) is fast
+    if got is not None:
+        for name in ONE_CASE_FIELDS:
+            _same_field(name, getattr(got, name), getattr(general, name))
+
+
+def test_a_linear_law_is_never_out_of_range() -> None:
+    # collect_warnings skips LinearTemperatureLaw.out_of_range: it holds no True anywhere.
+    law = LinearTemperatureLaw(slope=-0.0044, at_0c=0.58)
+    temps = np.array([-1e300, -273.15, -40.0, 0.0, 25.0, 1e300, math.inf, -math.inf, math.nan])
+    assert not np.any(law.out_of_range(temps))
+    assert not np.any(law.out_of_range(temps.reshape(3, 3)))
+
+
+@pytest.mark.parametrize("load_inertia", [5.0, np.array([5.0, 80.0])])
+def test_one_temperature_findings_carry_the_broadcast_temperature(load_inertia: Any) -> None:
+    # The method's findings at one temperature (one case, or a batch of parameters at one
+    # temperature) carry the temperature as the general path's broadcast and flat index
+    # give it. A short stop time makes every case report one (stop_time).
+    params = DynamicParameters(load_inertia, stop_time=1e-3, rolloff=Rolloff(0.5, 0.0039))
+    prediction = predict(paper_system(), [-40.0], ["dynamic"], dynamics=params)
+    solution = prediction.solutions["dynamic"]
+    own = solution.findings()
+    assert len(own) >= np.size(load_inertia)  # at least a stop_time finding per case
+    flat = np.broadcast_to(prediction.temperatures, solution.deployment_time.shape).ravel()
+    expected = [ModelWarning(code, message, float(flat[i]), "dynamic") for code, message, i in own]
+    got = [w for w in prediction.warnings if w.method == "dynamic"]
+    assert got == expected
+    assert all(type(w.temperature_C) is float for w in got)
+
+
+@pytest.mark.parametrize(
+    "value",
+    [
+        np.asarray(1.0),
+        np.array([0.9]),
+        np.array([[math.nan]]),
+        np.array([1.0, 1.0]),
+        np.array([1.0, 0.8]),
+        np.zeros(0),
+    ],
+    ids=str,
+)
+def test_differs_is_any_not_equal(value: np.ndarray) -> None:
+    assert problem_module._differs(value, 1.0) is bool(np.any(value != 1.0))
+
+
+@pytest.mark.parametrize("angle", [-1e-12, 0.0, 1.0, 1.57, 2.0, math.nan])
+def test_one_case_initial_angle_check_is_the_array_test(angle: float) -> None:
+    # dynamic_problem's start-angle test, on the numbers for one case, refuses exactly
+    # where the array test any(start < 0) or any(start >= travel) does (travel 1.57 rad;
+    # NaN passes both).
+    system = paper_system()
+    refused = bool(np.any(np.asarray(angle) < 0.0) or np.any(np.asarray(angle) >= 1.57))
+    params = DynamicParameters(5.0, initial_angle=angle, stop_time=1e-3)
+    if refused:
+        with pytest.raises(ModelDomainError, match="initial.angle"):
+            predict(system, [25.0], ["dynamic"], dynamics=params)
+    else:
+        temps = np.array([25.0])
+        ecd = system.ecd.at(temps)
+        base, fs = build_problem(system, ecd, temps)
+        problem = dynamic_problem(system, ecd, temps, base, fs, params)
+        assert problem.initial_angle.tobytes() == np.array([angle]).tobytes()
+
+
+def _with_load(**changes: Any) -> Any:
+    system = paper_system()
+    return replace(system, load=replace(system.load, **changes))
+
+
+BUILD_ONE_CASE: list[tuple[str, Any, Any]] = [
+    ("paper", paper_system(), [-40.0]),
+    ("scalar temperature", paper_system(), 25.0),
+    ("two axes", paper_system(), [[100.0]]),
+    (
+        "warm spring",
+        _with_load(spring=LinearSpring(3.7, 1.6, temperature_coefficient=-2e-3)),
+        [80.0],
+    ),
+    ("array travel", _with_load(travel=np.array([1.57])), [25.0]),
+    ("overflowing torque", _with_load(spring=LinearSpring(1e308, 1.6, 0.01)), [100.0]),
+    ("NaN temperature", paper_system(), [math.nan]),
+    ("two temperatures", paper_system(), [-40.0, 100.0]),
+]
+
+
+@pytest.mark.parametrize(
+    ("system", "temperature"),
+    [case[1:] for case in BUILD_ONE_CASE],
+    ids=[case[0] for case in BUILD_ONE_CASE],
+)
+def test_one_case_build_problem_is_the_general_one(
+    system: Any, temperature: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # build_problem's one-case shortcuts (a linear spring's breakpoints in floats packed
+    # into one array; any spring's arrays packed) against QuasiStaticProblem(...) on the
+    # same inputs: the problem and FS_T bit for bit, read-only flags included.
+    temps = np.asarray(temperature, dtype=float)
+    with np.errstate(over="ignore"):  # the overflowing case (the array path's warning)
+        ecd = system.ecd.at(temps)
+        got, got_fs = build_problem(system, ecd, temps)
+        monkeypatch.setattr(LinearSpring, "one_case_breakpoints", lambda *args: None)
+        half, half_fs = build_problem(system, ecd, temps)  # the arrays packed
+        monkeypatch.setattr(deployment_module, "one_case_problem", lambda *args: None)
+        general, general_fs = build_problem(system, ecd, temps)
+    for problem, fs in ((got, got_fs), (half, half_fs)):
+        _same_field("system_friction", fs, general_fs)
+        assert type(problem) is QuasiStaticProblem
+        for name in ONE_CASE_FIELDS:
+            _same_field(name, getattr(problem, name), getattr(general, name))
+
+
+def test_linear_spring_one_case_breakpoints_decline() -> None:
+    # Floats only, finite torques only: anything else is the array path's.
+    spring = LinearSpring(3.7, 1.6)
+    assert spring.one_case_breakpoints(1.57, 25.0) == ([0.0, 1.57], [3.7, 1.6])
+    assert spring.one_case_breakpoints(np.float64(1.57), 25.0) is None
+    assert LinearSpring(np.array(3.7), 1.6).one_case_breakpoints(1.57, 25.0) is None
+    assert LinearSpring(1e308, 1.6, 0.01).one_case_breakpoints(1.57, 125.0) is None
+
+
+def _balance(values: list[float | None], shape: tuple[int, ...]) -> EnergyBalance:
+    arrays = [None if v is None else np.full(shape, v, dtype=float) for v in values]
+    return EnergyBalance(*arrays)  # type: ignore[arg-type]
+
+
+ENERGY_CASES: list[tuple[str, list[float | None], bool]] = [
+    # (label, the eleven terms in field order, the float path answers)
+    ("closed", [2.0, 0.5, 1.5, 0.7, 0.0, 0.1, 0.2, 0.0, None, None, None], True),
+    ("open", [2.0, 0.5, 1.2, 0.7, 0.0, 0.1, 0.2, 3e-3, None, None, None], True),
+    ("gravity and mesh", [2.0, 0.5, 1.2, 0.7, 0.0, 0.1, 0.2, 0.0, 0.3, 0.05, 1e-3], True),
+    ("nothing moved", [0.0, 0.0, 0.0, -0.0, 0.0, 0.0, 0.0, 0.0, None, None, None], True),
+    ("infinite", [math.inf, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, None, None, None], False),
+    ("inf - inf", [math.inf, 0.0, math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, None, None, None], False),
+    ("NaN", [math.nan, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, None, None, None], False),
+    ("negative", [-1.0, 0.25, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, None, None], True),
+]
+
+
+@pytest.mark.parametrize("shape", [(), (1,), (1, 1), (2,)])
+@pytest.mark.parametrize(
+    ("terms", "fast"),
+    [case[1:] for case in ENERGY_CASES],
+    ids=[case[0] for case in ENERGY_CASES],
+)
+def test_one_case_energy_error_is_the_array_one(
+    terms: list[float | None], fast: bool, shape: tuple[int, ...], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # EnergyBalance.error of one case in floats against the NumPy expressions: the same
+    # bits, shape, dtype and writeable array; None (the general path) for a batch, or a
+    # sum that is not finite.
+    balance = _balance(terms, shape)
+    assert (balance._one_case_error() is not None) is (fast and math.prod(shape) == 1)
+    with np.errstate(invalid="ignore"):  # inf - inf, as in the general path
+        got = balance.error
+        monkeypatch.setattr(EnergyBalance, "_one_case_error", lambda self: None)
+        general = balance.error
+    _same_field("error", got, general)
+
+
+def test_energy_terms_are_the_balance_fields() -> None:
+    # The float path sums the terms it names: a field added to EnergyBalance fails here.
+    assert list(_TERMS) == [f.name for f in fields(EnergyBalance)]
+
+
+@pytest.mark.parametrize("damping", [0.0, math.inf, math.nan])
+def test_one_case_kloss_findings_leave_a_zero_or_odd_damping_to_numpy(damping: float) -> None:
+    # Eq. 1's BECD of 0 (a division by zero), inf or NaN: the one-case findings hand the
+    # case to the general path, whose answer (and NumPy's warnings) they give.
+    params = DynamicParameters(load_inertia=5.0, rolloff=Rolloff(60.0, 0.0039))
+    solution = predict(paper_system(), [25.0], ["dynamic"], dynamics=params).solutions["dynamic"]
+    problem = replace(solution.problem, damping_rate=np.array([damping]))  # type: ignore[attr-defined]
+    result = solution.result  # type: ignore[attr-defined]
+    error = np.array([0.0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        assert _findings(problem, result, error) == _batch_findings(problem, result, error)

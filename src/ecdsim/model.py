@@ -396,6 +396,33 @@ class LinearSpring:
         )
         return angles, torques
 
+    def one_case_breakpoints(
+        self, travel: object, temperature: float
+    ) -> tuple[list[float], list[float]] | None:
+        """:meth:`breakpoints` of one temperature as Python floats, or None.
+
+        For float parameters and travel: ``[0, travel]`` and ``[Ts f, Te f]`` with
+        ``f = 1 + k (T - T_ref)`` (``physics.load.spring_temperature_factor``) in the same
+        order of operations, the same bits (issue 13, single cases). None also where a
+        torque is not finite.
+        """
+        values = (
+            self.start_torque,
+            self.end_torque,
+            self.temperature_coefficient,
+            self.reference_temperature,
+            travel,
+        )
+        floats = [value for value in values if isinstance(value, float) and type(value) is float]
+        if len(floats) != len(values):
+            return None
+        ts, te, k, t_ref, trav = floats
+        factor = 1.0 + k * (temperature - t_ref)
+        start, end = ts * factor, te * factor
+        if not (math.isfinite(start) and math.isfinite(end)):
+            return None  # the array path, which reports an overflow as NumPy does
+        return [0.0, trav], [start, end]
+
     def torque_at(self, angle: ArrayLike, travel: ArrayLike, temperature: ArrayLike) -> FloatArray:
         """Eq. 7 at ``angle``: Ts + (Te - Ts) * angle / travel, scaled for temperature."""
         factor = load.spring_temperature_factor(

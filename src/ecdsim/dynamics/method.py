@@ -314,12 +314,15 @@ def _one_case_findings(
         slope = rolloff.kloss_speed_derivative(0.0, eddy.peak_torque, peak).item()
         becd = n * n * (slope + problem.gearbox_damping_rate.item())
         eq1 = problem.damping_rate.item()
+        shaft = result.max_speed.item() * n
+        if eq1 == 0.0 or not math.isfinite(becd / eq1 + shaft):
+            # NumPy's answer and warnings (a division by 0, an overflow): the general path.
+            return _batch_findings(problem, result, energy_error)
         mismatch = becd / eq1 - 1.0
         if abs(mismatch) > 0.01:
             out.append(
                 ("rolloff_temperature_law", _rolloff_law_message(becd, eq1, 100 * mismatch), 0)
             )
-        shaft = result.max_speed.item() * n
         if shaft > peak:
             out.append(("rolloff_beyond_peak", _beyond_peak_message(shaft, peak), 0))
     return out

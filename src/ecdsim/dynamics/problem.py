@@ -287,7 +287,11 @@ def dynamic_problem(
             )
     travel = np.asarray(base.travel)
     start = np.asarray(params.initial_angle, dtype=float)
-    if any_true(start < 0.0) or any_true(start >= travel):
+    if start.size == 1 and travel.size == 1:  # one case: the same test on the numbers
+        outside = start.item() < 0.0 or start.item() >= travel.item()
+    else:
+        outside = any_true(start < 0.0) or any_true(start >= travel)
+    if outside:
         raise DynamicDomainError(
             "initial.angle",
             f"must be >= 0 and below the travel ({float(np.min(travel)):.6g} rad), got "
@@ -302,9 +306,7 @@ def dynamic_problem(
                 "damper.thermal.initial_rotor_rise",
                 "puts the damper at or beyond the temperature where its damping law reaches zero",
             )
-    lossy = any_true(np.asarray(ecd.forward_efficiency != 1.0)) or any_true(
-        np.asarray(ecd.backward_efficiency != 1.0)
-    )
+    lossy = _differs(ecd.forward_efficiency, 1.0) or _differs(ecd.backward_efficiency, 1.0)
     if lossy and params.stribeck_speed is not None:
         # The Stribeck excess mixes the ECD's friction (through the mesh) with the
         # system's (not): its mesh loss is not separated yet (docs/dynamics.md).
@@ -418,6 +420,14 @@ def _one_case_problem(
         **settings,
     )
     return problem
+
+
+def _differs(value: FloatArray, number: float) -> bool:
+    """``any_true(value != number)``; one element compared as a Python float (NaN differs
+    from everything in both), without NumPy's comparison (issue 13, single cases)."""
+    if value.size == 1:
+        return bool(value.item() != number)
+    return any_true(np.asarray(value != number))
 
 
 def _check_compliant(
