@@ -10,20 +10,44 @@ the shapes a batch can have (empty, one element with 0, 1 or 2 axes, many).
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import Any
 
 import numpy as np
 import pytest
 
+import ecdsim.deployment as deployment_module
+import ecdsim.dynamics.problem as problem_module
+import ecdsim.model as model_module
 from ecdsim._types import all_true, any_true, one_case_views
-from ecdsim.deployment import ModelDomainError, _check_damping_positive, predict
-from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff
-from ecdsim.dynamics.method import REPORTED_FROM, _findings
-from ecdsim.dynamics.problem import _CASE_FIELDS
-from ecdsim.dynamics.result import STATUSES
-from ecdsim.model import LinearSpring, _pair
-from ecdsim.solvers.base import QuasiStaticProblem
+from ecdsim.deployment import (
+    ModelDomainError,
+    ModelWarning,
+    _check_damping_positive,
+    build_problem,
+    predict,
+)
+from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff, Thermal
+from ecdsim.dynamics.method import REPORTED_FROM, _batch_findings, _findings
+from ecdsim.dynamics.problem import (
+    _BASE_FIELDS,
+    _CASE_FIELDS,
+    _NO_GRAVITY,
+    _SETTING_FIELDS,
+    dynamic_problem,
+)
+from ecdsim.dynamics.result import _TERMS, STATUSES, EnergyBalance
+from ecdsim.model import (
+    Ecd,
+    EcdState,
+    Gearbox,
+    GearEfficiency,
+    LinearSpring,
+    LinearTemperatureLaw,
+    TabulatedTemperatureLaw,
+    _pair,
+)
+from ecdsim.solvers.base import ONE_CASE_FIELDS, QuasiStaticProblem, one_case_problem
 from tests.conftest import paper_system
 
 MASKS = [
@@ -263,3 +287,424 @@ def test_status_and_energy_findings_are_the_per_status_searches(statuses: list[s
     got = _findings(solution.problem, result, error)  # type: ignore[attr-defined]
     assert got == _findings_as_before(result, error)
     assert sum(code == "energy_balance" for code, _, _ in got) == 3  # 2e-6, -3e-6, 0.5
+
+
+def _same_field(name: str, fast: object, general: object) -> None:
+    """Asserts ``fast`` is ``general``'s value bit for bit: type, shape, dtype, read-only
+    flag and bytes for an array; equality (and type) for everything else."""
+    assert type(fast) is type(general), name
+    if isinstance(general, np.ndarray):
+        assert isinstance(fast, np.ndarray)
+        assert fast.shape == general.shape, name
+        assert fast.dtype == general.dtype, name
+        assert fast.flags.writeable == general.flags.writeable, name
+        assert fast.tobytes() == general.tobytes(), name  # -0.0, inf and NaN kept
+    else:
+        assert fast == general, name
+
+
+def test_the_one_case_problem_covers_every_field() -> None:
+    # _one_case_problem sets the fields it lists and nothing else: a field added to
+    # DynamicProblem (or QuasiStaticProblem) without adding it there fails here.
+    listed = (*_BASE_FIELDS, *_NO_GRAVITY, *_CASE_FIELDS, *_SETTING_FIELDS)
+    names = [f.name for f in fields(DynamicProblem)]
+    assert sorted(listed) == sorted(names)
+    system = paper_system()
+    problem = predict(system, [25.0], ["dynamic"], dynamics=DynamicParameters(5.0)).problem
+    assert type(problem) is DynamicProblem
+    assert sorted(vars(problem)) == sorted(names)
+
+
+ONE_CASE_INPUTS: list[tuple[str, Any, DynamicParameters]] = [
+    ("linear", [25.0], DynamicParameters(5.0, initial_speed=0.3)),
+    ("scalar temperature", 25.0, DynamicParameters(5.0, rotor_inertia=1e-6)),
+    ("two axes", [[-40.0]], DynamicParameters(5.0, restitution=0.4)),
+    ("rolloff", [60.0], DynamicParameters(5.0, rolloff=Rolloff(60.0, 0.0039))),
+    (
+        "two-node heating",
+        [25.0],
+        DynamicParameters(
+            5.0,
+            rolloff=Rolloff(60.0, 0.0039),
+            thermal=Thermal(2.0, 50.0, housing_heat_capacity=20.0, initial_rotor_rise=3.0),
+        ),
+    ),
+    ("stribeck", [25.0], DynamicParameters(5.0, stribeck_speed=0.05, static_friction_factor=1.5)),
+    ("compliant", [25.0], DynamicParameters(5.0, rotor_inertia=1e-6, gear_stiffness=1e3)),
+    # A one-element array parameter: one case at a scalar temperature, (1,) at [25.0] and
+    # (1, 1) at [[25.0]] (the general path, the parameter widening the batch).
+    ("array parameter", 25.0, DynamicParameters(np.array([5.0]))),
+    ("array parameter (1,)", [25.0], DynamicParameters(np.array([5.0]))),
+    ("array parameter (1, 1)", [25.0], DynamicParameters(np.array([[5.0]]))),
+    ("integer parameter", [25.0], DynamicParameters(np.array([5]), initial_speed=np.array(1))),
+    ("two cases", [25.0, 80.0], DynamicParameters(5.0)),
+]
+
+
+@pytest.mark.parametrize(
+    ("temperatures", "params"),
+    [case[1:] for case in ONE_CASE_INPUTS],
+    ids=[case[0] for case in ONE_CASE_INPUTS],
+)
+def test_the_one_case_problem_is_the_dataclass_one(
+    temperatures: Any, params: DynamicParameters, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # dynamic_problem's one-case construction against DynamicProblem(...) (its __init__
+    # and __post_init__), on the same inputs: every field bit for bit, read-only flags
+    # included. Where it declines (several cases, a widening parameter) the general path
+    # answers, so both sides agree there too.
+    system = paper_system()
+    temps = np.asarray(temperatures, dtype=float)
+    ecd = system.ecd.at(temps)
+    base, fs = build_problem(system, ecd, temps)
+    taken: list[bool] = []
+    one_case = problem_module._one_case_problem
+
+    def spy(*args: Any) -> DynamicProblem | None:
+        answer = one_case(*args)
+        taken.append(answer is not None)
+        return answer
+
+    monkeypatch.setattr(problem_module, "_one_case_problem", spy)
+    fast = dynamic_problem(system, ecd, temps, base, fs, params)
+    # The shortcut answers one case that keeps the temperatures' shape, and only that.
+    widened = np.shape(params.load_inertia) != () and temps.ndim == 0
+    assert taken == [temps.size == 1 and not widened and np.ndim(params.load_inertia) < 2]
+    monkeypatch.setattr(problem_module, "_one_case_problem", lambda *args: None)
+    general = dynamic_problem(system, ecd, temps, base, fs, params)
+    assert type(fast) is type(general) is DynamicProblem
+    for f in fields(DynamicProblem):
+        _same_field(f.name, getattr(fast, f.name), getattr(general, f.name))
+
+
+def test_one_case_findings_are_the_batch_findings() -> None:
+    # _findings of one case (Python floats) against the general path's on the same
+    # one-case results: a roll-off damper at three temperatures (its temperature law off
+    # Eq. 1's away from T_ref) with a low and a high peak speed (the damper beyond its
+    # peak or not), each with every status and energy errors on both sides of 1e-6.
+    system = paper_system()
+    seen: set[str] = set()
+    for peak_speed in (0.5, 1e4):
+        params = DynamicParameters(load_inertia=5.0, rolloff=Rolloff(peak_speed, 0.0039))
+        for temperature in (-40.0, 25.0, 100.0):
+            prediction = predict(system, [temperature], ["dynamic"], dynamics=params)
+            solution = prediction.solutions["dynamic"]
+            problem = solution.problem  # type: ignore[attr-defined]
+            for status in range(len(STATUSES)):
+                result = replace(
+                    solution.result,  # type: ignore[attr-defined]
+                    status=np.array([status], dtype=np.int8),
+                )
+                for value in (0.0, 2e-6, -3e-6, -1e-9, math.nan):
+                    error = np.array([value])
+                    got = _findings(problem, result, error)
+                    assert got == _batch_findings(problem, result, error)
+                    assert all(type(i) is int for _, _, i in got)
+                    seen.update(code for code, _, _ in got)
+    # Every finding was produced (and so compared) at least once.
+    assert seen == {
+        "stop_time",
+        "event_limit",
+        "horizon",
+        "energy_balance",
+        "rolloff_temperature_law",
+        "rolloff_beyond_peak",
+    }
+
+
+_PAPER_ECD = paper_system().ecd
+ONE_TEMPERATURE_ECDS: list[tuple[str, Ecd, Any, bool]] = [
+    # (label, assembly, temperature, the float path answers)
+    ("paper, cold", _PAPER_ECD, [-40.0], True),
+    ("paper, scalar", _PAPER_ECD, 25.0, True),
+    ("paper, two axes", _PAPER_ECD, [[100.0]], True),
+    (
+        "given BG",
+        replace(_PAPER_ECD, gearbox=Gearbox(120.0, 1e-3, damping_rate=3e-5)),
+        [60.0],
+        True,
+    ),
+    ("NaN temperature", _PAPER_ECD, [math.nan], False),
+    ("overflow", replace(_PAPER_ECD, gearbox=Gearbox(1e200, damping_rate=0.0)), [25.0], False),
+    (
+        "lossy gear",
+        replace(_PAPER_ECD, gearbox=Gearbox(380.0, 0.0, 0.0, efficiency=GearEfficiency(0.9, 0.8))),
+        [25.0],
+        False,
+    ),
+    (
+        "table law",
+        replace(
+            _PAPER_ECD,
+            damper=replace(
+                _PAPER_ECD.damper,
+                lubrication_friction=TabulatedTemperatureLaw((-50.0, 50.0), (4e-4, 1e-4)),
+            ),
+        ),
+        [25.0],
+        False,
+    ),
+    (
+        "array parameter",
+        replace(_PAPER_ECD, damper=replace(_PAPER_ECD.damper, damping_rate=np.array([1.3e-4]))),
+        [25.0],
+        False,
+    ),
+    ("two temperatures", _PAPER_ECD, [-40.0, 100.0], False),
+]
+
+
+@pytest.mark.parametrize(
+    ("ecd", "temperature", "fast"),
+    [case[1:] for case in ONE_TEMPERATURE_ECDS],
+    ids=[case[0] for case in ONE_TEMPERATURE_ECDS],
+)
+def test_ecd_at_one_temperature_is_the_general_path(
+    ecd: Ecd, temperature: Any, fast: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # Ecd.at's float path (Eq. 1-4 written out) against the NumPy path on the same
+    # inputs: every field bit for bit, shapes and writeable flags included. It declines
+    # (None) where it does not apply, and the general path answers.
+    t = np.asarray(temperature, dtype=float)
+    assert (ecd._one_case_at(t) is not None if t.size == 1 else False) is fast
+    with np.errstate(over="ignore"):  # the overflow case, as predict evaluates it
+        got = ecd.at(t)
+        monkeypatch.setattr(Ecd, "_one_case_at", lambda self, t: None)
+        general = ecd.at(t)
+    for f in fields(EcdState):
+        _same_field(f.name, getattr(got, f.name), getattr(general, f.name))
+    # The two efficiencies are one array in both (the ideal gear's 1).
+    assert (got.forward_efficiency is got.backward_efficiency) is (
+        general.forward_efficiency is general.backward_efficiency
+    )
+
+
+def test_ecd_at_one_temperature_sets_every_field(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The float path names every field of EcdState: one added to the class (with a
+    # default, so that the constructor would not complain) fails here until handled.
+    passed: list[str] = []
+
+    def record(**kwargs: Any) -> EcdState:
+        passed.extend(kwargs)
+        return EcdState(**kwargs)
+
+    monkeypatch.setattr(model_module, "EcdState", record)
+    assert _PAPER_ECD._one_case_at(np.array([25.0])) is not None
+    assert sorted(passed) == sorted(f.name for f in fields(EcdState))
+
+
+def test_the_one_case_quasi_static_problem_covers_every_field() -> None:
+    # one_case_problem sets the fields it lists, which are the class's: a field added to
+    # QuasiStaticProblem without adding it there fails here.
+    assert sorted(ONE_CASE_FIELDS) == sorted(f.name for f in fields(QuasiStaticProblem))
+    problem = one_case_problem(np.array([0.0, 1.5]), np.array([[2.0], [1.0]]), *np.ones((2, 1)))
+    assert problem is not None
+    assert sorted(vars(problem)) == sorted(ONE_CASE_FIELDS)
+
+
+QUASI_STATIC_ONE_CASE: list[tuple[str, tuple[Any, ...], bool]] = [
+    # (label, (angles, torques, friction, damping_rate), the shortcut answers)
+    ("linear spring", ([0.0, 1.57], [[3.7], [1.6]], [0.5], [20.0]), True),
+    ("scalar batch", ([0.0, 1.57], [3.7, 1.6], 0.5, 20.0), True),
+    ("two axes", ([0.0, 1.0, 1.57], [[[3.7]], [[2.0]], [[1.6]]], [[0.5]], 20.0), True),
+    ("aligned angles", ([[0.0], [1.57]], [[3.7], [1.6]], [-0.0], [math.inf]), True),
+    ("NaN damping", ([0.0, 1.57], [[3.7], [1.6]], [0.5], [math.nan]), True),
+    ("two cases", ([0.0, 1.57], [[3.7, 3.8], [1.6, 1.5]], [0.5, 0.6], [20.0]), False),
+    ("widening", ([0.0, 1.57], [[3.7], [1.6]], [[0.5]], [20.0]), True),
+    ("integer angles", (np.array([0, 2]), [[3.7], [1.6]], [0.5], [20.0]), False),
+]
+
+
+@pytest.mark.parametrize(
+    ("arrays", "fast"),
+    [case[1:] for case in QUASI_STATIC_ONE_CASE],
+    ids=[case[0] for case in QUASI_STATIC_ONE_CASE],
+)
+def test_the_one_case_quasi_static_problem_is_the_dataclass_one(
+    arrays: tuple[Any, ...], fast: bool
+) -> None:
+    # one_case_problem against QuasiStaticProblem(...) on the same arrays: every field
+    # bit for bit, read-only flags included; None where it does not apply.
+    angles, torques, friction, damping = (
+        value if isinstance(value, np.ndarray) else np.asarray(value, dtype=float)
+        for value in arrays
+    )
+    general = QuasiStaticProblem(angles, torques, friction, damping)
+    got = one_case_problem(angles, torques, friction, damping)
+    assert (got is not None) is fast
+    if got is not None:
+        for name in ONE_CASE_FIELDS:
+            _same_field(name, getattr(got, name), getattr(general, name))
+
+
+def test_a_linear_law_is_never_out_of_range() -> None:
+    # collect_warnings skips LinearTemperatureLaw.out_of_range: it holds no True anywhere.
+    law = LinearTemperatureLaw(slope=-0.0044, at_0c=0.58)
+    temps = np.array([-1e300, -273.15, -40.0, 0.0, 25.0, 1e300, math.inf, -math.inf, math.nan])
+    assert not np.any(law.out_of_range(temps))
+    assert not np.any(law.out_of_range(temps.reshape(3, 3)))
+
+
+@pytest.mark.parametrize("load_inertia", [5.0, np.array([5.0, 80.0])])
+def test_one_temperature_findings_carry_the_broadcast_temperature(load_inertia: Any) -> None:
+    # The method's findings at one temperature (one case, or a batch of parameters at one
+    # temperature) carry the temperature as the general path's broadcast and flat index
+    # give it. A short stop time makes every case report one (stop_time).
+    params = DynamicParameters(load_inertia, stop_time=1e-3, rolloff=Rolloff(0.5, 0.0039))
+    prediction = predict(paper_system(), [-40.0], ["dynamic"], dynamics=params)
+    solution = prediction.solutions["dynamic"]
+    own = solution.findings()
+    assert len(own) >= np.size(load_inertia)  # at least a stop_time finding per case
+    flat = np.broadcast_to(prediction.temperatures, solution.deployment_time.shape).ravel()
+    expected = [ModelWarning(code, message, float(flat[i]), "dynamic") for code, message, i in own]
+    got = [w for w in prediction.warnings if w.method == "dynamic"]
+    assert got == expected
+    assert all(type(w.temperature_C) is float for w in got)
+
+
+@pytest.mark.parametrize(
+    "value",
+    [
+        np.asarray(1.0),
+        np.array([0.9]),
+        np.array([[math.nan]]),
+        np.array([1.0, 1.0]),
+        np.array([1.0, 0.8]),
+        np.zeros(0),
+    ],
+    ids=str,
+)
+def test_differs_is_any_not_equal(value: np.ndarray) -> None:
+    assert problem_module._differs(value, 1.0) is bool(np.any(value != 1.0))
+
+
+@pytest.mark.parametrize("angle", [-1e-12, 0.0, 1.0, 1.57, 2.0, math.nan])
+def test_one_case_initial_angle_check_is_the_array_test(angle: float) -> None:
+    # dynamic_problem's start-angle test, on the numbers for one case, refuses exactly
+    # where the array test any(start < 0) or any(start >= travel) does (travel 1.57 rad;
+    # NaN passes both).
+    system = paper_system()
+    refused = bool(np.any(np.asarray(angle) < 0.0) or np.any(np.asarray(angle) >= 1.57))
+    params = DynamicParameters(5.0, initial_angle=angle, stop_time=1e-3)
+    if refused:
+        with pytest.raises(ModelDomainError, match="initial.angle"):
+            predict(system, [25.0], ["dynamic"], dynamics=params)
+    else:
+        temps = np.array([25.0])
+        ecd = system.ecd.at(temps)
+        base, fs = build_problem(system, ecd, temps)
+        problem = dynamic_problem(system, ecd, temps, base, fs, params)
+        assert problem.initial_angle.tobytes() == np.array([angle]).tobytes()
+
+
+def _with_load(**changes: Any) -> Any:
+    system = paper_system()
+    return replace(system, load=replace(system.load, **changes))
+
+
+BUILD_ONE_CASE: list[tuple[str, Any, Any]] = [
+    ("paper", paper_system(), [-40.0]),
+    ("scalar temperature", paper_system(), 25.0),
+    ("two axes", paper_system(), [[100.0]]),
+    (
+        "warm spring",
+        _with_load(spring=LinearSpring(3.7, 1.6, temperature_coefficient=-2e-3)),
+        [80.0],
+    ),
+    ("array travel", _with_load(travel=np.array([1.57])), [25.0]),
+    ("overflowing torque", _with_load(spring=LinearSpring(1e308, 1.6, 0.01)), [100.0]),
+    ("NaN temperature", paper_system(), [math.nan]),
+    ("two temperatures", paper_system(), [-40.0, 100.0]),
+]
+
+
+@pytest.mark.parametrize(
+    ("system", "temperature"),
+    [case[1:] for case in BUILD_ONE_CASE],
+    ids=[case[0] for case in BUILD_ONE_CASE],
+)
+def test_one_case_build_problem_is_the_general_one(
+    system: Any, temperature: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # build_problem's one-case shortcuts (a linear spring's breakpoints in floats packed
+    # into one array; any spring's arrays packed) against QuasiStaticProblem(...) on the
+    # same inputs: the problem and FS_T bit for bit, read-only flags included.
+    temps = np.asarray(temperature, dtype=float)
+    with np.errstate(over="ignore"):  # the overflowing case (the array path's warning)
+        ecd = system.ecd.at(temps)
+        got, got_fs = build_problem(system, ecd, temps)
+        monkeypatch.setattr(LinearSpring, "one_case_breakpoints", lambda *args: None)
+        half, half_fs = build_problem(system, ecd, temps)  # the arrays packed
+        monkeypatch.setattr(deployment_module, "one_case_problem", lambda *args: None)
+        general, general_fs = build_problem(system, ecd, temps)
+    for problem, fs in ((got, got_fs), (half, half_fs)):
+        _same_field("system_friction", fs, general_fs)
+        assert type(problem) is QuasiStaticProblem
+        for name in ONE_CASE_FIELDS:
+            _same_field(name, getattr(problem, name), getattr(general, name))
+
+
+def test_linear_spring_one_case_breakpoints_decline() -> None:
+    # Floats only, finite torques only: anything else is the array path's.
+    spring = LinearSpring(3.7, 1.6)
+    assert spring.one_case_breakpoints(1.57, 25.0) == ([0.0, 1.57], [3.7, 1.6])
+    assert spring.one_case_breakpoints(np.float64(1.57), 25.0) is None
+    assert LinearSpring(np.array(3.7), 1.6).one_case_breakpoints(1.57, 25.0) is None
+    assert LinearSpring(1e308, 1.6, 0.01).one_case_breakpoints(1.57, 125.0) is None
+
+
+def _balance(values: list[float | None], shape: tuple[int, ...]) -> EnergyBalance:
+    arrays = [None if v is None else np.full(shape, v, dtype=float) for v in values]
+    return EnergyBalance(*arrays)  # type: ignore[arg-type]
+
+
+ENERGY_CASES: list[tuple[str, list[float | None], bool]] = [
+    # (label, the eleven terms in field order, the float path answers)
+    ("closed", [2.0, 0.5, 1.5, 0.7, 0.0, 0.1, 0.2, 0.0, None, None, None], True),
+    ("open", [2.0, 0.5, 1.2, 0.7, 0.0, 0.1, 0.2, 3e-3, None, None, None], True),
+    ("gravity and mesh", [2.0, 0.5, 1.2, 0.7, 0.0, 0.1, 0.2, 0.0, 0.3, 0.05, 1e-3], True),
+    ("nothing moved", [0.0, 0.0, 0.0, -0.0, 0.0, 0.0, 0.0, 0.0, None, None, None], True),
+    ("infinite", [math.inf, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, None, None, None], False),
+    ("inf - inf", [math.inf, 0.0, math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, None, None, None], False),
+    ("NaN", [math.nan, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, None, None, None], False),
+    ("negative", [-1.0, 0.25, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, None, None], True),
+]
+
+
+@pytest.mark.parametrize("shape", [(), (1,), (1, 1), (2,)])
+@pytest.mark.parametrize(
+    ("terms", "fast"),
+    [case[1:] for case in ENERGY_CASES],
+    ids=[case[0] for case in ENERGY_CASES],
+)
+def test_one_case_energy_error_is_the_array_one(
+    terms: list[float | None], fast: bool, shape: tuple[int, ...], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # EnergyBalance.error of one case in floats against the NumPy expressions: the same
+    # bits, shape, dtype and writeable array; None (the general path) for a batch, or a
+    # sum that is not finite.
+    balance = _balance(terms, shape)
+    assert (balance._one_case_error() is not None) is (fast and math.prod(shape) == 1)
+    with np.errstate(invalid="ignore"):  # inf - inf, as in the general path
+        got = balance.error
+        monkeypatch.setattr(EnergyBalance, "_one_case_error", lambda self: None)
+        general = balance.error
+    _same_field("error", got, general)
+
+
+def test_energy_terms_are_the_balance_fields() -> None:
+    # The float path sums the terms it names: a field added to EnergyBalance fails here.
+    assert list(_TERMS) == [f.name for f in fields(EnergyBalance)]
+
+
+@pytest.mark.parametrize("damping", [0.0, math.inf, math.nan])
+def test_one_case_kloss_findings_leave_a_zero_or_odd_damping_to_numpy(damping: float) -> None:
+    # Eq. 1's BECD of 0 (a division by zero), inf or NaN: the one-case findings hand the
+    # case to the general path, whose answer (and NumPy's warnings) they give.
+    params = DynamicParameters(load_inertia=5.0, rolloff=Rolloff(60.0, 0.0039))
+    solution = predict(paper_system(), [25.0], ["dynamic"], dynamics=params).solutions["dynamic"]
+    problem = replace(solution.problem, damping_rate=np.array([damping]))  # type: ignore[attr-defined]
+    result = solution.result  # type: ignore[attr-defined]
+    error = np.array([0.0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        assert _findings(problem, result, error) == _batch_findings(problem, result, error)

@@ -20,6 +20,7 @@ __all__ = [
     "as_float",
     "broadcast",
     "joint_shape",
+    "one_case_rows",
     "one_case_views",
 ]
 
@@ -57,11 +58,16 @@ def one_case_views(values: Sequence[FloatArray], shape: tuple[int, ...]) -> list
     and dtype as :func:`broadcast` returns, for one NumPy call instead of one per value
     (a single deployment's problem has some 30 per-case fields; issue 13).
     """
-    packed = np.array([value.item() for value in values], dtype=np.float64)
+    return one_case_rows([value.item() for value in values], shape)
+
+
+def one_case_rows(numbers: Sequence[float], shape: tuple[int, ...]) -> list[FloatArray]:
+    """:func:`one_case_views` of numbers already read off their arrays (``item()``)."""
+    packed = np.array(numbers, dtype=np.float64)
     packed.flags.writeable = False
-    rows = packed.reshape((len(values), *shape))
+    rows = packed.reshape((len(numbers), *shape))
     if not shape:  # iterating would give NumPy scalars: index 0-d views instead
-        return [rows[i, ...] for i in range(len(values))]
+        return [rows[i, ...] for i in range(len(numbers))]
     return list(rows)  # the rows as views, iterated in C
 
 

@@ -15,16 +15,25 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, BoolArray, FloatArray, all_true, any_true, broadcast
+from ecdsim._types import (
+    ArrayLike,
+    BoolArray,
+    FloatArray,
+    all_true,
+    any_true,
+    broadcast,
+    joint_shape,
+)
 from ecdsim._version import __version__
 from ecdsim.dynamics.params import DynamicParameters
 from ecdsim.dynamics.problem import DynamicDomainError, DynamicProblem, dynamic_problem
 from ecdsim.methods import SOLVERS
-from ecdsim.model import DeploymentSystem, EcdState
+from ecdsim.model import DeploymentSystem, EcdState, LinearSpring, LinearTemperatureLaw
 from ecdsim.physics import mechanics
 from ecdsim.physics.assembly import damper_torque
 from ecdsim.physics.gravity import STANDARD_GRAVITY
 from ecdsim.solvers import DeploymentSolution, QuasiStaticProblem, Trajectory
+from ecdsim.solvers.base import one_case_problem, packed_problem
 
 DEFAULT_METHODS = ("paper", "exact")
 
@@ -247,10 +256,28 @@ def build_problem(
 ) -> tuple[QuasiStaticProblem, FloatArray]:
     """The quasi-static problem at the given temperatures, and FS_T [N*m]."""
     load = system.load
-    angles, torques = load.drive.breakpoints(load.travel, temperatures)
+    gravity = load.gravity
+    spring = load.drive
     fs = np.asarray(load.system_friction(temperatures), dtype=float)
     friction = np.asarray(ecd.ecd_friction + fs, dtype=float)
-    gravity = load.gravity
+    if gravity is None and temperatures.size == 1 and type(spring) is LinearSpring:
+        # One case of a linear spring: its breakpoints in floats, packed with friction and
+        # damping into the problem's one array (solvers.base.packed_problem).
+        points = spring.one_case_breakpoints(load.travel, temperatures.item())
+        damping = np.asarray(ecd.ecd_damping_rate, dtype=float)
+        if points is not None and friction.size == 1 and damping.size == 1:
+            batch = joint_shape(temperatures.shape, friction.shape, damping.shape)
+            return packed_problem(*points, friction.item(), damping.item(), batch), fs
+    angles, torques = spring.breakpoints(load.travel, temperatures)
+    if gravity is None and temperatures.size == 1:
+        one = one_case_problem(
+            np.asarray(angles, dtype=float),
+            np.asarray(torques, dtype=float),
+            friction,
+            np.asarray(ecd.ecd_damping_rate, dtype=float),
+        )
+        if one is not None:
+            return one, fs
     problem = QuasiStaticProblem(
         angles=np.asarray(angles, dtype=float),
         torques=np.asarray(torques, dtype=float),
@@ -410,6 +437,8 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
         "load.system_friction": system.load.system_friction,
     }
     for key, law in laws.items():
+        if type(law) is LinearTemperatureLaw:
+            continue  # no stated range: never out of range (its out_of_range is all False)
         outside = law.out_of_range(temps)
         for t in _temperature_at(prediction, np.asarray(outside)):
             found.append(
@@ -440,7 +469,10 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
         found.extend(_stall_warnings(prediction, name, solution))
         found.extend(_linear_range_warnings(prediction, name, solution))
         own = solution.findings()
-        if own:
+        if own and temps.size == 1:  # one case: its temperature, without the broadcast
+            temperature = temps.item()
+            found.extend(ModelWarning(code, message, temperature, name) for code, message, _ in own)
+        elif own:
             flat_temps = broadcast(temps, solution.deployment_time.shape).ravel()
             found.extend(
                 ModelWarning(code, message, float(flat_temps[i]), name) for code, message, i in own
@@ -451,6 +483,8 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
 def _unsolved_warnings(
     prediction: Prediction, name: str, solution: DeploymentSolution
 ) -> list[ModelWarning]:
+    if solution.solved is None or all_true(np.asarray(solution.solved)):
+        return []  # every case solved (the usual answer), at once
     unsolved = ~solution.solved_mask
     return [
         ModelWarning(

@@ -8,6 +8,7 @@ here that a test cannot reach directly in :mod:`ecdsim.physics`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Protocol, TypeAlias
 
@@ -240,6 +241,10 @@ class Ecd:
     def at(self, temperature: ArrayLike) -> EcdState:
         """Evaluate Eq. 1-4 at temperature(s) T [degC]."""
         t = np.asarray(temperature, dtype=float)
+        if t.size == 1:
+            state = self._one_case_at(t)
+            if state is not None:
+                return state
         bd_t = self.damper.damping_rate_at(t)
         bg = self.gearbox.damping_rate_for(self.damper)
         fd = np.asarray(self.damper.coulomb_friction, dtype=float)
@@ -273,6 +278,69 @@ class Ecd:
             gear_ratio=n,
             forward_efficiency=eta_f,
             backward_efficiency=eta_b,
+        )
+
+    def _one_case_at(self, t: FloatArray) -> EcdState | None:
+        """:meth:`at` of one temperature in Python floats, or None for the general path.
+
+        The same state, field for field (values, shapes, dtypes, writeable arrays), for
+        the common assembly: every parameter a float, a linear lubrication law, an ideal
+        gear. Eq. 1-4 are the formulas of ``physics.assembly`` and ``physics.laws``
+        written out in the same order of operations (IEEE doubles: the same bits as
+        NumPy's elementwise arithmetic); a single deployment saves the NumPy calls on
+        one-element arrays (about 5 us; issue 13, single cases). A result that is not
+        finite takes the general path, which reports an overflow as NumPy does.
+        """
+        damper, gearbox = self.damper, self.gearbox
+        law = damper.lubrication_friction
+        if type(law) is not LinearTemperatureLaw or gearbox.efficiency is not None:
+            return None
+        bg_given = gearbox.damping_rate  # BG, or a fraction of BD (damping_rate_for)
+        values = (
+            damper.damping_rate,
+            damper.damping_temperature_coefficient,
+            damper.reference_temperature,
+            law.slope,
+            law.at_0c,
+            damper.coulomb_friction,
+            gearbox.coulomb_friction,
+            gearbox.ratio,
+            bg_given if bg_given is not None else gearbox.damping_fraction,
+        )
+        # Python floats only (not NumPy scalars, whose arithmetic warns on overflow).
+        floats = [value for value in values if isinstance(value, float) and type(value) is float]
+        if len(floats) != len(values):
+            return None
+        bd, c, t_ref, slope, at_0c, fd, fg, n, bg_or_fraction = floats
+        temperature = t.item()
+        bd_t = bd * (1.0 + c * (temperature - t_ref))  # damper_damping_rate (Eq. 1)
+        bg = bg_or_fraction if bg_given is not None else bg_or_fraction * bd  # damping_rate_for
+        fl = slope * temperature + at_0c  # linear_in_temperature
+        bt = bd_t + bg  # total_damping_rate (Eq. 1)
+        ft = fd + fl + fg  # total_friction (Eq. 2)
+        becd = bt * n * n  # refer_damping_to_input (Eq. 3)
+        fecd = ft * n  # refer_friction_to_input (Eq. 4)
+        if not math.isfinite(bd_t + fl + bt + ft + becd + fecd):
+            return None
+        # The temperature-dependent fields have the temperature's shape; the constants
+        # are 0-d arrays, as np.asarray makes them in the general path.
+        rows = np.array([bd_t, fl, bt, ft, becd, fecd]).reshape((6, *t.shape))
+        bd_a, fl_a, bt_a, ft_a, becd_a, fecd_a = (rows[i, ...] for i in range(6))
+        ideal = np.asarray(1.0)
+        return EcdState(
+            temperature=t,
+            damper_damping_rate=bd_a,
+            gearbox_damping_rate=np.asarray(bg),
+            total_damping_rate=bt_a,
+            damper_friction=np.asarray(fd),
+            lubrication_friction=fl_a,
+            gearbox_friction=np.asarray(fg),
+            total_friction=ft_a,
+            ecd_damping_rate=becd_a,
+            ecd_friction=fecd_a,
+            gear_ratio=np.asarray(n),
+            forward_efficiency=ideal,
+            backward_efficiency=ideal,
         )
 
 
@@ -327,6 +395,33 @@ class LinearSpring:
             np.asarray(self.end_torque, dtype=float) * factor,
         )
         return angles, torques
+
+    def one_case_breakpoints(
+        self, travel: object, temperature: float
+    ) -> tuple[list[float], list[float]] | None:
+        """:meth:`breakpoints` of one temperature as Python floats, or None.
+
+        For float parameters and travel: ``[0, travel]`` and ``[Ts f, Te f]`` with
+        ``f = 1 + k (T - T_ref)`` (``physics.load.spring_temperature_factor``) in the same
+        order of operations, the same bits (issue 13, single cases). None also where a
+        torque is not finite.
+        """
+        values = (
+            self.start_torque,
+            self.end_torque,
+            self.temperature_coefficient,
+            self.reference_temperature,
+            travel,
+        )
+        floats = [value for value in values if isinstance(value, float) and type(value) is float]
+        if len(floats) != len(values):
+            return None
+        ts, te, k, t_ref, trav = floats
+        factor = 1.0 + k * (temperature - t_ref)
+        start, end = ts * factor, te * factor
+        if not (math.isfinite(start) and math.isfinite(end)):
+            return None  # the array path, which reports an overflow as NumPy does
+        return [0.0, trav], [start, end]
 
     def torque_at(self, angle: ArrayLike, travel: ArrayLike, temperature: ArrayLike) -> FloatArray:
         """Eq. 7 at ``angle``: Ts + (Te - Ts) * angle / travel, scaled for temperature."""

@@ -184,6 +184,15 @@ def _findings(
     problem: DynamicProblem, result: DynamicResult, energy_error: FloatArray
 ) -> list[tuple[str, str, int]]:
     """Outcomes a user must hear about, as (code, message, flat case index)."""
+    if result.status.size == 1:
+        return _one_case_findings(problem, result, energy_error)
+    return _batch_findings(problem, result, energy_error)
+
+
+def _batch_findings(
+    problem: DynamicProblem, result: DynamicResult, energy_error: FloatArray
+) -> list[tuple[str, str, int]]:
+    """:func:`_findings` of any batch (the general path)."""
     out: list[tuple[str, str, int]] = []
     status = result.status.ravel()
     if any_true(status >= REPORTED_FROM):
@@ -192,13 +201,7 @@ def _findings(
     unbalanced = np.abs(error) > 1e-6
     if any_true(unbalanced):
         for i in np.flatnonzero(unbalanced):
-            out.append(
-                (
-                    "energy_balance",
-                    f"the energy balance closes only to {error[i]:.2g} (relative); tighten rtol",
-                    int(i),
-                )
-            )
+            out.append(("energy_balance", _energy_message(error[i]), int(i)))
     eddy = problem.eddy
     if isinstance(eddy, KlossEddy):
         shape = result.batch_shape
@@ -220,15 +223,7 @@ def _findings(
             (100 * mismatch[off]).tolist(),
             strict=True,
         ):
-            out.append(
-                (
-                    "rolloff_temperature_law",
-                    f"at low speed the roll-off law gives BECD {becd:.4g} N*m*s/rad, "
-                    f"{ratio:+.1f} % from Eq. 1's {eq1:.4g}: with roll-off "
-                    "the damper's temperature law is resistivity_coefficient's, not Eq. 1's",
-                    case,
-                )
-            )
+            out.append(("rolloff_temperature_law", _rolloff_law_message(becd, eq1, ratio), case))
         shaft = (result.max_speed * n).ravel()
         peaks = broadcast(peak, shape).ravel()
         past = shaft > peaks
@@ -236,14 +231,7 @@ def _findings(
         for case, reached, limit in zip(
             beyond.tolist(), shaft[beyond].tolist(), peaks[beyond].tolist(), strict=True
         ):
-            out.append(
-                (
-                    "rolloff_beyond_peak",
-                    f"the damper reached {reached:.4g} rad/s, beyond its peak-torque speed "
-                    f"{limit:.4g} rad/s, where its torque falls with speed",
-                    case,
-                )
-            )
+            out.append(("rolloff_beyond_peak", _beyond_peak_message(reached, limit), case))
     return out
 
 
@@ -256,25 +244,87 @@ def _status_findings(result: DynamicResult, status: NDArray[np.int8]) -> list[tu
     final_angle = result.final_angle.ravel()
     for i, status_of_i in cases:
         if status_of_i == _STOP_TIME:
-            out.append(
-                (
-                    "stop_time",
-                    f"the end of travel was not reached by the stop time "
-                    f"({final_time[i]:.4g} s; angle {final_angle[i]:.4g} rad)",
-                    i,
-                )
-            )
+            out.append(("stop_time", _stop_time_message(final_time[i], final_angle[i]), i))
     for code, value in _CUT_SHORT.items():
         for i, status_of_i in cases:
             if status_of_i == value:
-                out.append(
-                    (
-                        code,
-                        f"the dynamic run was cut short ({code.replace('_', ' ')}) at "
-                        f"{final_time[i]:.4g} s; its result is incomplete",
-                        i,
-                    )
-                )
+                out.append((code, _cut_short_message(code, final_time[i]), i))
+    return out
+
+
+def _stop_time_message(time: float, angle: float) -> str:
+    return (
+        f"the end of travel was not reached by the stop time ({time:.4g} s; angle {angle:.4g} rad)"
+    )
+
+
+def _cut_short_message(code: str, time: float) -> str:
+    return (
+        f"the dynamic run was cut short ({code.replace('_', ' ')}) at {time:.4g} s; its "
+        "result is incomplete"
+    )
+
+
+def _energy_message(error: float) -> str:
+    return f"the energy balance closes only to {error:.2g} (relative); tighten rtol"
+
+
+def _rolloff_law_message(becd: float, eq1: float, ratio: float) -> str:
+    return (
+        f"at low speed the roll-off law gives BECD {becd:.4g} N*m*s/rad, "
+        f"{ratio:+.1f} % from Eq. 1's {eq1:.4g}: with roll-off "
+        "the damper's temperature law is resistivity_coefficient's, not Eq. 1's"
+    )
+
+
+def _beyond_peak_message(reached: float, limit: float) -> str:
+    return (
+        f"the damper reached {reached:.4g} rad/s, beyond its peak-torque speed "
+        f"{limit:.4g} rad/s, where its torque falls with speed"
+    )
+
+
+def _one_case_findings(
+    problem: DynamicProblem, result: DynamicResult, energy_error: FloatArray
+) -> list[tuple[str, str, int]]:
+    """:func:`_findings` of a result holding one case, in Python floats.
+
+    The same findings in the same order with the same text (NumPy scalars format as
+    Python floats) and the same arithmetic (the elementwise +, -, *, / of IEEE doubles),
+    without the general path's broadcasts, flattenings and index searches, which cost a
+    single deployment some 10 us (issue 13, single cases). The physics functions are
+    called with floats; every per-case array of a one-case problem holds one number.
+    """
+    out: list[tuple[str, str, int]] = []
+    status = result.status.item()
+    if status >= REPORTED_FROM:
+        time = result.final_time.item()
+        if status == _STOP_TIME:
+            out.append(("stop_time", _stop_time_message(time, result.final_angle.item()), 0))
+        else:  # the statuses from REPORTED_FROM on are stop_time and the cut-short ones
+            code = STATUSES[status]
+            out.append((code, _cut_short_message(code, time), 0))
+    error = energy_error.item()
+    if abs(error) > 1e-6:
+        out.append(("energy_balance", _energy_message(error), 0))
+    eddy = problem.eddy
+    if isinstance(eddy, KlossEddy):
+        n = problem.gear_ratio.item()
+        peak = eddy.peak_speed(problem.ambient_temperature.item()).item()
+        slope = rolloff.kloss_speed_derivative(0.0, eddy.peak_torque, peak).item()
+        becd = n * n * (slope + problem.gearbox_damping_rate.item())
+        eq1 = problem.damping_rate.item()
+        shaft = result.max_speed.item() * n
+        if eq1 == 0.0 or not math.isfinite(becd / eq1 + shaft):
+            # NumPy's answer and warnings (a division by 0, an overflow): the general path.
+            return _batch_findings(problem, result, energy_error)
+        mismatch = becd / eq1 - 1.0
+        if abs(mismatch) > 0.01:
+            out.append(
+                ("rolloff_temperature_law", _rolloff_law_message(becd, eq1, 100 * mismatch), 0)
+            )
+        if shaft > peak:
+            out.append(("rolloff_beyond_peak", _beyond_peak_message(shaft, peak), 0))
     return out
 
 

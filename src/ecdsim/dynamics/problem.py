@@ -17,7 +17,14 @@ from typing import Any
 
 import numpy as np
 
-from ecdsim._types import FloatArray, any_true, broadcast, joint_shape, one_case_views
+from ecdsim._types import (
+    FloatArray,
+    any_true,
+    broadcast,
+    joint_shape,
+    one_case_rows,
+    one_case_views,
+)
 from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
 from ecdsim.dynamics.params import DynamicParameters, Thermal
 from ecdsim.model import DeploymentSystem, EcdState
@@ -280,7 +287,11 @@ def dynamic_problem(
             )
     travel = np.asarray(base.travel)
     start = np.asarray(params.initial_angle, dtype=float)
-    if any_true(start < 0.0) or any_true(start >= travel):
+    if start.size == 1 and travel.size == 1:  # one case: the same test on the numbers
+        outside = start.item() < 0.0 or start.item() >= travel.item()
+    else:
+        outside = any_true(start < 0.0) or any_true(start >= travel)
+    if outside:
         raise DynamicDomainError(
             "initial.angle",
             f"must be >= 0 and below the travel ({float(np.min(travel)):.6g} rad), got "
@@ -295,9 +306,7 @@ def dynamic_problem(
                 "damper.thermal.initial_rotor_rise",
                 "puts the damper at or beyond the temperature where its damping law reaches zero",
             )
-    lossy = any_true(np.asarray(ecd.forward_efficiency != 1.0)) or any_true(
-        np.asarray(ecd.backward_efficiency != 1.0)
-    )
+    lossy = _differs(ecd.forward_efficiency, 1.0) or _differs(ecd.backward_efficiency, 1.0)
     if lossy and params.stribeck_speed is not None:
         # The Stribeck excess mixes the ECD's friction (through the mesh) with the
         # system's (not): its mesh loss is not separated yet (docs/dynamics.md).
@@ -307,54 +316,118 @@ def dynamic_problem(
         )
     if params.gear_stiffness is not None:
         _check_compliant(params, reflected, lossy=lossy, gravity=base.has_gravity)
+    case: dict[str, Any] = {
+        "load_inertia": params.load_inertia,
+        "damper_inertia": reflected,
+        "ecd_friction": ecd.ecd_friction,
+        "system_friction": system_friction,
+        "static_friction_factor": params.static_friction_factor,
+        "system_static_friction_factor": params.static_friction_factor
+        if params.system_static_friction_factor is None
+        else params.system_static_friction_factor,
+        "restitution": params.restitution,
+        "lost_motion": gearbox.lost_motion,
+        "initial_angle": start,
+        "initial_speed": params.initial_speed,
+        "ambient_temperature": temperatures,
+        "gear_ratio": n,
+        "gearbox_damping_rate": ecd.gearbox_damping_rate,
+        "heat_capacity": math.inf if thermal is None else thermal.heat_capacity,
+        "thermal_resistance": math.inf if thermal is None else thermal.thermal_resistance,
+        "stribeck_speed": math.inf if params.stribeck_speed is None else params.stribeck_speed,
+        "gear_stiffness": math.inf if params.gear_stiffness is None else params.gear_stiffness,
+        "gear_mesh_damping": 0.0 if params.gear_mesh_damping is None else params.gear_mesh_damping,
+        **_two_node_fields(thermal),
+        "forward_efficiency": ecd.forward_efficiency,
+        "backward_efficiency": ecd.backward_efficiency,
+    }
+    settings: dict[str, Any] = {
+        "eddy": eddy,
+        "thermal": thermal is not None,
+        "two_node": thermal is not None and thermal.housing_heat_capacity is not None,
+        "stop_time": params.stop_time,
+        "rtol": params.rtol,
+        "integrator": params.integrator,
+        "max_events": params.max_events,
+    }
+    one = _one_case_problem(base, case, settings)
+    if one is not None:
+        return one
     return DynamicProblem(
         angles=base.angles,
         torques=base.torques,
         friction=base.friction,
         damping_rate=base.damping_rate,
-        load_inertia=np.asarray(params.load_inertia, dtype=float),
-        damper_inertia=reflected,
-        ecd_friction=ecd.ecd_friction,
-        system_friction=system_friction,
-        static_friction_factor=np.asarray(params.static_friction_factor, dtype=float),
-        system_static_friction_factor=np.asarray(
-            params.static_friction_factor
-            if params.system_static_friction_factor is None
-            else params.system_static_friction_factor,
-            dtype=float,
-        ),
-        restitution=np.asarray(params.restitution, dtype=float),
-        lost_motion=np.asarray(gearbox.lost_motion, dtype=float),
-        initial_angle=start,
-        initial_speed=np.asarray(params.initial_speed, dtype=float),
-        ambient_temperature=temperatures,
-        gear_ratio=n,
-        gearbox_damping_rate=ecd.gearbox_damping_rate,
-        heat_capacity=np.asarray(
-            math.inf if thermal is None else thermal.heat_capacity, dtype=float
-        ),
-        thermal_resistance=np.asarray(
-            math.inf if thermal is None else thermal.thermal_resistance, dtype=float
-        ),
-        eddy=eddy,
-        stribeck_speed=np.asarray(
-            math.inf if params.stribeck_speed is None else params.stribeck_speed, dtype=float
-        ),
-        gear_stiffness=np.asarray(
-            math.inf if params.gear_stiffness is None else params.gear_stiffness, dtype=float
-        ),
-        gear_mesh_damping=np.asarray(
-            0.0 if params.gear_mesh_damping is None else params.gear_mesh_damping, dtype=float
-        ),
-        thermal=thermal is not None,
-        **_two_node_fields(thermal),
-        stop_time=params.stop_time,
-        rtol=params.rtol,
-        integrator=params.integrator,
-        max_events=params.max_events,
-        forward_efficiency=ecd.forward_efficiency,
-        backward_efficiency=ecd.backward_efficiency,
+        **case,
+        **settings,
     )
+
+
+# Every field of DynamicProblem by where _one_case_problem takes it from: the base
+# problem's breakpoints, friction and damping; the per-case numbers; the settings. A
+# field added to the class must be added here too (tests/test_fast_paths.py).
+_BASE_FIELDS = ("angles", "torques", "friction", "damping_rate")
+_NO_GRAVITY = ("gravity_amplitude", "gravity_angle")
+_SETTING_FIELDS = ("eddy", "thermal", "two_node", "stop_time", "rtol", "integrator", "max_events")
+
+
+def _one_case_problem(
+    base: QuasiStaticProblem, case: dict[str, Any], settings: dict[str, Any]
+) -> DynamicProblem | None:
+    """``DynamicProblem(**base fields, **case, **settings)`` for one case, or None.
+
+    The same problem, field for field (values, shapes, dtypes, read-only views), as the
+    dataclass's ``__init__`` and ``__post_init__`` make of these arguments, built without
+    them: ``base`` is a normalized QuasiStaticProblem already (aligned read-only float64
+    fields), so for one case the general path only reads every per-case value's one
+    number into one array and hands out its rows (``one_case_views``), which is what this
+    does directly. A single deployment saves the dataclass machinery (some 20 us; issue
+    13, single cases). None, for the general path, when ``base`` holds several cases or a
+    value would widen its batch shape (more axes, or more than one number).
+    """
+    batch = base.friction.shape
+    if math.prod(batch) != 1:
+        return None
+    depth = len(batch)
+    eddy: EddyLaw = settings["eddy"]
+    for name in _field_names(type(eddy)):
+        shape = _shape(getattr(eddy, name))
+        if len(shape) > depth or math.prod(shape) != 1:
+            return None
+    # The general path's order: friction, damping_rate, then _CASE_FIELDS.
+    numbers = [base.friction.item(), base.damping_rate.item()]
+    for name in _CASE_FIELDS:
+        value = case[name]
+        if type(value) is not float:  # a float is its own item()
+            array = value if type(value) is np.ndarray else np.asarray(value, dtype=float)
+            if array.ndim > depth or array.size != 1:
+                return None
+            # item() of an integer or boolean array is an int: float() is asarray's cast.
+            value = float(array.item())
+        numbers.append(value)
+    friction, damping, *rows = one_case_rows(numbers, batch)
+    problem = object.__new__(DynamicProblem)
+    # A frozen dataclass without slots: its fields live in the instance __dict__.
+    vars(problem).update(
+        angles=base.angles,
+        torques=base.torques,
+        friction=friction,
+        damping_rate=damping,
+        # dynamic_problem never passes gravity on (predict adds it with replace()).
+        gravity_amplitude=None,
+        gravity_angle=None,
+        **dict(zip(_CASE_FIELDS, rows, strict=True)),
+        **settings,
+    )
+    return problem
+
+
+def _differs(value: FloatArray, number: float) -> bool:
+    """``any_true(value != number)``; one element compared as a Python float (NaN differs
+    from everything in both), without NumPy's comparison (issue 13, single cases)."""
+    if value.size == 1:
+        return bool(value.item() != number)
+    return any_true(np.asarray(value != number))
 
 
 def _check_compliant(
@@ -419,18 +492,19 @@ def _check_compliant(
 
 
 def _two_node_fields(thermal: Thermal | None) -> dict[str, Any]:
-    """The housing node and the start temperatures of :class:`DynamicProblem`; none
-    (the one-node defaults) without ``Thermal.housing_heat_capacity``."""
-    if thermal is None:
-        return {}
-    fields: dict[str, Any] = {
-        "initial_rotor_rise": np.asarray(thermal.initial_rotor_rise, dtype=float),
-        "initial_housing_rise": np.asarray(thermal.initial_housing_rise, dtype=float),
+    """The housing node and the start temperatures of :class:`DynamicProblem`: the
+    one-node defaults without ``Thermal.housing_heat_capacity``."""
+    values: dict[str, Any] = {
+        "housing_heat_capacity": math.inf,
+        "housing_thermal_resistance": math.inf,
+        "initial_rotor_rise": 0.0,
+        "initial_housing_rise": 0.0,
     }
+    if thermal is None:
+        return values
+    values["initial_rotor_rise"] = thermal.initial_rotor_rise
+    values["initial_housing_rise"] = thermal.initial_housing_rise
     if thermal.housing_heat_capacity is not None:
-        fields["housing_heat_capacity"] = np.asarray(thermal.housing_heat_capacity, float)
-        fields["housing_thermal_resistance"] = np.asarray(
-            thermal.housing_thermal_resistance, dtype=float
-        )
-        fields["two_node"] = True
-    return fields
+        values["housing_heat_capacity"] = thermal.housing_heat_capacity
+        values["housing_thermal_resistance"] = thermal.housing_thermal_resistance
+    return values

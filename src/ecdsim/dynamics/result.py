@@ -146,6 +146,9 @@ class EnergyBalance:
     def error(self) -> FloatArray:
         """Relative imbalance ``(supplied - accounted) / max(|supplied|, |accounted|)``; 0
         where no energy moved."""
+        one = self._one_case_error()
+        if one is not None:
+            return one
         # Each sum once (they are properties: a single case pays every NumPy call).
         supplied, accounted = self.supplied, self.accounted
         scale = np.maximum(np.abs(supplied), np.abs(accounted))
@@ -153,6 +156,57 @@ class EnergyBalance:
         if all_true(moved):  # energy moved in every case (the usual answer): no guard
             return np.asarray((supplied - accounted) / scale)
         return np.where(moved, (supplied - accounted) / np.where(moved, scale, 1.0), 0.0)
+
+    def _one_case_error(self) -> FloatArray | None:
+        """:attr:`error` of one case in Python floats, or None for the general path.
+
+        The sums of :attr:`supplied` and :attr:`accounted` in their order, then the
+        guarded ratio: the same bits as the elementwise NumPy expressions, in a new array
+        of the terms' shape, without some twenty NumPy calls on one-element arrays
+        (issue 13, single cases). A term of another shape, or a sum that is not finite
+        (np.maximum propagates NaN where max() does not; NumPy warns of inf - inf), takes
+        the general path.
+        """
+        shape = self.spring_work.shape
+        if math.prod(shape) != 1:
+            return None
+        present = [value for value in (getattr(self, name) for name in _TERMS) if value is not None]
+        if any(value.shape != shape for value in present):
+            return None
+        supplied = self.spring_work.item() + self.initial_kinetic_energy.item()
+        if self.gravity_work is not None:
+            supplied = supplied - self.gravity_work.item()
+        accounted = (
+            self.damper_dissipation.item()
+            + self.friction_dissipation.item()
+            + self.engagement_loss.item()
+            + self.impact_loss.item()
+            + self.final_kinetic_energy.item()
+            + self.gear_loss.item()
+            + (0.0 if self.mesh_dissipation is None else self.mesh_dissipation.item())
+            + (0.0 if self.elastic_energy is None else self.elastic_energy.item())
+        )
+        if not (math.isfinite(supplied) and math.isfinite(accounted)):
+            return None
+        scale = max(abs(supplied), abs(accounted))
+        error = (supplied - accounted) / scale if scale > 0.0 else 0.0
+        return np.array(error, dtype=np.float64).reshape(shape)
+
+
+# The fields of EnergyBalance, every one a term of the balance (tests/test_fast_paths.py).
+_TERMS = (
+    "spring_work",
+    "initial_kinetic_energy",
+    "damper_dissipation",
+    "friction_dissipation",
+    "engagement_loss",
+    "impact_loss",
+    "final_kinetic_energy",
+    "gear_loss",
+    "gravity_work",
+    "mesh_dissipation",
+    "elastic_energy",
+)
 
 
 @dataclass(frozen=True)

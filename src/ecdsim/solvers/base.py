@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
@@ -139,6 +140,78 @@ class QuasiStaticProblem:
     def batch_shape(self) -> tuple[int, ...]:
         """Broadcast shape of one result."""
         return tuple(self.friction.shape)
+
+
+# Every field of QuasiStaticProblem, as one_case_problem sets it (tests/test_fast_paths.py
+# fails when a field is added to the class and not here).
+ONE_CASE_FIELDS = (
+    "angles",
+    "torques",
+    "friction",
+    "damping_rate",
+    "gravity_amplitude",
+    "gravity_angle",
+)
+
+
+def one_case_problem(
+    angles: FloatArray, torques: FloatArray, friction: FloatArray, damping_rate: FloatArray
+) -> QuasiStaticProblem | None:
+    """``QuasiStaticProblem(angles, torques, friction, damping_rate)`` of one case, or None.
+
+    The same problem, field for field (values, shapes, read-only float64 views), as
+    ``__post_init__`` makes of float64 arrays whose batch (the breakpoints' trailing axes,
+    friction's and damping's shapes) holds one case: their numbers read into one
+    read-only array and handed out as views of the aligned shapes, without the general
+    path's conversions, alignment and broadcasts (some 4 us of a single deployment;
+    issue 13, single cases). No gravity. None, for the general path, for anything else.
+    """
+    values = (angles, torques, friction, damping_rate)
+    for value in values:
+        if type(value) is not np.ndarray or value.dtype != np.float64:
+            return None
+    if angles.ndim < 1 or torques.ndim < 1 or angles.shape[0] != torques.shape[0]:
+        return None  # the general path raises its error
+    batch = joint_shape(angles.shape[1:], torques.shape[1:], friction.shape, damping_rate.shape)
+    if math.prod(batch) != 1:
+        return None
+    return packed_problem(
+        angles.ravel().tolist(),
+        torques.ravel().tolist(),
+        friction.item(),
+        damping_rate.item(),
+        batch,
+    )
+
+
+def packed_problem(
+    angles: list[float],
+    torques: list[float],
+    friction: float,
+    damping_rate: float,
+    batch: tuple[int, ...],
+) -> QuasiStaticProblem:
+    """The one-case problem of these numbers, its batch shape ``batch`` (of size 1).
+
+    What ``QuasiStaticProblem.__post_init__`` makes of the arrays holding them: the
+    breakpoints ``(n_points, *batch)``, friction and damping ``batch``, all read-only
+    float64 views (here of one array), no gravity (:func:`one_case_problem`).
+    """
+    n = len(angles)
+    packed = np.array([*angles, *torques, friction, damping_rate], dtype=np.float64)
+    packed.flags.writeable = False
+    points = (n, *batch)
+    problem = object.__new__(QuasiStaticProblem)
+    # A frozen dataclass without slots: its fields live in the instance __dict__.
+    vars(problem).update(
+        angles=packed[:n].reshape(points),
+        torques=packed[n : 2 * n].reshape(points),
+        friction=packed[2 * n : 2 * n + 1].reshape(batch),  # slices: views, read-only
+        damping_rate=packed[2 * n + 1 :].reshape(batch),
+        gravity_amplitude=None,
+        gravity_angle=None,
+    )
+    return problem
 
 
 def _aligned(points: FloatArray, batch: tuple[int, ...]) -> tuple[int, ...]:
