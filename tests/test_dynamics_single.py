@@ -485,7 +485,8 @@ def test_frozen_records_carry_every_field(law: str, monkeypatch: pytest.MonkeyPa
     assert data is not None
     assert len(data.integrated) > 2  # rebounds: several recorded segments
     steps = [record.solution.solution for record in data.integrated]  # type: ignore[attr-defined]
-    for built in (result, result.energy, result.events, data, *data.integrated, *steps):
+    laws = [data.eddy, data.integrated[0].solution.model.eddy]  # type: ignore[attr-defined]
+    for built in (result, result.energy, result.events, data, *data.integrated, *steps, *laws):
         kind = type(built)
         assert dataclasses.is_dataclass(kind)
         assert kind.__dataclass_params__.frozen  # type: ignore[attr-defined]

@@ -139,6 +139,7 @@ class _Case:
     ambient_factor: float  # f_a (Model.ambient_factor)
     zero: float  # the law's zero temperature T_ref - 1/c where c < 0, else inf [degC]
     heating: bool
+    law: tuple[float, ...]  # the damping law's parameters in its fields' order (_eddy_values)
 
     def temperature(self, state: float) -> float:
         """:meth:`Model.temperature` of one state s: ``T_amb + f_a s E(c s)``, clipped.
@@ -224,15 +225,14 @@ def _case(problem: DynamicProblem) -> _Case:
     a0, a1 = angles.item(0), angles.item(1)
     t0, t1 = torques.item(0), torques.item(1)
     width = a1 - a0
-    eddy = problem.eddy
-    # c: LinearEddy.coefficient and KlossEddy.coefficient (the law's only two classes
-    # here: eligible), read as a float rather than through np.asarray.
-    if isinstance(eddy, LinearEddy):
-        coefficient = _item(eddy.temperature_coefficient)
+    # The law's parameters, read once as floats (the kernel's row and the result take
+    # them too). c: LinearEddy.coefficient and KlossEddy.coefficient (the law's only two
+    # classes here: eligible), read as a float rather than through np.asarray.
+    law = _eddy_values(problem.eddy)
+    if isinstance(problem.eddy, LinearEddy):
+        _, reference, coefficient = law  # BD, T_ref, c
     else:
-        assert isinstance(eddy, KlossEddy)
-        coefficient = _item(eddy.resistivity_coefficient)
-    reference = _item(eddy.reference_temperature)
+        _, _, coefficient, reference = law  # T_peak, w_peak, alpha, T_ref
     ambient = problem.ambient_temperature.item()
     # max(eddy.factor(T), 0) in floats: both laws' factor is ``1 * (1 + c (T - T_ref))``
     # (assembly.damper_damping_rate at BD = 1, rolloff.peak_speed_at at w_ref = 1), the
@@ -260,6 +260,7 @@ def _case(problem: DynamicProblem) -> _Case:
         ambient_factor,
         reference - 1.0 / coefficient if coefficient < 0.0 else math.inf,  # zero
         problem.thermal,  # heating
+        law,
     )
 
 
@@ -270,7 +271,6 @@ def _kernel(problem: DynamicProblem, case: _Case, module: ModuleType) -> _Kernel
     set per segment. The columns of a lossy gear, gravity, Stribeck friction and the
     housing hold their "none" values, as ``_parameters`` writes them.
     """
-    eddy = problem.eddy
     row = [0.0] * module._COLUMNS  # zero: no Stribeck excess, gravity, flow, J_L .. a_L
     row[module._J] = case.total_inertia
     row[module._K] = -case.slope
@@ -287,15 +287,13 @@ def _kernel(problem: DynamicProblem, case: _Case, module: ModuleType) -> _Kernel
     row[module._RHE] = math.inf
     row[module._GD] = 1.0  # the gravity direction, unused without gravity
     row[module._MESH] = 1.0  # an ideal gear: m = 1
-    if isinstance(eddy, LinearEddy):
+    row[module._LAW_A] = case.law[0]  # BD or T_peak
+    if isinstance(problem.eddy, LinearEddy):
         law = module.LINEAR_LAW
-        row[module._LAW_A] = _item(eddy.damping_rate)
         row[module._LAW_B] = 0.0
     else:
-        assert isinstance(eddy, KlossEddy)
         law = module.KLOSS_LAW
-        row[module._LAW_A] = _item(eddy.peak_torque)
-        row[module._LAW_B] = _item(eddy.reference_peak_speed)
+        row[module._LAW_B] = case.law[1]  # w_peak at T_ref
     par = np.array(row)
 
     def model(drive: float) -> Model:
@@ -311,7 +309,7 @@ def _kernel(problem: DynamicProblem, case: _Case, module: ModuleType) -> _Kernel
             heat_capacity=problem.heat_capacity.reshape(1),
             thermal_resistance=problem.thermal_resistance.reshape(1),
             ambient=problem.ambient_temperature.reshape(1),
-            eddy=_flat_eddy(problem),
+            eddy=_flat_eddy(problem.eddy, case.law),
             heating=problem.thermal,
             ambient_factor=one * case.ambient_factor,
         )
@@ -637,41 +635,49 @@ def solve(problem: DynamicProblem, record: bool = True) -> DynamicResult:
 def _result(problem: DynamicProblem, case: _Case, run: _Run) -> DynamicResult:
     """solve_dynamic's result for the case: summaries, energy, events and trajectory.
 
-    The float fields are views of one array (one NumPy call, not one per field), each
-    of the batch's shape; so are the event log's times, angles and speeds. The frozen
-    records are built by :func:`_frozen` (every field named here).
+    Every float of the result is a view of one array (one NumPy call, not one per
+    field): the 21 summaries, each of the batch's shape, then, when recorded, the
+    trajectory's final state and display end and the flattened damping law's
+    parameters, each of shape (1,). So are the event log's times, angles and speeds of
+    another. The frozen records are built by :func:`_frozen` (every field named here).
     """
     shape = problem.batch_shape
     final_speed = run.w if run.status in _KEEPS else 0.0
     inertia = case.total_inertia
-    values = np.array(
-        (
-            run.arrival_time,
-            run.arrival_speed,
-            run.arrival_ke,
-            run.t,
-            run.phi,
-            final_speed,
-            run.temp,
-            run.stuck_angle,
-            run.stuck_time,
-            run.max_speed,
-            run.max_temp,
-            0.0,  # engagement_time: engaged at release
-            run.rebound_speed,
-            # The energy balance (mechanics.kinetic_energy for the kinetic energies).
-            run.spring_work,
-            0.5 * inertia * case.speed0 * case.speed0,
-            run.damper_work,
-            run.friction_work,
-            0.0,  # engagement_loss: no lost motion
-            run.impact_loss,
-            0.5 * inertia * final_speed * final_speed,
-            0.0,  # gear_loss: an ideal gear
-        )
-    ).reshape((21, *shape))
+    numbers = [
+        run.arrival_time,
+        run.arrival_speed,
+        run.arrival_ke,
+        run.t,
+        run.phi,
+        final_speed,
+        run.temp,
+        run.stuck_angle,
+        run.stuck_time,
+        run.max_speed,
+        run.max_temp,
+        0.0,  # engagement_time: engaged at release
+        run.rebound_speed,
+        # The energy balance (mechanics.kinetic_energy for the kinetic energies).
+        run.spring_work,
+        0.5 * inertia * case.speed0 * case.speed0,
+        run.damper_work,
+        run.friction_work,
+        0.0,  # engagement_loss: no lost motion
+        run.impact_loss,
+        0.5 * inertia * final_speed * final_speed,
+        0.0,  # gear_loss: an ideal gear
+    ]
+    if run.records is not None:
+        # The trajectory's final state and display end (solver._step_integrated), then
+        # the law's parameters (_eddy_values).
+        end = run.t if math.isfinite(run.t) else run.display_end
+        numbers += (run.phi, final_speed, run.temp, run.hold_from, end)
+        numbers += case.law
+    values = np.array(numbers)
     # Iterating over the first axis gives the views (but scalars for a 0-d batch).
-    v = list(values) if shape else [values[k, ...] for k in range(21)]
+    summary = values[:21].reshape((21, *shape))
+    v = list(summary) if shape else [summary[k, ...] for k in range(21)]
     logged = np.array((run.times, run.angles, run.speeds))
     energy = _frozen(
         EnergyBalance,
@@ -701,7 +707,7 @@ def _result(problem: DynamicProblem, case: _Case, run: _Run) -> DynamicResult:
     )
     trajectory = None
     if run.records is not None:
-        trajectory = _trajectory(problem, case, run, final_speed)
+        trajectory = _trajectory(problem, run.records, list(values[21:].reshape(-1, 1)))
     return _frozen(
         DynamicResult,
         {
@@ -747,73 +753,99 @@ def _frozen(cls: type[_T], values: dict[str, Any]) -> _T:
     return built
 
 
-def _flat_eddy(problem: DynamicProblem) -> LinearEddy | KlossEddy:
-    """``problem.eddy.flattened(shape)`` for one case: each parameter as a (1,) array
-    (rows of one array: one NumPy call)."""
-    eddy = problem.eddy
+def _eddy_values(eddy: object) -> tuple[float, ...]:
+    """The law's parameters as floats, in the order of its fields (:func:`_eddy_of`)."""
     if isinstance(eddy, LinearEddy):
-        rate, reference, coefficient = np.array(
-            (
-                _item(eddy.damping_rate),
-                _item(eddy.reference_temperature),
-                _item(eddy.temperature_coefficient),
-            )
-        ).reshape(3, 1)
-        return LinearEddy(rate, reference, coefficient)
-    assert isinstance(eddy, KlossEddy)
-    peak, speed, coefficient, reference = np.array(
-        (
-            _item(eddy.peak_torque),
-            _item(eddy.reference_peak_speed),
-            _item(eddy.resistivity_coefficient),
+        return (
+            _item(eddy.damping_rate),
             _item(eddy.reference_temperature),
+            _item(eddy.temperature_coefficient),
         )
-    ).reshape(4, 1)
-    return KlossEddy(peak, speed, coefficient, reference)
+    assert isinstance(eddy, KlossEddy)
+    return (
+        _item(eddy.peak_torque),
+        _item(eddy.reference_peak_speed),
+        _item(eddy.resistivity_coefficient),
+        _item(eddy.reference_temperature),
+    )
 
 
-def _same(values: FloatArray) -> FloatArray:
-    return values
+def _eddy_of(eddy: object, rows: list[FloatArray]) -> LinearEddy | KlossEddy:
+    """``eddy.flattened(shape)`` for one case from ``rows``, its parameters as (1,)
+    arrays in the order of :func:`_eddy_values` (the fields' order); built by
+    :func:`_frozen` (tests/test_dynamics_single.py holds the fields to it)."""
+    if isinstance(eddy, LinearEddy):
+        rate, reference, coefficient = rows
+        return _frozen(
+            LinearEddy,
+            {
+                "damping_rate": rate,
+                "reference_temperature": reference,
+                "temperature_coefficient": coefficient,
+            },
+        )
+    peak, speed, coefficient, reference = rows
+    return _frozen(
+        KlossEddy,
+        {
+            "peak_torque": peak,
+            "reference_peak_speed": speed,
+            "resistivity_coefficient": coefficient,
+            "reference_temperature": reference,
+        },
+    )
 
 
-def _one_element(values: FloatArray) -> FloatArray:
-    return values.reshape(1)
+def _flat_eddy(eddy: object, law: tuple[float, ...]) -> LinearEddy | KlossEddy:
+    """``eddy.flattened(shape)`` for one case from its parameters ``law``: each as a (1,)
+    array (rows of one array: one NumPy call)."""
+    return _eddy_of(eddy, list(np.array(law).reshape(-1, 1)))
 
 
 def _trajectory(
-    problem: DynamicProblem, case: _Case, run: _Run, final_speed: float
+    problem: DynamicProblem, records: list[IntegratedRecord], rows: list[FloatArray]
 ) -> TrajectoryData:
     """solve_dynamic's TrajectoryData for the case (one-element flat arrays: views of the
-    problem's fields, as solver._flatten takes them)."""
-    assert run.records is not None
-    end = run.t if math.isfinite(run.t) else run.display_end
-    # The final state and the display end as rows of one array (views of shape (1,)).
-    final = np.array((run.phi, final_speed, run.temp, run.hold_from, end)).reshape(5, 1)
+    problem's fields, as solver._flatten takes them).
+
+    ``rows``: the final angle, speed and temperature, the hold start and the display
+    end, then the law's parameters (:func:`_eddy_values`), each of shape (1,).
+    """
+    p = problem
+    flat = (
+        p.initial_angle,
+        p.initial_speed,
+        p.ambient_temperature,
+        p.ecd_friction,
+        p.system_friction,
+        p.static_friction_factor,
+        p.system_static_friction_factor,
+        p.gear_ratio,
+        p.gearbox_damping_rate,
+        p.stribeck_speed,
+    )
+    if p.batch_shape != (1,):  # a batch of shape (1,) (predict's one temperature) is flat
+        flat = tuple(values.reshape(1) for values in flat)
+    angle0, speed0, ambient, ecd_friction, system_friction = flat[:5]
+    factor, system_factor, ratio, gearbox_damping, stribeck_speed = flat[5:]
     engaged = np.array([True])  # engaged at release: no lost motion
-    # A batch of shape (1,) (predict's one temperature) needs no reshape.
-    flat = _same if problem.batch_shape == (1,) else _one_element
     return _frozen(
         TrajectoryData,
         {
             "closed": [],
-            "integrated": run.records,
-            "initial": (
-                flat(problem.initial_angle),
-                flat(problem.initial_speed),
-                flat(problem.ambient_temperature),
-                engaged,
-            ),
-            "final": (final[0], final[1], final[2], engaged.copy(), final[3]),
-            "display_end": final[4],
-            "angles": problem.angles.reshape(2, 1),
-            "torques": problem.torques.reshape(2, 1),
-            "ecd_friction": flat(problem.ecd_friction),
-            "system_friction": flat(problem.system_friction),
-            "factor": flat(problem.static_friction_factor),
-            "system_factor": flat(problem.system_static_friction_factor),
-            "ratio": flat(problem.gear_ratio),
-            "gearbox_damping": flat(problem.gearbox_damping_rate),
-            "eddy": _flat_eddy(problem),
-            "stribeck_speed": flat(problem.stribeck_speed),
+            "integrated": records,
+            "initial": (angle0, speed0, ambient, engaged),
+            "final": (rows[0], rows[1], rows[2], engaged.copy(), rows[3]),
+            "display_end": rows[4],
+            "angles": p.angles.reshape(2, 1),
+            "torques": p.torques.reshape(2, 1),
+            "ecd_friction": ecd_friction,
+            "system_friction": system_friction,
+            "factor": factor,
+            "system_factor": system_factor,
+            "ratio": ratio,
+            "gearbox_damping": gearbox_damping,
+            "eddy": _eddy_of(p.eddy, rows[5:]),  # case.law's rows
+            "stribeck_speed": stribeck_speed,
         },
     )
