@@ -818,7 +818,7 @@ def _trajectory(
     end, then the law's parameters (:func:`_eddy_values`), each of shape (1,).
     """
     p = problem
-    flat = (
+    flat: tuple[FloatArray, ...] = (
         p.initial_angle,
         p.initial_speed,
         p.ambient_temperature,
