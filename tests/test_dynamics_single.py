@@ -493,3 +493,30 @@ def test_frozen_records_carry_every_field(law: str, monkeypatch: pytest.MonkeyPa
         assert not hasattr(kind, "__post_init__"), kind
         assert set(vars(built)) == {f.name for f in dataclasses.fields(built)}, kind
     assert type(data.eddy).__name__ == ("KlossEddy" if law == "kloss" else "LinearEddy")
+
+
+def test_positionally_built_records_keep_their_field_order() -> None:
+    # single._segment and single._integrate build _Segment and _Step positionally (a
+    # keyword call costs more): a reordered field would take another field's value.
+    segment = [f.name for f in dataclasses.fields(single._Segment)]
+    step = [f.name for f in dataclasses.fields(single._Step)]
+    assert segment == [
+        "direction",
+        "torque",
+        "length",
+        "reach_kind",
+        "kinetic",
+        "drive",
+        "speed0",
+        "cap",
+    ]
+    assert step == [
+        "kind",
+        "duration",
+        "x",
+        "v",
+        "damper_work",
+        "peak_speed",
+        "temperature",
+        "peak_temperature",
+    ]
