@@ -28,7 +28,14 @@ from ecdsim.deployment import (
     predict,
 )
 from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff, Thermal
-from ecdsim.dynamics.method import REPORTED_FROM, _batch_findings, _findings
+from ecdsim.dynamics.damping import KlossEddy
+from ecdsim.dynamics.method import (
+    REPORTED_FROM,
+    DynamicSolution,
+    _batch_findings,
+    _findings,
+    _kloss_low_speed,
+)
 from ecdsim.dynamics.problem import (
     _BASE_FIELDS,
     _CASE_FIELDS,
@@ -47,6 +54,7 @@ from ecdsim.model import (
     TabulatedTemperatureLaw,
     _pair,
 )
+from ecdsim.physics import rolloff
 from ecdsim.solvers.base import ONE_CASE_FIELDS, QuasiStaticProblem, one_case_problem
 from tests.conftest import paper_system
 
@@ -708,3 +716,55 @@ def test_one_case_kloss_findings_leave_a_zero_or_odd_damping_to_numpy(damping: f
     error = np.array([0.0])
     with np.errstate(divide="ignore", invalid="ignore"):
         assert _findings(problem, result, error) == _batch_findings(problem, result, error)
+
+
+KLOSS_LAWS: list[tuple[Any, Any, Any, Any, float]] = [
+    # (T_peak, omega_peak_ref, alpha, T_ref, T): floats, 0-d, one-element and integer arrays
+    (0.13, 2000.0, 0.0039, 25.0, 125.0),
+    (np.asarray(6.5e-4), 10.0, 0.00392, 25.0, 20.0),
+    (np.array([1e-3]), np.array([[60.0]]), np.array([0.0039]), 20.0, -40.0),
+    (np.array([2]), np.array(7), 0.0, np.array([25]), 80.0),
+    (1e300, 1e300, 0.0039, 25.0, 25.0),  # p**2 overflows: NumPy's answer (inf, warned)
+    (0.13, 0.0, 0.0039, 25.0, 25.0),  # p = 0: the derivative's guard gives 0
+    (0.13, 2000.0, 0.0039, 25.0, math.nan),
+    (0.13, 2000.0, -0.01, 25.0, 125.0),  # p = 0 at T (alpha (T - T_ref) = -1)
+]
+
+
+@pytest.mark.parametrize(("t_peak", "p_ref", "alpha", "t_ref", "temperature"), KLOSS_LAWS)
+def test_kloss_low_speed_floats_are_the_physics_functions(
+    t_peak: Any, p_ref: Any, alpha: Any, t_ref: Any, temperature: float
+) -> None:
+    # The one-case findings' peak speed and zero-speed slope written out in floats
+    # against KlossEddy.peak_speed and rolloff.kloss_speed_derivative (NumPy) on the same
+    # law: bit for bit where the floats answer; None (the NumPy path) where a value is not
+    # finite or the peak speed is 0.
+    eddy = KlossEddy(t_peak, p_ref, alpha, t_ref)
+    with np.errstate(all="ignore"):
+        peak = float(eddy.peak_speed(temperature).item())
+        slope = float(rolloff.kloss_speed_derivative(0.0, eddy.peak_torque, peak).item())
+    got = _kloss_low_speed(eddy, temperature)
+    finite = math.isfinite(peak) and math.isfinite(slope) and peak != 0.0
+    assert (got is not None) is finite
+    if got is not None:
+        assert type(got[0]) is float
+        assert type(got[1]) is float
+        assert np.float64(got[0]).tobytes() == np.float64(peak).tobytes()
+        assert np.float64(got[1]).tobytes() == np.float64(slope).tobytes()
+
+
+@pytest.mark.parametrize("temperatures", [[20.0], [-40.0, 25.0, 100.0]])
+def test_the_dynamic_solution_is_the_dataclass_one(temperatures: list[float]) -> None:
+    # solution_from_result fills the DynamicSolution's __dict__ itself: every field of the
+    # class is set (a field added to it and not there fails here), with the values the
+    # dataclass's __init__ and __post_init__ make of the same arguments.
+    params = DynamicParameters(load_inertia=5.0, rolloff=Rolloff(60.0, 0.0039))
+    prediction = predict(paper_system(), temperatures, ["dynamic"], dynamics=params)
+    fast = prediction.solutions["dynamic"]
+    assert type(fast) is DynamicSolution
+    names = [f.name for f in fields(DynamicSolution)]
+    assert sorted(vars(fast)) == sorted(names)
+    given = {name: getattr(fast, name) for name in names if name != "solved"}
+    general = DynamicSolution(**given)
+    for name in names:
+        _same_field(name, getattr(fast, name), getattr(general, name))
