@@ -54,7 +54,7 @@ from ecdsim.model import (
     TabulatedTemperatureLaw,
     _pair,
 )
-from ecdsim.physics import rolloff
+from ecdsim.physics import mechanics, rolloff
 from ecdsim.solvers.base import ONE_CASE_FIELDS, QuasiStaticProblem, one_case_problem
 from tests.conftest import paper_system
 
@@ -768,3 +768,63 @@ def test_the_dynamic_solution_is_the_dataclass_one(temperatures: list[float]) ->
     general = DynamicSolution(**given)
     for name in names:
         _same_field(name, getattr(fast, name), getattr(general, name))
+
+
+@pytest.mark.parametrize(
+    ("rotor", "gearbox", "ratio"),
+    [
+        (2e-7, 0.0, np.asarray(380.0)),
+        (1e-6, 3e-7, np.asarray(120.0)),
+        (0.0, 0.0, np.asarray(1.0)),
+        (1e-6, 0.0, np.array([380.0])),  # the ratio's axis: the NumPy path
+        (np.array([1e-6]), 0.0, np.asarray(380.0)),  # an array inertia: the NumPy path
+        (1e300, 0.0, np.asarray(1e10)),  # overflows: NumPy's answer (and warning)
+    ],
+)
+def test_one_case_reflected_inertia_is_the_physics_function(
+    rotor: Any, gearbox: Any, ratio: np.ndarray
+) -> None:
+    # dynamic_problem's float J N N against mechanics.reflect_inertia_to_input on the same
+    # inputs: the same number (bit for bit), which DynamicProblem reads as the same 0-d
+    # array; None where the answer would have another shape or is not finite.
+    params = DynamicParameters(5.0, rotor_inertia=rotor, gearbox_inertia=gearbox)
+    with np.errstate(over="ignore"):
+        general = mechanics.reflect_inertia_to_input(
+            np.asarray(rotor, float) + np.asarray(gearbox, float), ratio
+        )
+    got = problem_module._one_case_reflected(params, ratio)
+    fast = type(rotor) is float and ratio.shape == () and bool(np.isfinite(general))
+    assert (got is not None) is fast
+    if got is not None:
+        assert type(got) is float
+        assert general.shape == ()
+        assert np.asarray(got, dtype=float).tobytes() == general.tobytes()
+
+
+@pytest.mark.parametrize(
+    ("temperatures", "peak_speed", "alpha"),
+    [
+        ([25.0], 60.0, 0.0039),
+        ([-300.0], 60.0, 0.0039),  # 1 + alpha (T - T_ref) < 0: refused
+        ([25.0 - 1.0 / 0.0039], 60.0, 0.0039),  # about 0 at T
+        (25.0, 60.0, -0.01),
+        ([125.0], 60.0, -0.01),  # exactly 0 at T: refused
+        ([math.nan], 60.0, 0.0039),  # NaN is not <= 0
+        ([100.0], 1e308, 1e10),  # overflows: the array test
+        ([25.0], np.array([60.0]), 0.0039),  # an array parameter: the array test
+        ([-300.0, 25.0], 60.0, 0.0039),  # two temperatures: the array test
+    ],
+)
+def test_one_case_peak_speed_check_is_the_array_test(
+    temperatures: Any, peak_speed: Any, alpha: float
+) -> None:
+    # The roll-off domain check in floats against the array test it replaces, and
+    # one_peak_speed against peak_speed_at bit for bit where it is finite.
+    temps = np.asarray(temperatures, dtype=float)
+    with np.errstate(over="ignore"):
+        peaks = rolloff.peak_speed_at(temps, peak_speed, alpha, 25.0)
+        expected = bool(np.any(peaks <= 0.0))
+        assert problem_module._peak_speed_not_positive(temps, peak_speed, alpha, 25.0) is expected
+    if temps.size == 1 and type(peak_speed) is float:
+        one = rolloff.one_peak_speed(temps.item(), peak_speed, alpha, 25.0)
+        assert np.float64(one).tobytes() == np.asarray(peaks, dtype=float).reshape(()).tobytes()

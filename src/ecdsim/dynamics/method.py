@@ -342,8 +342,8 @@ def _one_case_findings(
 def _kloss_low_speed(eddy: KlossEddy, temperature: float) -> tuple[float, float] | None:
     """The peak speed at ``temperature`` and the Kloss law's slope at zero speed, in floats.
 
-    ``eddy.peak_speed(T)`` (``rolloff.peak_speed_at``: ``p = p_ref (1 + alpha (T - T_ref))``)
-    and ``rolloff.kloss_speed_derivative(0, T_peak, p)`` (``2 T_peak p (p**2 - w**2) /
+    ``eddy.peak_speed(T)`` (``rolloff.one_peak_speed``) and
+    ``rolloff.kloss_speed_derivative(0, T_peak, p)`` (``2 T_peak p (p**2 - w**2) /
     (w**2 + p**2)**2`` at ``w = 0``), written out in their order of operations: the same
     bits as their NumPy elementwise arithmetic, without some ten NumPy calls on one
     number (issue 13, single cases). Each parameter of a one-case law holds one number.
@@ -359,7 +359,7 @@ def _kloss_low_speed(eddy: KlossEddy, temperature: float) -> tuple[float, float]
             eddy.reference_temperature,
         )
     )
-    p = p_ref * (1.0 + alpha * (temperature - t_ref))
+    p = rolloff.one_peak_speed(temperature, p_ref, alpha, t_ref)
     w = 0.0
     den = w * w + p * p
     if not (den > 0.0 and math.isfinite(den)):

@@ -241,9 +241,11 @@ def dynamic_problem(
     damper = system.ecd.damper
     gearbox = system.ecd.gearbox
     n = ecd.gear_ratio
-    reflected = mechanics.reflect_inertia_to_input(
-        np.asarray(params.rotor_inertia, float) + np.asarray(params.gearbox_inertia, float), n
-    )
+    reflected: float | FloatArray | None = _one_case_reflected(params, n)
+    if reflected is None:
+        reflected = mechanics.reflect_inertia_to_input(
+            np.asarray(params.rotor_inertia, float) + np.asarray(params.gearbox_inertia, float), n
+        )
     eddy: EddyLaw
     if params.rolloff is None:
         eddy = LinearEddy(
@@ -261,13 +263,12 @@ def dynamic_problem(
             params.rolloff.resistivity_coefficient,
             damper.reference_temperature,
         )
-        peak = rolloff.peak_speed_at(
+        if _peak_speed_not_positive(
             temperatures,
             params.rolloff.peak_speed,
             params.rolloff.resistivity_coefficient,
             damper.reference_temperature,
-        )
-        if any_true(np.asarray(peak <= 0.0)):
+        ):
             raise DynamicDomainError(
                 "damper.rolloff.resistivity_coefficient",
                 "the peak speed omega_peak(T) is <= 0 at an analysis temperature; the "
@@ -422,6 +423,49 @@ def _one_case_problem(
     return problem
 
 
+def _one_case_reflected(params: DynamicParameters, gear_ratio: FloatArray) -> float | None:
+    """``reflect_inertia_to_input(J_rotor + J_gearbox, N)`` in floats, or None.
+
+    ``(J_rotor + J_gearbox) N N`` (mechanics.reflect_inertia_to_input, Wittenburg 2008,
+    3.3) in its order of operations, the same bits as its NumPy arithmetic, for float
+    inertias and a 0-d gear ratio (the one-case Ecd.at's), whose NumPy answer is a 0-d
+    array: DynamicProblem reads the float as that array (issue 13, single cases). None,
+    for the NumPy path, for any other shape or type, or an answer that is not finite
+    (NumPy's overflow warning).
+    """
+    rotor, gearbox = params.rotor_inertia, params.gearbox_inertia
+    if type(rotor) is not float or type(gearbox) is not float or gear_ratio.shape != ():
+        return None
+    n = float(gear_ratio.item())
+    reflected = (rotor + gearbox) * n * n
+    return reflected if math.isfinite(reflected) else None
+
+
+def _peak_speed_not_positive(
+    temperatures: FloatArray,
+    peak_speed: float | FloatArray,
+    coefficient: float | FloatArray,
+    reference: float,
+) -> bool:
+    """True where ``rolloff.peak_speed_at`` is <= 0 at some analysis temperature.
+
+    One temperature and float parameters: :func:`rolloff.one_peak_speed`, the same
+    number, compared as a float (NaN is not <= 0 in either); otherwise, or where that
+    number is not finite (NumPy's overflow warning), the array test.
+    """
+    if (
+        temperatures.size == 1
+        and type(peak_speed) is float
+        and type(coefficient) is float
+        and type(reference) is float
+    ):
+        peak = rolloff.one_peak_speed(temperatures.item(), peak_speed, coefficient, reference)
+        if math.isfinite(peak):
+            return peak <= 0.0
+    peaks = rolloff.peak_speed_at(temperatures, peak_speed, coefficient, reference)
+    return any_true(np.asarray(peaks <= 0.0))
+
+
 def _differs(value: FloatArray, number: float) -> bool:
     """``any_true(value != number)``; one element compared as a Python float (NaN differs
     from everything in both), without NumPy's comparison (issue 13, single cases)."""
@@ -431,7 +475,7 @@ def _differs(value: FloatArray, number: float) -> bool:
 
 
 def _check_compliant(
-    params: DynamicParameters, damper_inertia: FloatArray, lossy: bool, gravity: bool
+    params: DynamicParameters, damper_inertia: float | FloatArray, lossy: bool, gravity: bool
 ) -> None:
     """What the compliant backlash (two degrees of freedom) does not model yet."""
     for absent, what in (
