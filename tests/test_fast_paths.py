@@ -18,7 +18,6 @@ import pytest
 
 import ecdsim.deployment as deployment_module
 import ecdsim.dynamics.problem as problem_module
-import ecdsim.model as model_module
 from ecdsim._types import all_true, any_true, one_case_views
 from ecdsim.deployment import (
     ModelDomainError,
@@ -487,18 +486,12 @@ def test_ecd_at_one_temperature_is_the_general_path(
     )
 
 
-def test_ecd_at_one_temperature_sets_every_field(monkeypatch: pytest.MonkeyPatch) -> None:
-    # The float path names every field of EcdState: one added to the class (with a
-    # default, so that the constructor would not complain) fails here until handled.
-    passed: list[str] = []
-
-    def record(**kwargs: Any) -> EcdState:
-        passed.extend(kwargs)
-        return EcdState(**kwargs)
-
-    monkeypatch.setattr(model_module, "EcdState", record)
-    assert _PAPER_ECD._one_case_at(np.array([25.0])) is not None
-    assert sorted(passed) == sorted(f.name for f in fields(EcdState))
+def test_ecd_at_one_temperature_sets_every_field() -> None:
+    # The float path fills the EcdState's __dict__ itself: one field added to the class
+    # (with a default, so that the constructor would not complain) fails here until set.
+    state = _PAPER_ECD._one_case_at(np.array([25.0]))
+    assert type(state) is EcdState
+    assert sorted(vars(state)) == sorted(f.name for f in fields(EcdState))
 
 
 def test_the_one_case_quasi_static_problem_covers_every_field() -> None:
@@ -623,6 +616,20 @@ BUILD_ONE_CASE: list[tuple[str, Any, Any]] = [
     ("overflowing torque", _with_load(spring=LinearSpring(1e308, 1.6, 0.01)), [100.0]),
     ("NaN temperature", paper_system(), [math.nan]),
     ("two temperatures", paper_system(), [-40.0, 100.0]),
+    # FS_T: a table law, an array parameter (the array paths), a negative value, and an
+    # overflowing law (the array path, with NumPy's warning).
+    (
+        "friction table",
+        _with_load(system_friction=TabulatedTemperatureLaw((-20.0, 60.0), (0.6, 0.3))),
+        [25.0],
+    ),
+    (
+        "friction law array",
+        _with_load(system_friction=LinearTemperatureLaw(np.array([-0.0044]), 0.58)),
+        25.0,
+    ),
+    ("negative friction", _with_load(system_friction=LinearTemperatureLaw(-0.0044, 0.3)), [100.0]),
+    ("overflowing friction", _with_load(system_friction=LinearTemperatureLaw(1e308, 0.0)), [100.0]),
 ]
 
 
@@ -828,3 +835,38 @@ def test_one_case_peak_speed_check_is_the_array_test(
     if temps.size == 1 and type(peak_speed) is float:
         one = rolloff.one_peak_speed(temps.item(), peak_speed, alpha, 25.0)
         assert np.float64(one).tobytes() == np.asarray(peaks, dtype=float).reshape(()).tobytes()
+
+
+def test_one_case_build_problem_leaves_an_overflowing_total_friction_to_numpy() -> None:
+    # FECD_T + FS_T = inf: the float path declines, and the array path answers with
+    # NumPy's overflow warning, as before the shortcut.
+    temps = np.array([25.0])
+    spring = paper_system().load.spring
+    assert isinstance(spring, LinearSpring)
+    paper = paper_system()  # the usual case: the float path answers
+    one = deployment_module._one_case_linear_problem(paper, spring, paper.ecd.at(temps), temps)
+    assert one is not None
+    system = _with_load(system_friction=LinearTemperatureLaw(0.0, 1e308))
+    ecd = replace(system.ecd.at(temps), ecd_friction=np.array([1e308]))
+    assert deployment_module._one_case_linear_problem(system, spring, ecd, temps) is None
+    with pytest.warns(RuntimeWarning, match="overflow"):
+        problem, _ = build_problem(system, ecd, temps)
+    assert problem.friction.tolist() == [math.inf]
+
+
+@pytest.mark.parametrize(
+    ("slope", "at_0c", "temperature"),
+    [(-0.0044, 0.58, 25.0), (1e-5, 4e-4, -40.0), (0.0, 0.0, 100.0), (2.5, -0.1, math.nan)],
+)
+def test_linear_law_at_one_temperature_is_the_array_law(
+    slope: float, at_0c: float, temperature: float
+) -> None:
+    # LinearTemperatureLaw.one_case against its NumPy evaluation: bit for bit where
+    # finite, None (the array path) where not or for an array parameter.
+    law = LinearTemperatureLaw(slope, at_0c)
+    general = law(np.asarray(temperature))
+    got = law.one_case(temperature)
+    assert (got is not None) is bool(np.isfinite(general))
+    if got is not None:
+        assert np.float64(got).tobytes() == general.tobytes()
+    assert LinearTemperatureLaw(np.asarray(slope), at_0c).one_case(temperature) is None
