@@ -870,3 +870,16 @@ def test_linear_law_at_one_temperature_is_the_array_law(
     if got is not None:
         assert np.float64(got).tobytes() == general.tobytes()
     assert LinearTemperatureLaw(np.asarray(slope), at_0c).one_case(temperature) is None
+
+
+@pytest.mark.parametrize("temperature", [-40.0, 25.0, 68.0, 100.0])
+def test_one_case_negative_friction_warning_is_the_batch_one(temperature: float) -> None:
+    # FS_T = 0.3 - 0.0044 T is negative above 68 degC: a one-case prediction reports the
+    # negative_friction findings the same as that case in a batch (its one-number test
+    # skips the array test only where the value is not negative).
+    system = _with_load(system_friction=LinearTemperatureLaw(-0.0044, 0.3))
+    one = predict(system, [temperature], ["paper"]).warnings
+    batch = predict(system, [temperature, 20.0], ["paper"]).warnings
+    expected = [w for w in batch if w.code == "negative_friction"]
+    assert [w for w in one if w.code == "negative_friction"] == expected
+    assert bool(expected) is (temperature > 0.3 / 0.0044)

@@ -495,6 +495,8 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
         "FS": prediction.system_friction,
     }
     for label, values in negative.items():
+        if values.size == 1 and not values.item() < 0.0:
+            continue  # one number, not negative (NaN neither): no case to report, at once
         below = np.asarray(values < 0.0)
         for t in _temperature_at(prediction, below, prediction.problem.batch_shape):
             found.append(
