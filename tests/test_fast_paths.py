@@ -883,3 +883,44 @@ def test_one_case_negative_friction_warning_is_the_batch_one(temperature: float)
     expected = [w for w in batch if w.code == "negative_friction"]
     assert [w for w in one if w.code == "negative_friction"] == expected
     assert bool(expected) is (temperature > 0.3 / 0.0044)
+
+
+SMALL_VALUES: list[Any] = [
+    0.0,
+    -0.0,
+    3.0,
+    -0.004,
+    math.nan,
+    math.inf,
+    np.asarray(0.0),
+    np.array([-1.0]),
+    np.array([[2.0]]),
+    np.array([0.0, -1.0]),
+    np.array([1, 0]),  # integers, as asarray(dtype=float) reads them
+    np.array([math.nan, 1.0]),
+]
+
+
+@pytest.mark.parametrize("value", SMALL_VALUES, ids=repr)
+def test_problem_value_tests_are_the_array_tests(value: Any) -> None:
+    # dynamic_problem's one-number tests against the array expressions they replace.
+    assert problem_module._differs(value, 0.0) is bool(np.any(np.asarray(value) != 0.0))
+    assert problem_module._below_zero(value) is bool(np.any(np.asarray(value, float) < 0.0))
+
+
+@pytest.mark.parametrize(
+    ("damping", "peak_speed"),
+    [
+        (1.3e-4, 2000.0),
+        (6.5e-5, 10.0),
+        (0.1, 3.0),
+        (np.asarray(1.3e-4), 2000.0),  # an array: the function itself
+        (1.3e-4, np.array([10.0, 20.0])),
+        (1e308, 1e10),  # overflows: the function (NumPy's answer and warning)
+    ],
+)
+def test_peak_torque_in_floats_is_the_physics_function(damping: Any, peak_speed: Any) -> None:
+    with np.errstate(over="ignore"):
+        general = rolloff.peak_torque_from_damping(damping, peak_speed)
+        got = problem_module._peak_torque(damping, peak_speed)
+    _same_field("peak_torque", got, general)
