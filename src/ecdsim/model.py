@@ -339,7 +339,10 @@ class Ecd:
         # The temperature-dependent fields have the temperature's shape; the constants
         # are 0-d arrays, as np.asarray makes them in the general path.
         rows = np.array([bd_t, fl, bt, ft, becd, fecd]).reshape((6, *t.shape))
-        bd_a, fl_a, bt_a, ft_a, becd_a, fecd_a = (rows[i, ...] for i in range(6))
+        # Iterating gives the rows as views in C; of a 0-d temperature, NumPy scalars:
+        # 0-d views by index then.
+        views = list(rows) if t.shape else [rows[i, ...] for i in range(6)]
+        bd_a, fl_a, bt_a, ft_a, becd_a, fecd_a = views
         ideal = np.asarray(1.0)
         state = object.__new__(EcdState)
         # EcdState(**these) without the frozen dataclass's __init__ (a field at a time
