@@ -88,6 +88,14 @@ def one_peak_speed(
     bits as its NumPy elementwise arithmetic (IEEE doubles), without its NumPy calls on
     one number (a single deployment asks it twice; issue 13). Unlike NumPy it does not
     warn of an overflow: callers take the array path where the answer is not finite.
+    To first order this is the paper's 0.4 % per degC fall of BD (Eq. 1).
+
+    Parameters
+    ----------
+    temperature : conductor (damper) temperature T [degC]
+    reference_peak_speed : omega_peak at T_ref [rad/s]
+    resistivity_coefficient : alpha, fractional change of resistivity per kelvin [1/K]
+    reference_temperature : T_ref [degC]
 
     >>> one_peak_speed(125.0, 2000.0, 0.0039, 25.0) == float(peak_speed_at(125.0, 2000.0, 0.0039))
     True
