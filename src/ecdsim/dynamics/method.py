@@ -149,9 +149,8 @@ def solution_from_result(
     """Wrap a :class:`DynamicResult` as the common :class:`DeploymentSolution` fields."""
     shape = result.batch_shape
     arrived = result.arrived
-    stalled = result.stuck & ~arrived
+    stalled = np.asarray(result.stuck & ~arrived)
     error = result.energy_balance_error  # computed once: the findings read it too
-    stalled = np.asarray(stalled)
     solution = object.__new__(DynamicSolution)
     # DynamicSolution(**these) without the frozen dataclass's __init__ (a field at a time
     # through object.__setattr__, some 3 us of a single deployment; issue 13): a frozen
