@@ -18,7 +18,6 @@ import pytest
 
 import ecdsim.deployment as deployment_module
 import ecdsim.dynamics.problem as problem_module
-import ecdsim.model as model_module
 from ecdsim._types import all_true, any_true, one_case_views
 from ecdsim.deployment import (
     ModelDomainError,
@@ -28,7 +27,14 @@ from ecdsim.deployment import (
     predict,
 )
 from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff, Thermal
-from ecdsim.dynamics.method import REPORTED_FROM, _batch_findings, _findings
+from ecdsim.dynamics.damping import KlossEddy
+from ecdsim.dynamics.method import (
+    REPORTED_FROM,
+    DynamicSolution,
+    _batch_findings,
+    _findings,
+    _kloss_low_speed,
+)
 from ecdsim.dynamics.problem import (
     _BASE_FIELDS,
     _CASE_FIELDS,
@@ -47,6 +53,7 @@ from ecdsim.model import (
     TabulatedTemperatureLaw,
     _pair,
 )
+from ecdsim.physics import mechanics, rolloff
 from ecdsim.solvers.base import ONE_CASE_FIELDS, QuasiStaticProblem, one_case_problem
 from tests.conftest import paper_system
 
@@ -479,18 +486,12 @@ def test_ecd_at_one_temperature_is_the_general_path(
     )
 
 
-def test_ecd_at_one_temperature_sets_every_field(monkeypatch: pytest.MonkeyPatch) -> None:
-    # The float path names every field of EcdState: one added to the class (with a
-    # default, so that the constructor would not complain) fails here until handled.
-    passed: list[str] = []
-
-    def record(**kwargs: Any) -> EcdState:
-        passed.extend(kwargs)
-        return EcdState(**kwargs)
-
-    monkeypatch.setattr(model_module, "EcdState", record)
-    assert _PAPER_ECD._one_case_at(np.array([25.0])) is not None
-    assert sorted(passed) == sorted(f.name for f in fields(EcdState))
+def test_ecd_at_one_temperature_sets_every_field() -> None:
+    # The float path fills the EcdState's __dict__ itself: one field added to the class
+    # (with a default, so that the constructor would not complain) fails here until set.
+    state = _PAPER_ECD._one_case_at(np.array([25.0]))
+    assert type(state) is EcdState
+    assert sorted(vars(state)) == sorted(f.name for f in fields(EcdState))
 
 
 def test_the_one_case_quasi_static_problem_covers_every_field() -> None:
@@ -615,6 +616,20 @@ BUILD_ONE_CASE: list[tuple[str, Any, Any]] = [
     ("overflowing torque", _with_load(spring=LinearSpring(1e308, 1.6, 0.01)), [100.0]),
     ("NaN temperature", paper_system(), [math.nan]),
     ("two temperatures", paper_system(), [-40.0, 100.0]),
+    # FS_T: a table law, an array parameter (the array paths), a negative value, and an
+    # overflowing law (the array path, with NumPy's warning).
+    (
+        "friction table",
+        _with_load(system_friction=TabulatedTemperatureLaw((-20.0, 60.0), (0.6, 0.3))),
+        [25.0],
+    ),
+    (
+        "friction law array",
+        _with_load(system_friction=LinearTemperatureLaw(np.array([-0.0044]), 0.58)),
+        25.0,
+    ),
+    ("negative friction", _with_load(system_friction=LinearTemperatureLaw(-0.0044, 0.3)), [100.0]),
+    ("overflowing friction", _with_load(system_friction=LinearTemperatureLaw(1e308, 0.0)), [100.0]),
 ]
 
 
@@ -708,3 +723,204 @@ def test_one_case_kloss_findings_leave_a_zero_or_odd_damping_to_numpy(damping: f
     error = np.array([0.0])
     with np.errstate(divide="ignore", invalid="ignore"):
         assert _findings(problem, result, error) == _batch_findings(problem, result, error)
+
+
+KLOSS_LAWS: list[tuple[Any, Any, Any, Any, float]] = [
+    # (T_peak, omega_peak_ref, alpha, T_ref, T): floats, 0-d, one-element and integer arrays
+    (0.13, 2000.0, 0.0039, 25.0, 125.0),
+    (np.asarray(6.5e-4), 10.0, 0.00392, 25.0, 20.0),
+    (np.array([1e-3]), np.array([[60.0]]), np.array([0.0039]), 20.0, -40.0),
+    (np.array([2]), np.array(7), 0.0, np.array([25]), 80.0),
+    (1e300, 1e300, 0.0039, 25.0, 25.0),  # p**2 overflows: NumPy's answer (inf, warned)
+    (0.13, 0.0, 0.0039, 25.0, 25.0),  # p = 0: the derivative's guard gives 0
+    (0.13, 2000.0, 0.0039, 25.0, math.nan),
+    (0.13, 2000.0, -0.01, 25.0, 125.0),  # p = 0 at T (alpha (T - T_ref) = -1)
+]
+
+
+@pytest.mark.parametrize(("t_peak", "p_ref", "alpha", "t_ref", "temperature"), KLOSS_LAWS)
+def test_kloss_low_speed_floats_are_the_physics_functions(
+    t_peak: Any, p_ref: Any, alpha: Any, t_ref: Any, temperature: float
+) -> None:
+    # The one-case findings' peak speed and zero-speed slope written out in floats
+    # against KlossEddy.peak_speed and rolloff.kloss_speed_derivative (NumPy) on the same
+    # law: bit for bit where the floats answer; None (the NumPy path) where a value is not
+    # finite or the peak speed is 0.
+    eddy = KlossEddy(t_peak, p_ref, alpha, t_ref)
+    with np.errstate(all="ignore"):
+        peak = float(eddy.peak_speed(temperature).item())
+        slope = float(rolloff.kloss_speed_derivative(0.0, eddy.peak_torque, peak).item())
+    got = _kloss_low_speed(eddy, temperature)
+    finite = math.isfinite(peak) and math.isfinite(slope) and peak != 0.0
+    assert (got is not None) is finite
+    if got is not None:
+        assert type(got[0]) is float
+        assert type(got[1]) is float
+        assert np.float64(got[0]).tobytes() == np.float64(peak).tobytes()
+        assert np.float64(got[1]).tobytes() == np.float64(slope).tobytes()
+
+
+@pytest.mark.parametrize("temperatures", [[20.0], [-40.0, 25.0, 100.0]])
+def test_the_dynamic_solution_is_the_dataclass_one(temperatures: list[float]) -> None:
+    # solution_from_result fills the DynamicSolution's __dict__ itself: every field of the
+    # class is set (a field added to it and not there fails here), with the values the
+    # dataclass's __init__ and __post_init__ make of the same arguments.
+    params = DynamicParameters(load_inertia=5.0, rolloff=Rolloff(60.0, 0.0039))
+    prediction = predict(paper_system(), temperatures, ["dynamic"], dynamics=params)
+    fast = prediction.solutions["dynamic"]
+    assert type(fast) is DynamicSolution
+    names = [f.name for f in fields(DynamicSolution)]
+    assert sorted(vars(fast)) == sorted(names)
+    given = {name: getattr(fast, name) for name in names if name != "solved"}
+    general = DynamicSolution(**given)
+    for name in names:
+        _same_field(name, getattr(fast, name), getattr(general, name))
+
+
+@pytest.mark.parametrize(
+    ("rotor", "gearbox", "ratio"),
+    [
+        (2e-7, 0.0, np.asarray(380.0)),
+        (1e-6, 3e-7, np.asarray(120.0)),
+        (0.0, 0.0, np.asarray(1.0)),
+        (1e-6, 0.0, np.array([380.0])),  # the ratio's axis: the NumPy path
+        (np.array([1e-6]), 0.0, np.asarray(380.0)),  # an array inertia: the NumPy path
+        (1e300, 0.0, np.asarray(1e10)),  # overflows: NumPy's answer (and warning)
+    ],
+)
+def test_one_case_reflected_inertia_is_the_physics_function(
+    rotor: Any, gearbox: Any, ratio: np.ndarray
+) -> None:
+    # dynamic_problem's float J N N against mechanics.reflect_inertia_to_input on the same
+    # inputs: the same number (bit for bit), which DynamicProblem reads as the same 0-d
+    # array; None where the answer would have another shape or is not finite.
+    params = DynamicParameters(5.0, rotor_inertia=rotor, gearbox_inertia=gearbox)
+    with np.errstate(over="ignore"):
+        general = mechanics.reflect_inertia_to_input(
+            np.asarray(rotor, float) + np.asarray(gearbox, float), ratio
+        )
+    got = problem_module._one_case_reflected(params, ratio)
+    fast = type(rotor) is float and ratio.shape == () and bool(np.isfinite(general))
+    assert (got is not None) is fast
+    if got is not None:
+        assert type(got) is float
+        assert general.shape == ()
+        assert np.asarray(got, dtype=float).tobytes() == general.tobytes()
+
+
+@pytest.mark.parametrize(
+    ("temperatures", "peak_speed", "alpha"),
+    [
+        ([25.0], 60.0, 0.0039),
+        ([-300.0], 60.0, 0.0039),  # 1 + alpha (T - T_ref) < 0: refused
+        ([25.0 - 1.0 / 0.0039], 60.0, 0.0039),  # about 0 at T
+        (25.0, 60.0, -0.01),
+        ([125.0], 60.0, -0.01),  # exactly 0 at T: refused
+        ([math.nan], 60.0, 0.0039),  # NaN is not <= 0
+        ([100.0], 1e308, 1e10),  # overflows: the array test
+        ([25.0], np.array([60.0]), 0.0039),  # an array parameter: the array test
+        ([-300.0, 25.0], 60.0, 0.0039),  # two temperatures: the array test
+    ],
+)
+def test_one_case_peak_speed_check_is_the_array_test(
+    temperatures: Any, peak_speed: Any, alpha: float
+) -> None:
+    # The roll-off domain check in floats against the array test it replaces, and
+    # one_peak_speed against peak_speed_at bit for bit where it is finite.
+    temps = np.asarray(temperatures, dtype=float)
+    with np.errstate(over="ignore"):
+        peaks = rolloff.peak_speed_at(temps, peak_speed, alpha, 25.0)
+        expected = bool(np.any(peaks <= 0.0))
+        assert problem_module._peak_speed_not_positive(temps, peak_speed, alpha, 25.0) is expected
+    if temps.size == 1 and type(peak_speed) is float:
+        one = rolloff.one_peak_speed(temps.item(), peak_speed, alpha, 25.0)
+        assert np.float64(one).tobytes() == np.asarray(peaks, dtype=float).reshape(()).tobytes()
+
+
+def test_one_case_build_problem_leaves_an_overflowing_total_friction_to_numpy() -> None:
+    # FECD_T + FS_T = inf: the float path declines, and the array path answers with
+    # NumPy's overflow warning, as before the shortcut.
+    temps = np.array([25.0])
+    spring = paper_system().load.spring
+    assert isinstance(spring, LinearSpring)
+    paper = paper_system()  # the usual case: the float path answers
+    one = deployment_module._one_case_linear_problem(paper, spring, paper.ecd.at(temps), temps)
+    assert one is not None
+    system = _with_load(system_friction=LinearTemperatureLaw(0.0, 1e308))
+    ecd = replace(system.ecd.at(temps), ecd_friction=np.array([1e308]))
+    assert deployment_module._one_case_linear_problem(system, spring, ecd, temps) is None
+    with pytest.warns(RuntimeWarning, match="overflow"):
+        problem, _ = build_problem(system, ecd, temps)
+    assert problem.friction.tolist() == [math.inf]
+
+
+@pytest.mark.parametrize(
+    ("slope", "at_0c", "temperature"),
+    [(-0.0044, 0.58, 25.0), (1e-5, 4e-4, -40.0), (0.0, 0.0, 100.0), (2.5, -0.1, math.nan)],
+)
+def test_linear_law_at_one_temperature_is_the_array_law(
+    slope: float, at_0c: float, temperature: float
+) -> None:
+    # LinearTemperatureLaw.one_case against its NumPy evaluation: bit for bit where
+    # finite, None (the array path) where not or for an array parameter.
+    law = LinearTemperatureLaw(slope, at_0c)
+    general = law(np.asarray(temperature))
+    got = law.one_case(temperature)
+    assert (got is not None) is bool(np.isfinite(general))
+    if got is not None:
+        assert np.float64(got).tobytes() == general.tobytes()
+    assert LinearTemperatureLaw(np.asarray(slope), at_0c).one_case(temperature) is None
+
+
+@pytest.mark.parametrize("temperature", [-40.0, 25.0, 68.0, 100.0])
+def test_one_case_negative_friction_warning_is_the_batch_one(temperature: float) -> None:
+    # FS_T = 0.3 - 0.0044 T is negative above 68 degC: a one-case prediction reports the
+    # negative_friction findings the same as that case in a batch (its one-number test
+    # skips the array test only where the value is not negative).
+    system = _with_load(system_friction=LinearTemperatureLaw(-0.0044, 0.3))
+    one = predict(system, [temperature], ["paper"]).warnings
+    batch = predict(system, [temperature, 20.0], ["paper"]).warnings
+    expected = [w for w in batch if w.code == "negative_friction"]
+    assert [w for w in one if w.code == "negative_friction"] == expected
+    assert bool(expected) is (temperature > 0.3 / 0.0044)
+
+
+SMALL_VALUES: list[Any] = [
+    0.0,
+    -0.0,
+    3.0,
+    -0.004,
+    math.nan,
+    math.inf,
+    np.asarray(0.0),
+    np.array([-1.0]),
+    np.array([[2.0]]),
+    np.array([0.0, -1.0]),
+    np.array([1, 0]),  # integers, as asarray(dtype=float) reads them
+    np.array([math.nan, 1.0]),
+]
+
+
+@pytest.mark.parametrize("value", SMALL_VALUES, ids=repr)
+def test_problem_value_tests_are_the_array_tests(value: Any) -> None:
+    # dynamic_problem's one-number tests against the array expressions they replace.
+    assert problem_module._differs(value, 0.0) is bool(np.any(np.asarray(value) != 0.0))
+    assert problem_module._below_zero(value) is bool(np.any(np.asarray(value, float) < 0.0))
+
+
+@pytest.mark.parametrize(
+    ("damping", "peak_speed"),
+    [
+        (1.3e-4, 2000.0),
+        (6.5e-5, 10.0),
+        (0.1, 3.0),
+        (np.asarray(1.3e-4), 2000.0),  # an array: the function itself
+        (1.3e-4, np.array([10.0, 20.0])),
+        (1e308, 1e10),  # overflows: the function (NumPy's answer and warning)
+    ],
+)
+def test_peak_torque_in_floats_is_the_physics_function(damping: Any, peak_speed: Any) -> None:
+    with np.errstate(over="ignore"):
+        general = rolloff.peak_torque_from_damping(damping, peak_speed)
+        got = problem_module._peak_torque(damping, peak_speed)
+    _same_field("peak_torque", got, general)

@@ -258,16 +258,12 @@ def build_problem(
     load = system.load
     gravity = load.gravity
     spring = load.drive
+    if gravity is None and temperatures.size == 1 and type(spring) is LinearSpring:
+        packed = _one_case_linear_problem(system, spring, ecd, temperatures)
+        if packed is not None:
+            return packed
     fs = np.asarray(load.system_friction(temperatures), dtype=float)
     friction = np.asarray(ecd.ecd_friction + fs, dtype=float)
-    if gravity is None and temperatures.size == 1 and type(spring) is LinearSpring:
-        # One case of a linear spring: its breakpoints in floats, packed with friction and
-        # damping into the problem's one array (solvers.base.packed_problem).
-        points = spring.one_case_breakpoints(load.travel, temperatures.item())
-        damping = np.asarray(ecd.ecd_damping_rate, dtype=float)
-        if points is not None and friction.size == 1 and damping.size == 1:
-            batch = joint_shape(temperatures.shape, friction.shape, damping.shape)
-            return packed_problem(*points, friction.item(), damping.item(), batch), fs
     angles, torques = spring.breakpoints(load.travel, temperatures)
     if gravity is None and temperatures.size == 1:
         one = one_case_problem(
@@ -288,6 +284,38 @@ def build_problem(
         gravity_angle=None if gravity is None else np.asarray(gravity.release_angle, float),
     )
     return problem, fs
+
+
+def _one_case_linear_problem(
+    system: DeploymentSystem, spring: LinearSpring, ecd: EcdState, temperatures: FloatArray
+) -> tuple[QuasiStaticProblem, FloatArray] | None:
+    """:func:`build_problem` of one temperature, a linear spring and no gravity, or None.
+
+    The spring's breakpoints (:meth:`LinearSpring.one_case_breakpoints`) and a linear
+    FS_T law (:meth:`LinearTemperatureLaw.one_case`) in floats, the total friction
+    FECD_T + FS_T added as NumPy adds their arrays (the same bits), all packed with the
+    damping into the problem's one array (``solvers.base.packed_problem``); FS_T as the
+    law's array of the temperatures' shape. None, for the general path (and NumPy's
+    overflow warnings), where a part declines, a value is not finite, or FECD_T or
+    BECD_T holds more than one case.
+    """
+    load = system.load
+    temperature = temperatures.item()
+    points = spring.one_case_breakpoints(load.travel, temperature)
+    law = load.system_friction
+    fs = law.one_case(temperature) if type(law) is LinearTemperatureLaw else None
+    ecd_friction, damping = ecd.ecd_friction, ecd.ecd_damping_rate
+    if points is None or fs is None or ecd_friction.size != 1 or damping.size != 1:
+        return None
+    if ecd_friction.dtype != np.float64 or damping.dtype != np.float64:
+        return None
+    friction = ecd_friction.item() + fs
+    if not math.isfinite(friction):
+        return None
+    batch = joint_shape(temperatures.shape, ecd_friction.shape, damping.shape)
+    problem = packed_problem(*points, friction, damping.item(), batch)
+    # The law's answer has the temperatures' shape (its parameters are floats).
+    return problem, np.array(fs, dtype=np.float64).reshape(temperatures.shape)
 
 
 def predict(
@@ -371,7 +399,7 @@ def _check_finite(ecd: EcdState) -> None:
         "FECD_T (Eq. 4)": ecd.ecd_friction,
     }
     for label, values in derived.items():
-        if all_true(np.isfinite(values)):
+        if _all_finite(values):
             continue
         ratio = float(np.max(np.abs(ecd.gear_ratio)))
         gearbox = float(np.max(np.abs(ecd.gearbox_damping_rate)))
@@ -392,15 +420,28 @@ def _check_finite(ecd: EcdState) -> None:
         )
 
 
+def _all_finite(values: FloatArray) -> bool:
+    """``all_true(np.isfinite(values))``; one number tested as a Python float (the same
+    answer for inf and NaN), without NumPy's ufunc (issue 13, single cases)."""
+    if values.size == 1:
+        return math.isfinite(values.item())
+    return all_true(np.isfinite(values))
+
+
 def _check_damping_positive(ecd: EcdState) -> None:
     # The damper's own rate must not go negative, not only the total: a negative BD_T
     # hidden by the gearbox's BG is still a temperature law used beyond its range. Zero is
     # a real case (an undamped coast, a damper removed): the methods that cannot solve it
     # say so per case (DeploymentSolution.solved).
     rate = ecd.ecd_damping_rate
+    damper_rate = ecd.damper_damping_rate
     # One test first, the usual answer: min(BD_T, BECD_T) >= 0 holds exactly where both
-    # do (np.minimum propagates a NaN, which fails the test as it fails either).
-    if all_true(np.minimum(ecd.damper_damping_rate, rate) >= 0.0):
+    # do (np.minimum propagates a NaN, which fails the test as it fails either). One
+    # number each (a single deployment): the same test on the floats, NaN failing it too.
+    if rate.size == 1 and damper_rate.size == 1:
+        if damper_rate.item() >= 0.0 and rate.item() >= 0.0:
+            return
+    elif all_true(np.minimum(damper_rate, rate) >= 0.0):
         return
     damper = np.broadcast_to(ecd.damper_damping_rate, np.shape(rate))
     bad = ~(damper >= 0.0) | ~(rate >= 0.0)
@@ -454,6 +495,8 @@ def collect_warnings(prediction: Prediction) -> list[ModelWarning]:
         "FS": prediction.system_friction,
     }
     for label, values in negative.items():
+        if values.size == 1 and not values.item() < 0.0:
+            continue  # one number, not negative (NaN neither): no case to report, at once
         below = np.asarray(values < 0.0)
         for t in _temperature_at(prediction, below, prediction.problem.batch_shape):
             found.append(

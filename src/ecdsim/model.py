@@ -53,6 +53,20 @@ class LinearTemperatureLaw:
         """Evaluate the law at T [degC]."""
         return laws.linear_in_temperature(temperature, self.slope, self.at_0c)
 
+    def one_case(self, temperature: float) -> float | None:
+        """The law at one temperature T [degC] in Python floats, or None.
+
+        ``slope * T + at_0c`` in :func:`laws.linear_in_temperature`'s order of operations
+        (the same bits as its NumPy arithmetic) for float parameters, without its NumPy
+        calls on one number (issue 13, single cases). None for array parameters, or an
+        answer that is not finite (the NumPy path warns of an overflow).
+        """
+        slope, at_0c = self.slope, self.at_0c
+        if type(slope) is not float or type(at_0c) is not float:
+            return None
+        value = slope * temperature + at_0c
+        return value if math.isfinite(value) else None
+
     def out_of_range(self, temperature: ArrayLike) -> BoolArray:
         """A linear law has no stated range: never out of range."""
         return np.zeros(np.shape(temperature), dtype=bool)
@@ -325,9 +339,17 @@ class Ecd:
         # The temperature-dependent fields have the temperature's shape; the constants
         # are 0-d arrays, as np.asarray makes them in the general path.
         rows = np.array([bd_t, fl, bt, ft, becd, fecd]).reshape((6, *t.shape))
-        bd_a, fl_a, bt_a, ft_a, becd_a, fecd_a = (rows[i, ...] for i in range(6))
+        # Iterating gives the rows as views in C; of a 0-d temperature, NumPy scalars:
+        # 0-d views by index then.
+        views = list(rows) if t.shape else [rows[i, ...] for i in range(6)]
+        bd_a, fl_a, bt_a, ft_a, becd_a, fecd_a = views
         ideal = np.asarray(1.0)
-        return EcdState(
+        state = object.__new__(EcdState)
+        # EcdState(**these) without the frozen dataclass's __init__ (a field at a time
+        # through object.__setattr__): it has no slots and no __post_init__, its fields
+        # live in the instance __dict__, and every one is given here
+        # (tests/test_fast_paths.py fails on a field added and not set).
+        vars(state).update(
             temperature=t,
             damper_damping_rate=bd_a,
             gearbox_damping_rate=np.asarray(bg),
@@ -342,6 +364,7 @@ class Ecd:
             forward_efficiency=ideal,
             backward_efficiency=ideal,
         )
+        return state
 
 
 class Spring(Protocol):

@@ -149,16 +149,23 @@ def solution_from_result(
     """Wrap a :class:`DynamicResult` as the common :class:`DeploymentSolution` fields."""
     shape = result.batch_shape
     arrived = result.arrived
-    stalled = result.stuck & ~arrived
+    stalled = np.asarray(result.stuck & ~arrived)
     error = result.energy_balance_error  # computed once: the findings read it too
-    return DynamicSolution(
+    solution = object.__new__(DynamicSolution)
+    # DynamicSolution(**these) without the frozen dataclass's __init__ (a field at a time
+    # through object.__setattr__, some 3 us of a single deployment; issue 13): a frozen
+    # dataclass without slots keeps its fields in the instance __dict__, and every field
+    # is given, ``solved`` as DeploymentSolution.__post_init__ fills it in (every case
+    # solved). tests/test_fast_paths.py fails when a field is added and not set here.
+    vars(solution).update(
         method=name,
         deployment_time=result.deployment_time,
         start_speed=broadcast(problem.initial_speed, shape).astype(float),
         end_speed=result.arrival_speed,
         max_speed=result.max_speed,
-        stalled=np.asarray(stalled),
+        stalled=stalled,
         stall_angle=np.where(stalled, result.stuck_angle, np.nan),
+        solved=np.ones(stalled.shape, dtype=bool),
         end_kinetic_energy=result.arrival_kinetic_energy,
         max_damper_temperature=result.max_damper_temperature,
         stuck=result.stuck,
@@ -169,6 +176,7 @@ def solution_from_result(
         problem=problem,
         notes=tuple(_findings(problem, result, error)),
     )
+    return solution
 
 
 # No case flagged: the usual answer, without NumPy's search for the indices.
@@ -310,8 +318,10 @@ def _one_case_findings(
     eddy = problem.eddy
     if isinstance(eddy, KlossEddy):
         n = problem.gear_ratio.item()
-        peak = eddy.peak_speed(problem.ambient_temperature.item()).item()
-        slope = rolloff.kloss_speed_derivative(0.0, eddy.peak_torque, peak).item()
+        kloss = _kloss_low_speed(eddy, problem.ambient_temperature.item())
+        if kloss is None:
+            return _batch_findings(problem, result, energy_error)
+        peak, slope = kloss
         becd = n * n * (slope + problem.gearbox_damping_rate.item())
         eq1 = problem.damping_rate.item()
         shaft = result.max_speed.item() * n
@@ -326,6 +336,37 @@ def _one_case_findings(
         if shaft > peak:
             out.append(("rolloff_beyond_peak", _beyond_peak_message(shaft, peak), 0))
     return out
+
+
+def _kloss_low_speed(eddy: KlossEddy, temperature: float) -> tuple[float, float] | None:
+    """The peak speed at ``temperature`` and the Kloss law's slope at zero speed, in floats.
+
+    ``eddy.peak_speed(T)`` (``rolloff.one_peak_speed``) and
+    ``rolloff.kloss_speed_derivative(0, T_peak, p)`` (``2 T_peak p (p**2 - w**2) /
+    (w**2 + p**2)**2`` at ``w = 0``), written out in their order of operations: the same
+    bits as their NumPy elementwise arithmetic, without some ten NumPy calls on one
+    number (issue 13, single cases). Each parameter of a one-case law holds one number.
+    None, for the general path (NumPy's answer and warnings), where a value is not
+    finite or ``p`` is 0 (the derivative's guard).
+    """
+    t_peak, p_ref, alpha, t_ref = (
+        value if type(value) is float else float(np.asarray(value, dtype=float).item())
+        for value in (
+            eddy.peak_torque,
+            eddy.reference_peak_speed,
+            eddy.resistivity_coefficient,
+            eddy.reference_temperature,
+        )
+    )
+    p = rolloff.one_peak_speed(temperature, p_ref, alpha, t_ref)
+    w = 0.0
+    den = w * w + p * p
+    if not (den > 0.0 and math.isfinite(den)):
+        return None
+    slope = 2.0 * t_peak * p * (p * p - w * w) / den / den
+    if not math.isfinite(slope):
+        return None
+    return p, slope
 
 
 DYNAMIC = DynamicMethod()

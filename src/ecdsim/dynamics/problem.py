@@ -241,9 +241,11 @@ def dynamic_problem(
     damper = system.ecd.damper
     gearbox = system.ecd.gearbox
     n = ecd.gear_ratio
-    reflected = mechanics.reflect_inertia_to_input(
-        np.asarray(params.rotor_inertia, float) + np.asarray(params.gearbox_inertia, float), n
-    )
+    reflected: float | FloatArray | None = _one_case_reflected(params, n)
+    if reflected is None:
+        reflected = mechanics.reflect_inertia_to_input(
+            np.asarray(params.rotor_inertia, float) + np.asarray(params.gearbox_inertia, float), n
+        )
     eddy: EddyLaw
     if params.rolloff is None:
         eddy = LinearEddy(
@@ -252,29 +254,26 @@ def dynamic_problem(
             damper.damping_temperature_coefficient,
         )
     else:
-        peak_torque = rolloff.peak_torque_from_damping(
-            damper.damping_rate, params.rolloff.peak_speed
-        )
+        peak_torque = _peak_torque(damper.damping_rate, params.rolloff.peak_speed)
         eddy = KlossEddy(
             peak_torque,
             params.rolloff.peak_speed,
             params.rolloff.resistivity_coefficient,
             damper.reference_temperature,
         )
-        peak = rolloff.peak_speed_at(
+        if _peak_speed_not_positive(
             temperatures,
             params.rolloff.peak_speed,
             params.rolloff.resistivity_coefficient,
             damper.reference_temperature,
-        )
-        if any_true(np.asarray(peak <= 0.0)):
+        ):
             raise DynamicDomainError(
                 "damper.rolloff.resistivity_coefficient",
                 "the peak speed omega_peak(T) is <= 0 at an analysis temperature; the "
                 "resistivity law does not reach that far",
             )
-        alpha = np.asarray(params.rolloff.resistivity_coefficient, dtype=float)
-        if params.thermal is not None and any_true(alpha < 0.0):
+        alpha = params.rolloff.resistivity_coefficient
+        if params.thermal is not None and _below_zero(alpha):
             # Heating drives omega_peak = omega_peak_ref (1 + alpha (T - T_ref)) towards 0
             # and the low-speed damping BD / (1 + alpha (T - T_ref)) to infinity: the
             # damper would lock the load short of the end, approached without end.
@@ -298,7 +297,7 @@ def dynamic_problem(
             f"{float(np.max(start)):.6g} rad",
         )
     thermal = params.thermal
-    if thermal is not None and any_true(np.asarray(thermal.initial_rotor_rise) != 0.0):
+    if thermal is not None and _differs(thermal.initial_rotor_rise, 0.0):
         # A warm start (repeated deployments) must lie below the damping law's zero.
         warm = eddy.factor(np.asarray(temperatures, float) + thermal.initial_rotor_rise)
         if any_true(np.asarray(warm <= 0.0)):
@@ -391,24 +390,27 @@ def _one_case_problem(
     depth = len(batch)
     eddy: EddyLaw = settings["eddy"]
     for name in _field_names(type(eddy)):
-        shape = _shape(getattr(eddy, name))
-        if len(shape) > depth or math.prod(shape) != 1:
-            return None
+        value = getattr(eddy, name)
+        if type(value) is not float:  # a float is one number of no axes
+            shape = np.shape(value)
+            if len(shape) > depth or math.prod(shape) != 1:
+                return None
     # The general path's order: friction, damping_rate, then _CASE_FIELDS.
     numbers = [base.friction.item(), base.damping_rate.item()]
-    for name in _CASE_FIELDS:
-        value = case[name]
+    append = numbers.append  # (bound once: 24 calls)
+    for value in map(case.__getitem__, _CASE_FIELDS):
         if type(value) is not float:  # a float is its own item()
             array = value if type(value) is np.ndarray else np.asarray(value, dtype=float)
             if array.ndim > depth or array.size != 1:
                 return None
             # item() of an integer or boolean array is an int: float() is asarray's cast.
             value = float(array.item())
-        numbers.append(value)
+        append(value)
     friction, damping, *rows = one_case_rows(numbers, batch)
     problem = object.__new__(DynamicProblem)
     # A frozen dataclass without slots: its fields live in the instance __dict__.
-    vars(problem).update(
+    state = vars(problem)
+    state.update(
         angles=base.angles,
         torques=base.torques,
         friction=friction,
@@ -416,22 +418,89 @@ def _one_case_problem(
         # dynamic_problem never passes gravity on (predict adds it with replace()).
         gravity_amplitude=None,
         gravity_angle=None,
-        **dict(zip(_CASE_FIELDS, rows, strict=True)),
-        **settings,
     )
+    state.update(zip(_CASE_FIELDS, rows, strict=True))
+    state.update(settings)
     return problem
 
 
-def _differs(value: FloatArray, number: float) -> bool:
-    """``any_true(value != number)``; one element compared as a Python float (NaN differs
-    from everything in both), without NumPy's comparison (issue 13, single cases)."""
-    if value.size == 1:
-        return bool(value.item() != number)
-    return any_true(np.asarray(value != number))
+def _one_case_reflected(params: DynamicParameters, gear_ratio: FloatArray) -> float | None:
+    """``reflect_inertia_to_input(J_rotor + J_gearbox, N)`` in floats, or None.
+
+    ``(J_rotor + J_gearbox) N N`` (mechanics.reflect_inertia_to_input, Wittenburg 2008,
+    3.3) in its order of operations, the same bits as its NumPy arithmetic, for float
+    inertias and a 0-d gear ratio (the one-case Ecd.at's), whose NumPy answer is a 0-d
+    array: DynamicProblem reads the float as that array (issue 13, single cases). None,
+    for the NumPy path, for any other shape or type, or an answer that is not finite
+    (NumPy's overflow warning).
+    """
+    rotor, gearbox = params.rotor_inertia, params.gearbox_inertia
+    if type(rotor) is not float or type(gearbox) is not float or gear_ratio.shape != ():
+        return None
+    n = float(gear_ratio.item())
+    reflected = (rotor + gearbox) * n * n
+    return reflected if math.isfinite(reflected) else None
+
+
+def _peak_speed_not_positive(
+    temperatures: FloatArray,
+    peak_speed: float | FloatArray,
+    coefficient: float | FloatArray,
+    reference: float,
+) -> bool:
+    """True where ``rolloff.peak_speed_at`` is <= 0 at some analysis temperature.
+
+    One temperature and float parameters: :func:`rolloff.one_peak_speed`, the same
+    number, compared as a float (NaN is not <= 0 in either); otherwise, or where that
+    number is not finite (NumPy's overflow warning), the array test.
+    """
+    if (
+        temperatures.size == 1
+        and type(peak_speed) is float
+        and type(coefficient) is float
+        and type(reference) is float
+    ):
+        peak = rolloff.one_peak_speed(temperatures.item(), peak_speed, coefficient, reference)
+        if math.isfinite(peak):
+            return peak <= 0.0
+    peaks = rolloff.peak_speed_at(temperatures, peak_speed, coefficient, reference)
+    return any_true(np.asarray(peaks <= 0.0))
+
+
+def _differs(value: float | FloatArray, number: float) -> bool:
+    """``any_true(np.asarray(value) != number)``; a float or one element compared as a
+    Python float (NaN differs from everything in both), without NumPy's comparison
+    (issue 13, single cases)."""
+    if type(value) is float:
+        return value != number
+    array = np.asarray(value)
+    if array.size == 1:
+        return bool(array.item() != number)
+    return any_true(np.asarray(array != number))
+
+
+def _below_zero(value: float | FloatArray) -> bool:
+    """``any_true(np.asarray(value, dtype=float) < 0)``; a float compared as it is (NaN
+    is not below zero in either)."""
+    if type(value) is float:
+        return value < 0.0
+    return any_true(np.asarray(value, dtype=float) < 0.0)
+
+
+def _peak_torque(damping_rate: float | FloatArray, peak_speed: float | FloatArray) -> FloatArray:
+    """``rolloff.peak_torque_from_damping``: ``BD omega_peak / 2`` of float parameters in
+    floats, its 0-d array (the same bits, IEEE doubles), without its NumPy calls; the
+    function itself for arrays or an answer that is not finite (NumPy's overflow warning).
+    """
+    if type(damping_rate) is float and type(peak_speed) is float:
+        value = damping_rate * peak_speed / 2.0
+        if math.isfinite(value):
+            return np.asarray(value)
+    return rolloff.peak_torque_from_damping(damping_rate, peak_speed)
 
 
 def _check_compliant(
-    params: DynamicParameters, damper_inertia: FloatArray, lossy: bool, gravity: bool
+    params: DynamicParameters, damper_inertia: float | FloatArray, lossy: bool, gravity: bool
 ) -> None:
     """What the compliant backlash (two degrees of freedom) does not model yet."""
     for absent, what in (

@@ -170,9 +170,10 @@ class EnergyBalance:
         shape = self.spring_work.shape
         if math.prod(shape) != 1:
             return None
-        present = [value for value in (getattr(self, name) for name in _TERMS) if value is not None]
-        if any(value.shape != shape for value in present):
-            return None
+        for name in _TERMS:
+            value = getattr(self, name)
+            if value is not None and value.shape != shape:
+                return None
         supplied = self.spring_work.item() + self.initial_kinetic_energy.item()
         if self.gravity_work is not None:
             supplied = supplied - self.gravity_work.item()

@@ -75,6 +75,35 @@ def peak_speed_at(
     return as_float(np.asarray(reference_peak_speed, dtype=float) * factor)
 
 
+def one_peak_speed(
+    temperature: float,
+    reference_peak_speed: float,
+    resistivity_coefficient: float,
+    reference_temperature: float,
+) -> float:
+    """:func:`peak_speed_at` of one case in Python floats [rad/s].
+
+    ``omega_peak_ref * (1 + alpha * (T - T_ref))`` (Wouterse 1991,
+    doi:10.1049/ip-b.1991.0019) in :func:`peak_speed_at`'s order of operations: the same
+    bits as its NumPy elementwise arithmetic (IEEE doubles), without its NumPy calls on
+    one number (a single deployment asks it twice; issue 13). Unlike NumPy it does not
+    warn of an overflow: callers take the array path where the answer is not finite.
+    To first order this is the paper's 0.4 % per degC fall of BD (Eq. 1).
+
+    Parameters
+    ----------
+    temperature : conductor (damper) temperature T [degC]
+    reference_peak_speed : omega_peak at T_ref [rad/s]
+    resistivity_coefficient : alpha, fractional change of resistivity per kelvin [1/K]
+    reference_temperature : T_ref [degC]
+
+    >>> one_peak_speed(125.0, 2000.0, 0.0039, 25.0) == float(peak_speed_at(125.0, 2000.0, 0.0039))
+    True
+    """
+    dt = temperature - reference_temperature
+    return reference_peak_speed * (1.0 + resistivity_coefficient * dt)
+
+
 def _kloss_parts(
     speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, BoolArray]:
