@@ -501,6 +501,12 @@ def singles() -> list[Single]:
 
 
 LSODA_LADDER = (1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
+# A one-deployment sample is a block of this many calls (timeit's number): ecdsim's call
+# takes 0.2-0.4 ms, LSODA's 1-5 ms, so a block lasts several ms on either side and a
+# sample is not one call right after the other side's (cold caches; a note gives that
+# figure too, from SINGLE_CALLS alternating pairs of single calls).
+SINGLE_NUMBER = 20
+SINGLE_CALLS = 41
 
 
 def _single_case(single: Single) -> Case[float]:
@@ -519,12 +525,26 @@ def _single_case(single: Single) -> Case[float]:
             start = time.perf_counter()
             solve_dynamic(problem, record=False)
             solver.append(time.perf_counter() - start)
+        # The same pair timed one call at a time, alternating (no blocks): each call then
+        # runs right after the other side's, in caches that side has just filled.
+        alone: dict[str, list[float]] = {"ecdsim": [], "lsoda": []}
+        for i in range(SINGLE_CALLS):
+            pair = (("ecdsim", single.ecdsim), ("lsoda", lambda: single.scipy(rtol)))
+            for side, call in pair if i % 2 == 0 else pair[::-1]:
+                alone[side].append(harness.timed_once(call))
+        one_by_one = statistics.median(
+            b / a for a, b in zip(alone["ecdsim"], alone["lsoda"], strict=True)
+        )
         lines = (
             f"error against Radau at rtol 1e-12: ecdsim (rtol {single.params.rtol:g}) "
             f"{error:.1e}, LSODA (rtol {rtol:g}) {errors[rtol]:.1e}; LSODA at rtol 1e-8: "
             f"{errors[1e-8]:.1e}",
             f"ecdsim's solver alone (solve_dynamic on the built problem, not interleaved): "
             f"min {1e3 * min(solver):.2f} ms, median {1e3 * statistics.median(solver):.2f} ms",
+            f"one call at a time instead of blocks of {SINGLE_NUMBER} ({SINGLE_CALLS} "
+            f"alternating pairs): ecdsim median {1e3 * statistics.median(alone['ecdsim']):.3f} "
+            f"ms, LSODA {1e3 * statistics.median(alone['lsoda']):.3f} ms, ratio "
+            f"{one_by_one:.2f}x",
         )
         return Notes(
             lines=lines,
@@ -532,6 +552,7 @@ def _single_case(single: Single) -> Case[float]:
                 "ecdsim_error": error,
                 "lsoda_rtol": rtol,
                 "lsoda_errors": {str(r): e for r, e in errors.items()},
+                "one_call_ratio": one_by_one,
             },
         )
 
@@ -543,7 +564,8 @@ def _single_case(single: Single) -> Case[float]:
         "accurate as ecdsim), plain Python right-hand side; goal >= 5x",
         agree=lambda a, b: max_relative_difference(a, b),
         tolerance=AGREEMENT_NONLINEAR,
-        repeats=9,
+        repeats=15,
+        number=SINGLE_NUMBER,
         notes=notes,
         description=f"predict(...) of one deployment ({single.name}) against one solve_ivp call",
     )

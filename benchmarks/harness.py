@@ -199,6 +199,9 @@ class Case(Generic[T]):
     tolerance: float | None = None
     repeats: int = MIN_REPEATS
     warmup: int = 1
+    # Calls per timed sample (``timeit``'s ``number``): a sample of a sub-millisecond call
+    # is a block of ``number`` calls, its time divided by ``number``; the blocks alternate.
+    number: int = 1
     items: int = 1
     baseline_items: int | None = None
     item_name: str = ""
@@ -265,33 +268,42 @@ class Row:
         return out
 
 
-def _timed(call: Callable[[], Any]) -> tuple[float, Any]:
-    """Time one call with the garbage collector off, as ``timeit`` does.
+def _timed(call: Callable[[], Any], number: int = 1) -> tuple[float, Any]:
+    """Time ``number`` calls in a row with the garbage collector off, as ``timeit`` does;
+    the time per call and the last call's result.
 
-    No collection is forced right before the call: a full collection walks every live
+    No collection is forced right before the calls: a full collection walks every live
     object, and the call after it paid for that in cold caches (a one-deployment
     ``predict`` took 0.5-0.6 ms longer, LSODA 0.25 ms), a cost neither side has in a
-    loop of calls. The collector runs again between calls, outside the timing.
+    loop of calls. The collector runs again between samples, outside the timing.
     """
     enabled = gc.isenabled()
     gc.disable()
+    result: Any = None
     try:
         start = time.perf_counter()
-        result = call()
-        elapsed = time.perf_counter() - start
+        for _ in range(number):
+            result = call()
+        elapsed = (time.perf_counter() - start) / number
     finally:
         if enabled:
             gc.enable()
-    if isinstance(result, Timed):
+    if isinstance(result, Timed):  # a self-timed call (number 1): its own figure
         return result.seconds, result.value
     return elapsed, result
+
+
+def timed_once(call: Callable[[], Any]) -> float:
+    """The time of one call of ``call`` [s], as :func:`measure` times a sample of one."""
+    return _timed(call)[0]
 
 
 def measure(case: Case[Any], repeats: int | None = None) -> Row:
     """Time ``case``: warm-up, then ecdsim and baseline in turn; never raises.
 
     The order alternates each round (A B, B A, ...) so that neither side always runs
-    right after the other. An exception in the case is recorded in ``Row.error``.
+    right after the other. Each sample is ``case.number`` calls in a row (one by
+    default). An exception in the case is recorded in ``Row.error``.
     """
     count = max(MIN_REPEATS, repeats if repeats is not None else case.repeats)
     row = Row(
@@ -322,7 +334,7 @@ def measure(case: Case[Any], repeats: int | None = None) -> Row:
             for call in order:
                 if call is None:
                     continue
-                elapsed, _ = _timed(call)
+                elapsed, _ = _timed(call, case.number)
                 (row.ecdsim_times_s if call is case.ecdsim else row.baseline_times_s).append(
                     elapsed
                 )
