@@ -314,22 +314,22 @@ class Ecd:
             damper.damping_rate,
             damper.damping_temperature_coefficient,
             damper.reference_temperature,
-            law.slope,
-            law.at_0c,
             damper.coulomb_friction,
             gearbox.coulomb_friction,
             gearbox.ratio,
             bg_given if bg_given is not None else gearbox.damping_fraction,
         )
         # Python floats only (not NumPy scalars, whose arithmetic warns on overflow).
-        floats = [value for value in values if isinstance(value, float) and type(value) is float]
+        floats = [value for value in values if type(value) is float]
         if len(floats) != len(values):
             return None
-        bd, c, t_ref, slope, at_0c, fd, fg, n, bg_or_fraction = floats
+        bd, c, t_ref, fd, fg, n, bg_or_fraction = floats
         temperature = t.item()
+        fl = law.one_case(temperature)  # linear_in_temperature; None: not floats or finite
+        if fl is None:
+            return None
         bd_t = bd * (1.0 + c * (temperature - t_ref))  # damper_damping_rate (Eq. 1)
         bg = bg_or_fraction if bg_given is not None else bg_or_fraction * bd  # damping_rate_for
-        fl = slope * temperature + at_0c  # linear_in_temperature
         bt = bd_t + bg  # total_damping_rate (Eq. 1)
         ft = fd + fl + fg  # total_friction (Eq. 2)
         becd = bt * n * n  # refer_damping_to_input (Eq. 3)
