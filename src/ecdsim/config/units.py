@@ -14,6 +14,8 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from decimal import Decimal
+from fractions import Fraction
 from functools import cache
 from typing import Any
 
@@ -276,10 +278,55 @@ def _in_range(number: float, raw: object, kind: Kind) -> float:
     return number
 
 
+# Absolute temperature units, converted exactly: degC = x * scale + offset with rational
+# scale and offset, from the decimal number as written, rounded once. pint goes through
+# kelvin in floats, which leaves rounding noise ('-40 degF' -> -39.99999999999997 degC,
+# '77 degF' -> 25.000000000000057); these give -40 and 25, as a person computes them.
+# Keyed by the unit as written and as pint names it (str(quantity.units)).
+_NINTHS = Fraction(5, 9)
+_KELVIN_OFFSET = Fraction("-273.15")
+_ABSOLUTE_TEMPERATURE: dict[str, tuple[Fraction, Fraction]] = {
+    **dict.fromkeys(("degC", "celsius", "degree_Celsius"), (Fraction(1), Fraction(0))),
+    **dict.fromkeys(("K", "kelvin"), (Fraction(1), _KELVIN_OFFSET)),
+    **dict.fromkeys(
+        ("degF", "fahrenheit", "degree_Fahrenheit"), (_NINTHS, Fraction(-32) * _NINTHS)
+    ),
+    **dict.fromkeys(("degR", "rankine", "degree_Rankine"), (_NINTHS, _KELVIN_OFFSET)),
+}
+# Exact decimal arithmetic for numbers written with at most this exponent (every
+# temperature); a longer one ('1e-999...') takes the float's own value, not 10**huge.
+_EXACT_EXPONENT = 400
+
+
+def absolute_temperature(number: float, number_text: str, unit_text: str) -> float | None:
+    """``number_text`` (parsed as ``number``) in ``unit_text`` as degC, exactly rounded,
+    for the absolute temperature units of :data:`_ABSOLUTE_TEMPERATURE`; None for others.
+
+    >>> absolute_temperature(-40.0, "-40", "degF"), absolute_temperature(77.0, "77", "degF")
+    (-40.0, 25.0)
+    >>> absolute_temperature(298.15, "298.15", "K"), absolute_temperature(1.0, "1", "mK")
+    (25.0, None)
+    """
+    found = _ABSOLUTE_TEMPERATURE.get(unit_text.strip())
+    if found is None:
+        return None
+    scale, offset = found
+    decimal = Decimal(number_text)
+    exact = Fraction(decimal) if abs(decimal.adjusted()) <= _EXACT_EXPONENT else Fraction(number)
+    return float(exact * scale + offset)
+
+
 def _convert(number: float, unit_text: str, raw: str, kind: Kind) -> float:
     bad_grammar = check_unit_grammar(unit_text)
     if bad_grammar is not None:
         raise QuantityError(f"{quoted(raw)}: {quoted(unit_text)} {bad_grammar}; {kind.expected}")
+    if kind.offset:
+        written = _NUMBER.match(raw)
+        exact = (
+            None if written is None else absolute_temperature(number, written.group(1), unit_text)
+        )
+        if exact is not None:
+            return _in_range(_finite(exact, raw, kind), raw, kind)
     factor = LEAN_FACTORS.get((lean_key(unit_text), kind.unit))
     if factor is not None:
         return _in_range(_finite(number * factor, raw, kind), raw, kind)
