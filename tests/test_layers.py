@@ -31,6 +31,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "ecdsim.atomic",
             "ecdsim.formatting",
             "ecdsim.jsonrows",
+            "ecdsim.tidy",
             "ecdsim.units_display",
         ),
     ),

@@ -57,7 +57,7 @@ def test_full_factorial_table_matches_the_hand_calculation(tmp_path: Path) -> No
     seen = set()
     for row in rows:
         ratio = float(row["gearbox.ratio"])
-        ts = float(row["load.start_torque [N*m]"])
+        ts = float(row["load.start_torque_Nm"])
         assert ts == pytest.approx(3.73) or ts == pytest.approx(30 * lbf_in, rel=1e-12)
         t = float(row["temperature_C"])
         assert row["method"] == "paper"
@@ -105,7 +105,7 @@ def test_latin_from_the_cli_with_units(tmp_path: Path) -> None:
     assert code == 0, stderr
     rows = list(csv.DictReader(io.StringIO(out.read_text(encoding="utf-8"))))
     lbf_in = 0.45359237 * 9.80665 * 0.0254
-    torques = sorted(float(r["load.start_torque [N*m]"]) / lbf_in for r in rows)
+    torques = sorted(float(r["load.start_torque_Nm"]) / lbf_in for r in rows)
     # Strata of 2.5 lbf*in over 30..40 (converted back by hand): one point each.
     assert [int((x - 30.0) // 2.5) for x in torques] == [0, 1, 2, 3]
 

@@ -15,8 +15,8 @@ The package is layered (see ``docs/architecture.md``):
 
 Importing :mod:`ecdsim` itself is cheap: it imports nothing heavy. The notebook API
 (:mod:`ecdsim.api`, docs/api.md) is exported lazily: ``ecdsim.deploy``, ``ecdsim.fit``,
-``ecdsim.size`` and ``ecdsim.load`` import it on first use, and ``ecdsim.montecarlo``
-(for ``ecdsim.montecarlo.open(folder)``) is imported when first named.
+``ecdsim.size``, ``ecdsim.sweep`` and ``ecdsim.load`` import it on first use, and
+``ecdsim.montecarlo`` (for ``ecdsim.montecarlo.open(folder)``) is imported when first named.
 """
 
 from __future__ import annotations
@@ -26,11 +26,11 @@ from typing import TYPE_CHECKING, Any
 from ecdsim._version import __version__
 
 if TYPE_CHECKING:
-    from ecdsim.api import deploy, fit, load, size
+    from ecdsim.api import deploy, fit, load, size, sweep
 
-__all__ = ["__version__", "deploy", "fit", "load", "size"]
+__all__ = ["__version__", "deploy", "fit", "load", "size", "sweep"]
 
-_LAZY = {"deploy", "fit", "load", "size"}
+_LAZY = {"deploy", "fit", "load", "size", "sweep"}
 
 
 def __getattr__(name: str) -> Any:

@@ -11,15 +11,21 @@
 * :func:`deploy` predicts a deployment (``ecdsim deploy``);
 * :func:`fit` reduces a drop-test CSV (``ecdsim fit drop-test``);
 * :func:`size` searches a catalogue against the config's requirements (``ecdsim size``);
+* :func:`sweep` varies config keys over a grid or a Latin hypercube (``ecdsim sweep``);
 * ``ecdsim.montecarlo.open(folder)`` opens the samples of a finished Monte Carlo study.
+
+Every table is long (tidy): temperature and method are columns, and every column name
+ends in its SI unit (``deployment_time_s``, ``load.start_torque_Nm``; docs/json.md).
 
 Inputs may be pint quantities or plain numbers. A plain number is read in SI units,
 except temperatures, which are degC like everywhere in ecdsim (``-40`` is -40 degC;
 pass ``Q_(233.15, "K")`` for kelvin). Config keys can be changed without editing the
 file with ``overrides={"gearbox.ratio": 400, "load.inertia": Q_(5, "kg*m^2")}``.
 
-Bad input raises :class:`~ecdsim.config.ConfigError` with one line per problem naming
-the field, the value and the expected unit; a model asked outside its domain raises
+Bad input raises :class:`~ecdsim.config.ConfigError` (a ValueError) with one line per
+problem naming the field, the value and the expected unit (an unknown name, such as a
+method that was not run, :class:`UnknownNameError`, naming the choices); a model asked
+outside its domain raises
 :class:`~ecdsim.deployment.ModelDomainError`. pandas is optional: ``to_dataframe()``
 says how to install it (``pip install 'ecdsim[montecarlo]'``) when it is missing.
 """
@@ -32,11 +38,12 @@ import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast, overload
 
 from ecdsim.config import Config, ConfigError
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
     from ecdsim.characterize.droptest import DropTestResult
@@ -45,6 +52,7 @@ if TYPE_CHECKING:
     from ecdsim.sizing.ratio import RatioIntervals
     from ecdsim.sizing.requirements import Requirements
     from ecdsim.sizing.search import SearchResult
+    from ecdsim.sweeps import SweepResult
     from ecdsim.units_display import UnitSystem
 
 __all__ = [
@@ -52,18 +60,37 @@ __all__ = [
     "FitResults",
     "MissingDependencyError",
     "SizeResults",
+    "SweepResults",
+    "UnknownNameError",
     "deploy",
     "fit",
     "load",
     "size",
+    "sweep",
 ]
 
 ConfigLike = str | os.PathLike[str] | Config | Mapping[str, Any]
 HTML_ROWS = 60
+# The deepest nesting of an ``overrides`` mapping (as files and the explorer's requests).
+MAX_OVERRIDE_DEPTH = 32
 
 
 class MissingDependencyError(ImportError):
     """An optional package is not installed; the message names the extra to install."""
+
+
+class UnknownNameError(ConfigError):
+    """A name that is not one of the choices (a method, a unit system, a plot); a
+    ValueError whose one line names the value and the choices."""
+
+
+def _choose(what: str, value: object, choices: Sequence[str]) -> str:
+    """``value`` if it is one of ``choices``; else :class:`UnknownNameError` naming both."""
+    from ecdsim.config.units import quoted
+
+    if isinstance(value, str) and value in choices:
+        return value
+    raise UnknownNameError([f"{what}: {quoted(value)} is not one of {list(choices)}"])
 
 
 def _pandas() -> Any:
@@ -87,10 +114,15 @@ class _Table:
         raise NotImplementedError
 
     def to_dataframe(self) -> Any:
-        """The rows as a pandas DataFrame (needs pandas: ``pip install 'ecdsim[montecarlo]'``)."""
-        rows = self.rows()
-        columns = list(dict.fromkeys(k for row in rows for k in row))
-        return _pandas().DataFrame(rows, columns=columns)
+        """The rows as a pandas DataFrame (needs pandas: ``pip install 'ecdsim[montecarlo]'``).
+
+        Flags are pandas' nullable ``boolean``, counts ``Int64``, so that a column only
+        some rows have (the dynamic method's ``stuck``) keeps its type (ecdsim.tidy).
+        """
+        from ecdsim.tidy import dataframe
+
+        _pandas()
+        return dataframe(self.rows())
 
     def _repr_html_(self) -> str:
         rows = self.rows()
@@ -133,38 +165,20 @@ def load(config_or_path: ConfigLike, overrides: Mapping[str, object] | None = No
     """
     import hashlib
     import json
-    import tomllib
 
-    from ecdsim.config.loader import load_config, read_config_text, validate
-    from ecdsim.config.overrides import apply_overrides
+    from ecdsim.config.loader import load_config, validate
     from ecdsim.model import DeploymentSystem
 
+    overrides = _overrides(overrides)
     if isinstance(config_or_path, Config):
         if overrides:
             raise ConfigError(
                 ["overrides: a loaded Config cannot take overrides; pass its path or mapping"]
             )
         return config_or_path
-    if isinstance(config_or_path, Mapping):
-        raw: dict[str, Any] = dict(config_or_path)
-        source = "<mapping>"
-    elif isinstance(config_or_path, str | os.PathLike):
-        path = Path(config_or_path)
-        if not overrides:
-            return load_config(path)
-        source = str(path)
-        try:
-            raw = tomllib.loads(read_config_text(path))
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError([f"not valid TOML: {exc}"], source) from None
-    else:
-        raise ConfigError(
-            [
-                f"config_or_path = {type(config_or_path).__name__}: expected a path, "
-                "a TOML mapping or an ecdsim Config"
-            ]
-        )
-    document = apply_overrides(raw, overrides or {})
+    if isinstance(config_or_path, str | os.PathLike) and not overrides:
+        return load_config(Path(config_or_path))
+    document, source = _document(config_or_path, overrides)
     spec = validate(document, source)
     text = json.dumps(document, sort_keys=True, default=str)
     return Config(
@@ -177,21 +191,134 @@ def load(config_or_path: ConfigLike, overrides: Mapping[str, object] | None = No
     )
 
 
-def _temperatures(values: object) -> tuple[float, ...]:
-    """Temperatures [degC] from numbers (degC), strings ("77 degF") or pint quantities."""
-    from ecdsim.config.units import QuantityError, parse_temperature
+def _document(
+    config_or_path: ConfigLike, overrides: Mapping[str, object]
+) -> tuple[dict[str, Any], str]:
+    """The TOML document (overrides applied) and its source name, before validation.
 
-    quantity: Any = values
-    if hasattr(quantity, "magnitude") and hasattr(quantity, "to"):
-        try:
-            magnitudes = quantity.to("degC").magnitude
-        except Exception as exc:  # pint's DimensionalityError and friends
+    A loaded :class:`Config` gives the document of the file it was read from.
+    """
+    import tomllib
+
+    from ecdsim.config.loader import read_config_text
+    from ecdsim.config.overrides import apply_overrides
+
+    if isinstance(config_or_path, Config):
+        import hashlib
+
+        path = Path(config_or_path.source)
+        # Only a Config read from a file as it is now (not one built with overrides or
+        # from a mapping, which the file would not reproduce).
+        if not path.is_file() or (
+            hashlib.sha256(path.read_bytes()).hexdigest() != config_or_path.sha256
+        ):
             raise ConfigError(
-                [f"temperatures = {values}: not a temperature ({type(exc).__name__})"]
-            ) from None
-        # pint converts degF through kelvin (77 degF -> 25.000000000000057 degC): 12
-        # significant digits keep the value and drop the rounding noise.
-        items: list[Any] = [_round(m) for m in _iterate(magnitudes)]
+                [
+                    f"{config_or_path.source}: this Config is not its file as read; pass the "
+                    "path or mapping (with its overrides) instead"
+                ]
+            )
+        config_or_path = path
+    if isinstance(config_or_path, Mapping):
+        raw: dict[str, Any] = dict(config_or_path)
+        source = "<mapping>"
+    elif isinstance(config_or_path, str | os.PathLike):
+        path = Path(config_or_path)
+        source = str(path)
+        try:
+            raw = tomllib.loads(read_config_text(path))
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError([f"not valid TOML: {exc}"], source) from None
+    else:
+        raise ConfigError(
+            [
+                f"config_or_path = {type(config_or_path).__name__}: expected a path, "
+                "a TOML mapping or an ecdsim Config"
+            ]
+        )
+    return apply_overrides(raw, overrides), source
+
+
+def _overrides(overrides: object) -> dict[str, object]:
+    """``overrides`` as flat dotted keys with plain Python values.
+
+    A nested mapping merges into its table key by key (``{"gearbox": {"ratio": 400}}``
+    sets ``gearbox.ratio`` and keeps the table's other keys), as TOML's dotted keys do;
+    NumPy scalars and arrays become Python numbers and lists. Keys must be strings.
+    Raises :class:`ConfigError` naming the key.
+    """
+    from ecdsim.config.units import quoted
+
+    if overrides is None:
+        return {}
+    if not isinstance(overrides, Mapping):
+        raise ConfigError(
+            [f"overrides = {quoted(overrides)}: expected a mapping of dotted config keys to values"]
+        )
+    flat: dict[str, object] = {}
+    problems: list[str] = []
+    # Level by level, without recursion (a deep mapping must not exhaust the stack).
+    from collections import deque
+
+    queue: deque[tuple[str, Mapping[Any, Any], int]] = deque([("", overrides, 0)])
+    while queue:
+        prefix, mapping, depth = queue.popleft()
+        if depth > MAX_OVERRIDE_DEPTH:
+            problems.append(
+                f"overrides: {prefix[:80]}... is nested deeper than {MAX_OVERRIDE_DEPTH} levels"
+            )
+            continue
+        for key, value in mapping.items():
+            if not isinstance(key, str):
+                where = f" in {prefix.rstrip('.')}" if prefix else ""
+                problems.append(
+                    f"overrides: key {quoted(key)}{where} is not a config key; expected a "
+                    "dotted name such as 'gearbox.ratio'"
+                )
+                continue
+            if isinstance(value, Mapping) and not _is_quantity(value):
+                queue.append((f"{prefix}{key}.", value, depth + 1))
+            else:
+                flat[f"{prefix}{key}"] = _plain(value)
+    if problems:
+        raise ConfigError(problems)
+    return flat
+
+
+def _is_quantity(value: object) -> bool:
+    return hasattr(value, "magnitude") and hasattr(value, "to")
+
+
+def _plain(value: object) -> object:
+    """NumPy scalars as Python numbers, arrays as lists; anything else as it is."""
+    try:
+        import numpy as np
+    except ImportError:  # pragma: no cover - numpy is a core dependency
+        return value
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _temperatures(values: object) -> tuple[float, ...]:
+    """Temperatures [degC] from numbers (degC), strings ("77 degF") or pint quantities.
+
+    Every form is read by :func:`ecdsim.config.units.parse_temperature`, which converts
+    degF, K and degR exactly (``"-40 degF"`` and ``Q_(-40, "degF")`` are -40 degC).
+    """
+    import numbers
+
+    from ecdsim.config.units import QuantityError, parse_temperature, quoted
+
+    items: list[object] = []
+    if _is_quantity(values):
+        quantity: Any = values
+        unit = str(quantity.units)
+        items = [f"{float(cast(Any, m))!r} {unit}" for m in _iterate(quantity.magnitude)]
     else:
         items = list(_iterate(values))
     if not items:
@@ -200,23 +327,22 @@ def _temperatures(values: object) -> tuple[float, ...]:
     problems = []
     for item in items:
         text = item
-        if isinstance(item, int | float) and not isinstance(item, bool):
+        if not isinstance(item, bool) and isinstance(item, numbers.Real):
             text = f"{float(item)!r} degC"
-        elif hasattr(item, "magnitude") and hasattr(item, "to"):
-            text = f"{_round(item.to('degC').magnitude)!r} degC"
+        elif _is_quantity(item):
+            quantity = item
+            text = f"{float(quantity.magnitude)!r} {quantity.units}"
         elif isinstance(item, str) and not any(c.isalpha() for c in item):
             text = f"{item} degC"
         try:
             out.append(parse_temperature(text))
         except QuantityError as exc:
             problems.append(f"temperatures: {exc}")
+        except (TypeError, ValueError, OverflowError):
+            problems.append(f"temperatures: {quoted(item)} is not a temperature")
     if problems:
         raise ConfigError(problems)
     return tuple(out)
-
-
-def _round(value: Any) -> float:
-    return float(f"{float(value):.12g}")
 
 
 def _iterate(values: object) -> Iterable[object]:
@@ -226,32 +352,33 @@ def _iterate(values: object) -> Iterable[object]:
         import numpy as np
 
         if isinstance(values, np.ndarray):
-            return [float(v) for v in values.ravel()]
+            return [v.item() for v in values.ravel()]
     except ImportError:  # pragma: no cover - numpy is a core dependency
         pass
     return list(values)
 
 
-def _methods(values: str | Sequence[str]) -> tuple[str, ...]:
+def _methods(values: object) -> tuple[str, ...]:
+    from ecdsim.config.units import quoted
     from ecdsim.methods import SOLVERS
 
-    names = (values,) if isinstance(values, str) else tuple(values)
+    names = (values,) if isinstance(values, str) else tuple(_iterate(values))
     problems = [
-        f"methods: {m!r} is not a method; expected one of {sorted(SOLVERS)}"
+        f"methods: {quoted(m)} is not a method; expected one of {sorted(SOLVERS)}"
         for m in names
-        if m not in SOLVERS
+        if not isinstance(m, str) or m not in SOLVERS
     ]
     if not names:
         problems.append(f"methods: empty; expected one or more of {sorted(SOLVERS)}")
     if problems:
-        raise ConfigError(problems)
-    return names
+        raise UnknownNameError(problems)
+    return tuple(str(m) for m in names)
 
 
 # ----------------------------------------------------------------------------- deploy
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class DeployResults(_Table):
     """A deployment predicted at each temperature by each method.
 
@@ -287,13 +414,21 @@ class DeployResults(_Table):
 
         return prediction_rows(self.prediction)
 
+    def __repr__(self) -> str:
+        """One line: the system, the temperatures and methods, each method's times."""
+        return _short_repr(self)
+
+    def _method(self, method: object) -> str:
+        return _choose("method", method, list(self.prediction.solutions))
+
     def deployment_time(self, method: str = "exact") -> dict[float, float]:
         """Deployment time [s] by ``method`` at each temperature [degC] (inf: stalled).
 
         With ``[load.gravity]`` this is the ground test (1 g, offloaded as configured);
-        :meth:`flight_deployment_time` gives the same system in flight (0 g).
+        :meth:`flight_deployment_time` gives the same system in flight (0 g). A method
+        that was not run raises :class:`UnknownNameError` naming the methods that were.
         """
-        times = self.prediction.solutions[method].deployment_time
+        times = self.prediction.solutions[self._method(method)].deployment_time
         temps = self.prediction.temperatures
         return {float(t): float(x) for t, x in zip(temps, times, strict=True)}
 
@@ -302,23 +437,44 @@ class DeployResults(_Table):
 
         None without ``[load.gravity]`` (the prediction is then the flight itself).
         """
+        name = self._method(method)
         flight = self.prediction.flight
         if flight is None:
             return None
-        times = flight.solutions[method].deployment_time
+        times = flight.solutions[name].deployment_time
         return {float(t): float(x) for t, x in zip(flight.temperatures, times, strict=True)}
 
-    def plot(self, units: UnitSystem = "si") -> list[Figure]:
+    @overload
+    def plot(self, units: UnitSystem = "si", *, ax: None = None, kind: str = ...) -> list[Figure]:
+        pass
+
+    @overload
+    def plot(self, units: UnitSystem = "si", *, ax: Axes, kind: str = ...) -> Axes:
+        pass
+
+    def plot(
+        self, units: UnitSystem = "si", *, ax: Axes | None = None, kind: str = "angle"
+    ) -> list[Figure] | Axes:
         """Angle and speed against time, and ECD torque against speed (paper Fig. 4-6, 8).
 
-        With the dynamic method, also its own figures (events marked, damper heating).
+        Without ``ax``: a list of figures, with the dynamic method also its own (events
+        marked, damper heating). With ``ax`` (a matplotlib Axes): draws one plot there,
+        ``kind`` = ``"angle"``, ``"speed"`` or ``"torque_speed"``, and returns ``ax``.
+        ``units``: ``"si"`` or ``"us"`` (labels in degF, lbf*in).
         """
         from ecdsim.plotting import plot_deployment, plot_speed, plot_torque_speed
+        from ecdsim.units_display import check_system
 
+        system = check_system(units, "units")
+        if ax is not None:
+            chosen = _choose("kind", kind, list(PLOT_KINDS))
+            draw = {"angle": plot_deployment, "speed": plot_speed}.get(chosen, plot_torque_speed)
+            draw(self.prediction, units=system, ax=ax)
+            return ax
         figures = [
-            plot_deployment(self.prediction, units=units),
-            plot_speed(self.prediction, units=units),
-            plot_torque_speed(self.prediction, units=units),
+            plot_deployment(self.prediction, units=system),
+            plot_speed(self.prediction, units=system),
+            plot_torque_speed(self.prediction, units=system),
         ]
         if "dynamic" in self.prediction.solutions:
             from ecdsim.plotting_dynamic import (
@@ -331,10 +487,86 @@ class DeployResults(_Table):
             result = dynamic_result(self.prediction)
             if result is not None:
                 for quantity in ("angle", "speed"):
-                    figures.append(plot_dynamic(self.prediction, quantity, units, result=result))
+                    figures.append(plot_dynamic(self.prediction, quantity, system, result=result))
                 if heated(result):
-                    figures.append(plot_damper_temperature(self.prediction, units, result=result))
+                    figures.append(plot_damper_temperature(self.prediction, system, result=result))
         return figures
+
+    def timeseries(self, times: object = None, n_points: int = 400) -> Any:
+        """The motion as a long (tidy) DataFrame: one row per (temperature, method, time).
+
+        Columns ``temperature_C``, ``method``, ``time_s``, ``angle_rad`` (deployed angle
+        from the start of travel), ``speed_rad_s`` (input shaft). ``times`` [s]: the
+        instants (default ``n_points`` from 0 to 1.1 times the longest deployment, as
+        the plots). Each method's own trajectory: the quasi-static methods' closed forms,
+        the dynamic method's integrated motion; NaN where a method did not solve a case.
+        """
+        import numpy as np
+
+        from ecdsim.plotting import time_span
+
+        pd = _pandas()
+        if times is None:
+            if isinstance(n_points, bool) or not isinstance(n_points, int) or n_points < 2:
+                raise ConfigError([f"n_points = {n_points!r}: expected an integer >= 2"])
+            grid = np.linspace(0.0, time_span(self.prediction), n_points)
+        else:
+            try:
+                grid = np.asarray(times, dtype=float).reshape(-1)
+            except (TypeError, ValueError):
+                raise ConfigError(["times: expected numbers [s]"]) from None
+            if grid.size == 0 or not np.all(np.isfinite(grid)) or np.any(grid < 0.0):
+                raise ConfigError(["times: expected one or more finite times >= 0 s"])
+        temps = np.ravel(self.prediction.temperatures)
+        frames = []
+        for name, solution in self.prediction.solutions.items():
+            trajectory = self.prediction.trajectory(name, grid)
+            angle = np.asarray(trajectory.angle, dtype=float).reshape(grid.size, -1)
+            speed = np.asarray(trajectory.speed, dtype=float).reshape(grid.size, -1)
+            shape = self.prediction.temperatures.shape
+            solved = np.ravel(np.broadcast_to(solution.solved_mask, shape))
+            angle = np.where(solved[None, :], angle, np.nan)
+            speed = np.where(solved[None, :], speed, np.nan)
+            frames.append(
+                pd.DataFrame(
+                    {
+                        "temperature_C": np.repeat(temps, grid.size),
+                        "method": pd.array([name] * (temps.size * grid.size), dtype="string"),
+                        "time_s": np.tile(grid, temps.size),
+                        "angle_rad": angle.T.reshape(-1),
+                        "speed_rad_s": speed.T.reshape(-1),
+                    }
+                )
+            )
+        # Temperature first, then method in the order run, then time.
+        frame = pd.concat(frames, ignore_index=True)
+        order = {name: i for i, name in enumerate(self.prediction.solutions)}
+        frame["_order"] = frame["method"].map(order)
+        frame = frame.sort_values(["temperature_C", "_order", "time_s"], kind="stable")
+        return frame.drop(columns="_order").reset_index(drop=True)
+
+
+PLOT_KINDS = ("angle", "speed", "torque_speed")
+
+
+def _short_repr(result: DeployResults) -> str:
+    prediction = result.prediction
+    temps = ", ".join(f"{float(cast(Any, t)):g}" for t in _iterate(prediction.temperatures))
+    parts = []
+    for name, solution in prediction.solutions.items():
+        times = ", ".join(_seconds(float(cast(Any, t))) for t in _iterate(solution.deployment_time))
+        parts.append(f"{name} [{times}]")
+    count = len(prediction.warnings)
+    return (
+        f"<DeployResults {result.config.system.name!r} at [{temps}] degC: deployment time "
+        f"{'; '.join(parts)}; {count} warning{'s' if count != 1 else ''}>"
+    )
+
+
+def _seconds(value: float) -> str:
+    if math.isnan(value):
+        return "nan"
+    return "stall" if math.isinf(value) else f"{value:.4g} s"
 
 
 def deploy(
@@ -372,7 +604,7 @@ def deploy(
 # ----------------------------------------------------------------------------- fit
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class FitResults(_Table):
     """A drop test reduced: BECD and FECD at each temperature, and laws over temperature.
 
@@ -383,6 +615,21 @@ class FitResults(_Table):
 
     result: DropTestResult
     caption = "drop-test fit"
+
+    def __repr__(self) -> str:
+        """One line: the source, the fitted temperatures and BECD, FECD at each."""
+        fits = self.result.fits
+        each = "; ".join(
+            f"{f.temperature:g} degC: {f.line.slope.value:.4g} N*m*s/rad, "
+            f"{f.line.intercept.value:.4g} N*m"
+            for f in fits[:6]
+        )
+        more = f"; {len(fits) - 6} more" if len(fits) > 6 else ""
+        count = len(self.result.warnings)
+        return (
+            f"<FitResults {self.result.table.source!r}: {len(fits)} temperatures "
+            f"[{each}{more}]; {count} warning{'s' if count != 1 else ''}>"
+        )
 
     def rows(self) -> list[dict[str, Any]]:
         """One row per fitted temperature: BECD, FECD, their standard errors and 95 % CIs."""
@@ -431,32 +678,69 @@ class FitResults(_Table):
 
 
 def fit(
-    csv_path: str | os.PathLike[str],
+    data: str | os.PathLike[str] | Any,
     reference_temperature: object = 25.0,
     *,
     noise: str = "torque",
 ) -> FitResults:
-    """Fit BECD(T) and FECD(T) to a drop-test CSV (``ecdsim fit drop-test``).
+    """Fit BECD(T) and FECD(T) to a drop test (``ecdsim fit drop-test``).
 
-    ``reference_temperature``: T_ref of the damping laws (a number in degC, a string or a
-    pint quantity); ``noise``: where the scatter lies (docs/characterize.md).
+    ``data``: the CSV file, or a pandas DataFrame with the same unit-bearing columns
+    (``temperature [degC]``, ``mass [g]``, ...; docs/characterize.md), e.g. the file read
+    with ``pandas.read_csv``. ``reference_temperature``: T_ref of the damping laws (a
+    number in degC, a string or a pint quantity); ``noise``: where the scatter lies
+    (``"torque"`` or ``"timing"``, docs/characterize.md).
     """
-    from ecdsim.characterize.droptest import fit_drop_test, noise_model
+    from ecdsim.characterize.droptest import NOISE_MODELS, fit_drop_test, noise_model
 
     temps = _temperatures(reference_temperature)
     if len(temps) != 1:
         raise ConfigError([f"reference_temperature: expected one temperature, got {len(temps)}"])
     try:
         noise_model(noise)
-    except ValueError as exc:
-        raise ConfigError([f"noise: {exc}"]) from None
-    return FitResults(fit_drop_test(Path(csv_path), temps[0], noise=noise))
+    except (ValueError, TypeError):
+        _choose("noise", noise, list(NOISE_MODELS))
+    if isinstance(data, str | os.PathLike):
+        return FitResults(fit_drop_test(Path(data), temps[0], noise=noise))
+    if not (hasattr(data, "to_csv") and hasattr(data, "columns")):
+        raise ConfigError(
+            [f"data = {type(data).__name__}: expected a CSV path or a pandas DataFrame"]
+        )
+    return FitResults(_fit_frame(data, temps[0], noise))
+
+
+def _fit_frame(frame: Any, reference_temperature: float, noise: str) -> DropTestResult:
+    """Fit a DataFrame: written as the CSV it stands for and read by the same reader, so
+    that its columns, units and rows are checked exactly as a file's are."""
+    import dataclasses
+    import tempfile
+
+    from ecdsim.characterize.droptest import (
+        STANDARD_GRAVITY,
+        read_drop_test,
+        reduce_drop_test,
+    )
+
+    bad = [c for c in frame.columns if not isinstance(c, str)]
+    if bad:
+        raise ConfigError(
+            [f"DataFrame column {bad[0]!r}: expected a header such as 'temperature [degC]'"]
+        )
+    with tempfile.TemporaryDirectory(prefix="ecdsim-fit-") as folder:
+        path = Path(folder) / "dataframe.csv"
+        frame.to_csv(path, index=False)
+        try:
+            table = read_drop_test(path, STANDARD_GRAVITY)
+        except ConfigError as exc:
+            raise ConfigError(exc.problems, "<DataFrame>") from None
+    table = dataclasses.replace(table, source="<DataFrame>")
+    return reduce_drop_test(table, reference_temperature, STANDARD_GRAVITY, noise=noise)
 
 
 # ----------------------------------------------------------------------------- size
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class SizeResults(_Table):
     """A catalogue search against the config's ``[requirements]``, best first.
 
@@ -473,6 +757,19 @@ class SizeResults(_Table):
     requirements: Requirements
     load: Load
     caption = "sizing: candidates against the requirements, best first"
+
+    def __repr__(self) -> str:
+        """One line: how many candidates, how many pass, the best one."""
+        candidates = self.search.candidates
+        passed = sum(1 for c in candidates if c.passed)
+        best = next((c for c in candidates if c.error is None), None)
+        shown = (
+            "no valid candidate"
+            if best is None
+            else f"best {best.candidate.damper.name!r} + {best.candidate.gearbox.name!r} at "
+            f"ratio {best.candidate.ratio:g} ({'passes' if best.passed else 'fails'})"
+        )
+        return f"<SizeResults {len(candidates)} candidates, {passed} pass; {shown}>"
 
     def rows(self) -> list[dict[str, Any]]:
         """One row per (candidate, temperature): rank, pass, margin and the exact results."""
@@ -565,3 +862,162 @@ def size(
             found.damper(best.damper.name), found.gearbox(best.gearbox.name), load_, requirements
         )
     return SizeResults(result, intervals, requirements, load_)
+
+
+# ----------------------------------------------------------------------------- sweep
+
+
+@dataclass(frozen=True, repr=False)
+class SweepResults(_Table):
+    """A what-if sweep: every point's prediction at each temperature by each method.
+
+    Attributes
+    ----------
+    result : the library's table (:class:`ecdsim.sweeps.SweepResult`): rows, varied keys,
+        errors of points the model could not evaluate
+    config : the base config (overrides applied)
+    """
+
+    result: SweepResult
+    config: Config
+
+    @property
+    def caption(self) -> str:  # type: ignore[override]
+        """The table's caption: the system's name and the varied keys."""
+        return f"{self.result.title}: sweep of {', '.join(v.key for v in self.result.varies)}"
+
+    @property
+    def errors(self) -> list[tuple[int, str]]:
+        """``(point, message)`` of the points the model could not evaluate."""
+        return list(self.result.errors)
+
+    def __repr__(self) -> str:
+        """One line: the varied keys, the points, the rows."""
+        points = len({row["point"] for row in self.result.rows})
+        keys = ", ".join(v.column for v in self.result.varies)
+        errors = len(self.result.errors)
+        return (
+            f"<SweepResults {self.result.title!r}: {points} points of [{keys}], "
+            f"{len(self.result.rows)} rows, {errors} point error{'s' if errors != 1 else ''}>"
+        )
+
+    def rows(self) -> list[dict[str, Any]]:
+        """One row per (point, temperature, method): ``point``, each varied key (SI, the
+        unit's suffix in the name: ``load.start_torque_Nm``), then the columns of
+        :meth:`DeployResults.rows`, and ``error`` for a point the model cannot evaluate."""
+        return [dict(row) for row in self.result.rows]
+
+    def to_dataframe(self) -> Any:
+        """The table as a pandas DataFrame (the columns of :meth:`rows`)."""
+        _pandas()
+        return self.result.to_dataframe()
+
+    def write(self, path: str | os.PathLike[str]) -> Path:
+        """Write the table atomically: Parquet (units, config hash and version in its
+        metadata) if ``path`` ends .parquet, else CSV, as ``ecdsim sweep -o``."""
+        return self.result.write(Path(path))
+
+    def plot(self, output: str = "deployment_time_s", method: str | None = None) -> Figure:
+        """``output`` against each varied key, a colour per temperature (``--plot``)."""
+        varied = {v.column for v in self.result.varies}
+        columns = [c for c in self.result.columns if c not in varied]
+        _choose("output", output, columns)
+        if method is not None:
+            _choose("method", method, list(self.result.methods))
+        return self.result.plot(output, method)
+
+
+def sweep(
+    config_or_path: ConfigLike,
+    vary: Mapping[str, object] | Sequence[str],
+    *,
+    latin: int | None = None,
+    seed: int = 0,
+    temperatures: object = None,
+    methods: str | Sequence[str] | None = None,
+    overrides: Mapping[str, object] | None = None,
+) -> SweepResults:
+    """Vary config keys over a full factorial grid or a Latin hypercube (``ecdsim sweep``).
+
+    ``vary``: ``{"gearbox.ratio": [300, 380, 450], "load.start_torque": "3.2:4.2:5 N*m"}``
+    (a list of values: numbers in SI, strings with units, pint quantities; or a string
+    ``START:STOP:N [UNIT]``), or the command line's ``["gearbox.ratio=300:450:4", ...]``.
+    ``latin``: that many points of a Latin hypercube drawn with ``seed`` instead of the
+    grid. ``temperatures``, ``methods``, ``overrides``: as :func:`deploy`.
+
+    >>> s = sweep("examples/paper_cc16.toml", {"gearbox.ratio": [300, 400]},
+    ...           temperatures=25, methods="exact")
+    >>> s.to_dataframe()[["gearbox.ratio", "deployment_time_s"]].round(2).values.tolist()
+    [[300.0, 15.26], [400.0, 30.53]]
+    """
+    from ecdsim.sweeps import SweepError, design, parse_vary, run_sweep
+
+    config = load(config_or_path, overrides)
+    temps = config.temperatures if temperatures is None else _temperatures(temperatures)
+    chosen = config.methods if methods is None else _methods(methods)
+    specs = _vary_specs(vary)
+    problems: list[str] = []
+    varies = []
+    for spec in specs:
+        try:
+            varies.append(parse_vary(spec, "vary"))
+        except SweepError as exc:
+            problems.extend(exc.problems)
+    if latin is not None and (isinstance(latin, bool) or not isinstance(latin, int) or latin < 1):
+        problems.append(f"latin = {latin!r}: expected a number of points >= 1")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        problems.append(f"seed = {seed!r}: expected an integer >= 0")
+    if problems:
+        raise ConfigError(problems)
+    raw, _ = _document(config_or_path, _overrides(overrides))
+    try:
+        points = design(varies, latin, seed)
+        result = run_sweep(raw, config.source, varies, points, temps, chosen, config.sha256)
+    except SweepError as exc:
+        raise ConfigError(exc.problems) from None
+    return SweepResults(result, config)
+
+
+def _vary_specs(vary: object) -> list[str]:
+    """``vary`` as the command line's ``KEY=VALUES`` strings."""
+    from ecdsim.config.units import quoted
+
+    if isinstance(vary, str):
+        return [vary]
+    if isinstance(vary, Mapping):
+        specs = []
+        for key, values in vary.items():
+            if not isinstance(key, str):
+                raise ConfigError([f"vary: key {quoted(key)} is not a config key"])
+            if isinstance(values, str):
+                specs.append(f"{key}={values}")
+                continue
+            items = [_vary_value(key, v) for v in _iterate(values)]
+            specs.append(f"{key}={','.join(items)}")
+        return specs
+    if isinstance(vary, Iterable):
+        specs = list(vary)
+        bad = [v for v in specs if not isinstance(v, str)]
+        if bad:
+            raise ConfigError([f"vary: {quoted(bad[0])} is not a KEY=VALUES string"])
+        return specs
+    raise ConfigError(
+        [f"vary = {quoted(vary)}: expected a mapping of config keys to values, or KEY=VALUES"]
+    )
+
+
+def _vary_value(key: str, value: object) -> str:
+    """One value of a varied key as ``--vary`` text: a number, or a number and unit."""
+    import numbers
+
+    from ecdsim.config.units import quoted
+
+    value = _plain(value)
+    if _is_quantity(value):
+        quantity: Any = value
+        return f"{float(quantity.magnitude)!r} {quantity.units}"
+    if not isinstance(value, bool) and isinstance(value, numbers.Real):
+        return repr(float(value))
+    if isinstance(value, str) and "," not in value:
+        return value
+    raise ConfigError([f"vary {key}: {quoted(value)} is not a number or a quantity string"])

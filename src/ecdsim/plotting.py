@@ -7,7 +7,7 @@ non-interactive Agg backend is used, so plotting works on machines with no displ
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, cast
 
 import numpy as np
 
@@ -17,6 +17,7 @@ from ecdsim.methods import SOLVERS
 from ecdsim.units_display import Shown, UnitSystem
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 _LINESTYLES = {"exact": "-", "paper": "--"}
@@ -26,6 +27,14 @@ def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
     from matplotlib.figure import Figure
 
     return Figure(figsize=(width, height), layout="constrained")
+
+
+def _target(ax: Axes | None) -> tuple[Figure, Axes]:
+    """The figure and axes to draw on: the caller's ``ax`` (and its figure), or new ones."""
+    if ax is not None:
+        return cast("Figure", ax.figure), ax
+    fig = _figure()
+    return fig, fig.add_subplot()
 
 
 def plot_title(system: str, what: str, width: int = 70) -> str:
@@ -65,11 +74,12 @@ def _plot_against_time(
     title: str,
     n_points: int,
     units: UnitSystem = "si",
+    ax: Axes | None = None,
 ) -> Figure:
-    """One line per (method, temperature) of a trajectory field against time."""
+    """One line per (method, temperature) of a trajectory field against time (on ``ax``
+    if given, else on a new figure)."""
     u = Shown(units)
-    fig = _figure()
-    ax = fig.add_subplot()
+    fig, ax = _target(ax)
     times = np.linspace(0.0, time_span(prediction), n_points)
     temps = np.ravel(prediction.temperatures)
     colors = temperature_colors(len(temps))
@@ -108,23 +118,34 @@ def _plot_against_time(
 
 
 def plot_deployment(
-    prediction: Prediction, n_points: int = 400, units: UnitSystem = "si"
+    prediction: Prediction,
+    n_points: int = 400,
+    units: UnitSystem = "si",
+    ax: Axes | None = None,
 ) -> Figure:
     """Deployed angle against time at each temperature, by each method (paper Fig. 4-6)."""
     return _plot_against_time(
-        prediction, "angle", "deployed angle [deg]", "angle against time", n_points, units
+        prediction, "angle", "deployed angle [deg]", "angle against time", n_points, units, ax
     )
 
 
-def plot_speed(prediction: Prediction, n_points: int = 400, units: UnitSystem = "si") -> Figure:
+def plot_speed(
+    prediction: Prediction,
+    n_points: int = 400,
+    units: UnitSystem = "si",
+    ax: Axes | None = None,
+) -> Figure:
     """Input-shaft speed against time at each temperature, by each method."""
     return _plot_against_time(
-        prediction, "speed", "input shaft speed [rad/s]", "speed against time", n_points, units
+        prediction, "speed", "input shaft speed [rad/s]", "speed against time", n_points, units, ax
     )
 
 
 def plot_torque_speed(
-    prediction: Prediction, n_points: int = 50, units: UnitSystem = "si"
+    prediction: Prediction,
+    n_points: int = 50,
+    units: UnitSystem = "si",
+    ax: Axes | None = None,
 ) -> Figure:
     """The ECD's input torque against speed at each temperature (paper Fig. 8).
 
@@ -132,8 +153,7 @@ def plot_torque_speed(
     deployment's operating range, from the start to the end speed of the exact solution.
     """
     u = Shown(units, digits=3)
-    fig = _figure()
-    ax = fig.add_subplot()
+    fig, ax = _target(ax)
     ecd = prediction.ecd
     temps = np.ravel(prediction.temperatures)
     damping = np.ravel(np.broadcast_to(ecd.ecd_damping_rate, prediction.temperatures.shape))

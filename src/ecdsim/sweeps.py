@@ -72,8 +72,12 @@ class Vary:
 
     @property
     def column(self) -> str:
-        """The table column: the key, with its SI unit in brackets when it has one."""
-        return f"{self.key} [{self.unit}]" if self.unit else self.key
+        """The table column: the key with its SI unit's suffix (``load.start_torque_Nm``;
+        ``gearbox.ratio`` for a plain number), as every ecdsim table names it (ecdsim.tidy).
+        """
+        from ecdsim.tidy import key_column
+
+        return key_column(self.key, self.unit)
 
 
 def _si(key: str, value: object) -> float:
@@ -200,8 +204,12 @@ def prediction_rows(prediction: Prediction) -> list[dict[str, Any]]:
     """One row per (temperature, method): inputs at T and the method's results, SI.
 
     Column names carry their units as ``docs/json.md`` spells them (``temperature_C``,
-    ``deployment_time_s``, ``damping_rate_Nms_per_rad``); a missing value is NaN.
+    ``deployment_time_s``, ``damping_rate_Nms_per_rad``); a missing value is NaN. A
+    nested object of the method's block becomes columns (``energy_J.spring_work`` ->
+    ``energy_spring_work_J``, :func:`ecdsim.tidy.flatten`).
     """
+    from ecdsim.tidy import flatten
+
     document = prediction.to_dict()
     rows = []
     for case in document["cases"]:
@@ -215,7 +223,7 @@ def prediction_rows(prediction: Prediction) -> list[dict[str, Any]]:
         for method in document["methods"]:
             row: dict[str, Any] = {"temperature_C": shared["temperature_C"], "method": method}
             row.update({k: v for k, v in shared.items() if k != "temperature_C"})
-            for name, value in case[method].items():
+            for name, value in flatten(case[method]).items():
                 scalar = _scalar(value)
                 if scalar is not None:
                     row[name] = scalar
@@ -234,6 +242,7 @@ class SweepResult:
     title : the config's title
     methods : the methods run at each point
     errors : ``(point index, message)`` for points the model could not evaluate
+    config_sha256 : SHA-256 of the base config (stamped into a Parquet file's metadata)
     """
 
     rows: list[dict[str, Any]]
@@ -241,6 +250,7 @@ class SweepResult:
     title: str
     methods: tuple[str, ...]
     errors: list[tuple[int, str]] = field(default_factory=list)
+    config_sha256: str = ""
 
     @property
     def columns(self) -> list[str]:
@@ -249,6 +259,32 @@ class SweepResult:
         for row in self.rows:
             seen.update(dict.fromkeys(row))
         return list(seen)
+
+    def to_dataframe(self) -> Any:
+        """The table as a pandas DataFrame (flags nullable ``boolean``, counts ``Int64``)."""
+        from ecdsim.tidy import dataframe
+
+        return dataframe(self.rows, self.columns)
+
+    def metadata(self) -> dict[str, Any]:
+        """What a Parquet file of the table carries besides its columns: the units of
+        the columns, the config's hash, ecdsim's version, the varied keys and methods."""
+        from ecdsim._version import __version__
+        from ecdsim.tidy import units_of
+
+        return {
+            "ecdsim_version": __version__,
+            "kind": "sweep",
+            "system": self.title,
+            "config_sha256": self.config_sha256,
+            "varied": [v.key for v in self.varies],
+            "methods": list(self.methods),
+            # a varied plain number (gearbox.ratio) is dimensionless: "1", as CF writes it
+            "units": {
+                **{v.column: "1" for v in self.varies if v.unit == ""},
+                **units_of(self.columns),
+            },
+        }
 
     def to_csv(self) -> str:
         """The table as CSV text (NaN as an empty cell, numbers with full precision)."""
@@ -274,14 +310,12 @@ class SweepResult:
         if target.suffix.lower() != ".parquet":
             return atomic.write_text(target, self.to_csv())
         try:
-            import pyarrow as pa
             import pyarrow.parquet as pq
         except ImportError:
             raise ModuleNotFoundError(
                 "Parquet output needs pyarrow; install it with: pip install 'ecdsim[montecarlo]'"
             ) from None
-        columns = self.columns
-        table = pa.table({c: [row.get(c) for row in self.rows] for c in columns})
+        table = parquet_table(self.to_dataframe(), self.metadata())
         return atomic.write_with(target, lambda handle: pq.write_table(table, handle))
 
     def plot(self, output: str = "deployment_time_s", method: str | None = None) -> Figure:
@@ -322,6 +356,28 @@ class SweepResult:
         return fig
 
 
+PARQUET_KEY = b"ecdsim"
+
+
+def parquet_table(frame: Any, metadata: dict[str, Any]) -> Any:
+    """A pyarrow table of ``frame`` whose schema carries ``metadata`` (JSON, key
+    ``ecdsim``) and, on each column with a unit, that unit (field metadata ``unit``)."""
+    import json
+
+    import pyarrow as pa
+
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    units = metadata.get("units", {})
+    fields = [
+        field.with_metadata({b"unit": units[field.name].encode()}) if field.name in units else field
+        for field in table.schema
+    ]
+    schema = pa.schema(fields, metadata=table.schema.metadata)
+    table = table.cast(schema)
+    document = json.dumps(metadata, sort_keys=True, allow_nan=False).encode("utf-8")
+    return table.replace_schema_metadata({**(schema.metadata or {}), PARQUET_KEY: document})
+
+
 _UNIT_SUFFIXES = (
     ("_Nms_per_rad", "N*m*s/rad"),
     ("_rad_s", "rad/s"),
@@ -360,14 +416,19 @@ def run_sweep(
     points: Sequence[Mapping[str, tuple[object, float]]],
     temperatures: Sequence[float] | None = None,
     methods: Sequence[str] | None = None,
+    config_sha256: str | None = None,
 ) -> SweepResult:
     """Validate every point's config, then predict at each and gather the rows.
 
-    ``raw`` is the parsed TOML document of the base config. Every invalid point is
+    ``raw`` is the parsed TOML document of the base config; ``config_sha256`` its
+    file's hash (default: the hash of ``raw`` as canonical JSON). Every invalid point is
     reported before anything runs (:class:`SweepError`, one line per problem naming
     ``--vary`` and the key); a point the model cannot evaluate (damping <= 0, ...)
     gives rows with the ``error`` column set and NaN results.
     """
+    import hashlib
+    import json
+
     from ecdsim.config import ConfigError
     from ecdsim.config.loader import validate
     from ecdsim.config.overrides import apply_overrides
@@ -417,4 +478,7 @@ def run_sweep(
             continue
         for row in prediction_rows(prediction):
             rows.append({**head, **row})
-    return SweepResult(rows, list(varies), title, chosen_methods, errors)
+    if config_sha256 is None:
+        text = json.dumps(raw, sort_keys=True, default=str)
+        config_sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return SweepResult(rows, list(varies), title, chosen_methods, errors, config_sha256)

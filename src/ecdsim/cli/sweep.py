@@ -113,7 +113,9 @@ def sweep(
         fail(problems)
     try:
         points = design(varies, latin, seed)
-        result = run_sweep(raw, str(config), varies, points, loaded.temperatures, loaded.methods)
+        result = run_sweep(
+            raw, str(config), varies, points, loaded.temperatures, loaded.methods, loaded.sha256
+        )
     except SweepError as exc:
         fail(exc.problems)
     if plot is not None and output not in result.columns:

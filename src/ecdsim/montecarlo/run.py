@@ -427,13 +427,18 @@ def write_result(plan: Plan, out: Path, result: ChunkResult) -> Path:
     if result.staged:
         return store.install_chunk(out, result.index, Path(result.staged))
     return store.write_chunk(
-        out, result.index, result.columns, plan.identity_sha256, _extra(result)
+        out, result.index, result.columns, plan.identity_sha256, _extra(plan, result)
     )
 
 
-def _extra(result: ChunkResult) -> dict[str, Any]:
-    """What a chunk file's metadata holds besides the study's identity and its index."""
+def _extra(plan: Plan, result: ChunkResult) -> dict[str, Any]:
+    """What a chunk file's metadata holds besides the study's identity and its index:
+    the version and config hash (also in the identity the hash stands for), each
+    column's SI unit, and the chunk's warnings and streamed sums."""
     return {
+        "ecdsim_version": __version__,
+        "config_sha256": plan.config_sha256,
+        "units": store.column_units(plan.columns, plan.tolerances),
         "warnings": result.warnings,
         streaming.KEY: result.sensitivity_sums,
         streaming.MOMENTS_KEY: result.moments,
@@ -596,7 +601,9 @@ def _forked_chunk(index: int) -> ChunkResult:
     start, stop = plan.bounds(index)
     for name, whole in shared.items():
         whole[start:stop] = result.columns[name]
-    staged = store.stage_chunk(out, index, result.columns, plan.identity_sha256, _extra(result))
+    staged = store.stage_chunk(
+        out, index, result.columns, plan.identity_sha256, _extra(plan, result)
+    )
     return ChunkResult(
         index,
         {},

@@ -69,10 +69,10 @@ def read_manifest(out: Path) -> dict[str, Any] | None:
     if not path.exists():
         return None
     try:
-        document: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
+        document: Any = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError) as exc:
         raise ValueError(f"{path}: not a readable manifest ({exc})") from None
-    if document.get("format") != FORMAT:
+    if not isinstance(document, dict) or document.get("format") != FORMAT:
         raise ValueError(f"{path}: not an ecdsim Monte Carlo manifest (format {FORMAT})")
     return document
 
@@ -87,6 +87,28 @@ def write_manifest(out: Path, identity: Mapping[str, Any], extra: Mapping[str, A
     }
     text = json.dumps(document, indent=2, sort_keys=True, allow_nan=False) + "\n"
     return atomic.write_text(out / MANIFEST, text)
+
+
+def column_units(columns: Sequence[str], tolerances: Any) -> dict[str, str]:
+    """The SI unit of each chunk column that has one ("1" for a dimensionless number):
+    a sampled quantity's from its tolerance, a result's from its name's suffix
+    (``deployment_time_s@-40.0C``: s; ecdsim.tidy). ``stalled`` and ``sample`` have none.
+    """
+    from ecdsim.tidy import unit_of
+
+    given = {t.key: t.unit for t in getattr(tolerances, "tolerances", ())}
+    units = {}
+    for name in columns:
+        if name in given:
+            units[name] = given[name] or "1"
+        elif name != "sample":
+            prefix = name.split("@", 1)[0]
+            unit = unit_of(prefix)
+            if unit is not None:
+                units[name] = unit
+            elif prefix == "min_torque_margin":
+                units[name] = "1"
+    return units
 
 
 def remove_partial_files(out: Path) -> list[Path]:
@@ -132,7 +154,18 @@ def _chunk_table(
     # levels, which halved the encoding of a 65,536-sample chunk (10.3 to 4.9 ms of CPU);
     # the values read back are the same.
     fields = zip(columns, arrays, strict=True)
-    schema = pa.schema([pa.field(name, array.type, nullable=False) for name, array in fields])
+    units = extra.get("units", {})
+    schema = pa.schema(
+        [
+            pa.field(
+                name,
+                array.type,
+                nullable=False,
+                metadata={b"unit": units[name].encode()} if name in units else None,
+            )
+            for name, array in fields
+        ]
+    )
     table = pa.Table.from_arrays(arrays, schema=schema)
     tag = json.dumps(
         {"identity_sha256": identity_sha256, "chunk": index, **extra},
