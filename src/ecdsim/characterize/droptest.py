@@ -453,7 +453,7 @@ class DropTestResult:
             "kind": "drop_test",
             "source": self.table.source,
             "source_sha256": self.table.sha256,
-            "gravity_m_per_s2": self.gravity,
+            "gravity_m_s2": self.gravity,
             "reference_temperature_C": self.reference_temperature,
             "noise_model": self.noise,
             "temperatures": [fit.to_dict(points_as_table=points_as_table) for fit in self.fits],

@@ -586,7 +586,7 @@ class CandidateResult:
                 "temperature_C": self.torque_margin_temperature,
             },
             "lost_motion_rad": c.gearbox.lost_motion,
-            "reflected_rotor_inertia_kgm2": (
+            "reflected_rotor_inertia_kg_m2": (
                 None if c.damper.rotor_inertia is None else c.damper.rotor_inertia * c.ratio**2
             ),
             "error": self.error,
