@@ -17,10 +17,39 @@ import re
 import secrets
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+# The JSON Schema of every --json document, shipped with the package (docs/json.md).
+SCHEMA_DIR = Path(__file__).resolve().parent / "schemas"
+SCHEMAS = (
+    "deploy",
+    "fit_drop_test",
+    "fit_trace",
+    "size",
+    "compare_fluid",
+    "montecarlo",
+    "repeat",
+    "sweep",
+)
+
+
+def schema(name: str) -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) of a ``--json`` document: ``"deploy"``,
+    ``"fit_drop_test"``, ``"fit_trace"``, ``"size"``, ``"compare_fluid"``,
+    ``"montecarlo"``, ``"repeat"`` or ``"sweep"``.
+
+    >>> schema("deploy")["title"]
+    'ecdsim deploy --json'
+    """
+    if not isinstance(name, str) or name not in SCHEMAS:
+        raise ValueError(f"{name!r} is not a JSON document of ecdsim; expected one of {list(SCHEMAS)}")
+    found: dict[str, Any] = json.loads((SCHEMA_DIR / f"{name}.schema.json").read_text("utf-8"))
+    return found
+
 
 # Rows per block: large enough that the per-block overhead is negligible, small enough
 # that a block's strings (about 100 B per cell) stay a few tens of MB.

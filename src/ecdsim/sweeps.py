@@ -286,6 +286,11 @@ class SweepResult:
             },
         }
 
+    def to_document(self) -> dict[str, Any]:
+        """The JSON document of ``ecdsim sweep --json``: :meth:`metadata` and the rows
+        (NaN as null; docs/json.md)."""
+        return {**self.metadata(), "rows": [_json_row(row) for row in self.rows]}
+
     def to_csv(self) -> str:
         """The table as CSV text (NaN as an empty cell, numbers with full precision)."""
         import csv
@@ -395,6 +400,13 @@ def _label(column: str) -> str:
         if column.endswith(suffix):
             return f"{column[: -len(suffix)].replace('_', ' ')} [{unit}]"
     return column.replace("_", " ")
+
+
+def _json_row(row: Mapping[str, Any]) -> dict[str, Any]:
+    """A row with NaN and infinities as null (JSON has neither)."""
+    return {
+        k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in row.items()
+    }
 
 
 def _number(value: object) -> float:

@@ -33,14 +33,15 @@ def sweep(
         ),
     ],
     out: Annotated[
-        Path,
+        Path | None,
         typer.Option(
             "--out",
             "-o",
-            help="The table: CSV, or Parquet if the name ends .parquet.",
+            help="The table: CSV, or Parquet if the name ends .parquet (default sweep.csv; "
+            "none with --json unless given).",
             metavar="FILE",
         ),
-    ] = Path("sweep.csv"),
+    ] = None,
     latin: Annotated[
         int | None,
         typer.Option(
@@ -86,6 +87,10 @@ def sweep(
             metavar="COLUMN",
         ),
     ] = "deployment_time_s",
+    as_json: Annotated[
+        bool,
+        typer.Option("--json", help="Print the table as JSON on stdout (docs/json.md)."),
+    ] = False,
 ) -> None:
     """Vary config keys (full factorial or Latin hypercube) and tabulate every result."""
     import tomllib
@@ -121,15 +126,24 @@ def sweep(
     if plot is not None and output not in result.columns:
         known = [c for c in result.columns if c not in {v.column for v in varies}]
         fail([f"--output {output!r}: not a column of the table; expected one of {known}"])
-    try:
-        result.write(out)
-    except ModuleNotFoundError as exc:
-        fail([f"--out {out}: {exc}"])
-    except OSError as exc:
-        fail([f"--out {out}: cannot write ({exc.strerror or exc})"])
-    typer.echo(f"wrote {out} ({len(points)} points, {len(result.rows)} rows)")
+    if out is None and not as_json:
+        out = Path("sweep.csv")
+    if out is not None:
+        try:
+            result.write(out)
+        except ModuleNotFoundError as exc:
+            fail([f"--out {out}: {exc}"])
+        except OSError as exc:
+            fail([f"--out {out}: cannot write ({exc.strerror or exc})"])
+        typer.echo(f"wrote {out} ({len(points)} points, {len(result.rows)} rows)", err=as_json)
     for index, message in result.errors:
         typer.echo(f"warning: point {index}: {message}", err=True)
+    if as_json:
+        import sys
+
+        from ecdsim.jsonrows import write_json
+
+        write_json(result.to_document(), sys.stdout.write)
     if plot is not None:
         from ecdsim.plotting import save_figure
 
@@ -137,4 +151,4 @@ def sweep(
             save_figure(result.plot(output), plot)
         except OSError as exc:
             fail([f"--plot {plot}: cannot write ({exc.strerror or exc})"])
-        typer.echo(f"wrote {plot}")
+        typer.echo(f"wrote {plot}", err=as_json)
