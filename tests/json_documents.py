@@ -131,27 +131,102 @@ CATALOGUE = str(EXAMPLES / "catalogue.toml")
 
 CASES: tuple[Case, ...] = (
     Case("deploy paper", "deploy", lambda _: ["deploy", PAPER, "--json"]),
-    Case("deploy exact only, us", "deploy", lambda _: ["deploy", PAPER, "-m", "exact", "--units", "us", "--json"]),  # noqa: E501
+    Case(
+        "deploy exact only, us",
+        "deploy",
+        lambda _: ["deploy", PAPER, "-m", "exact", "--units", "us", "--json"],
+    ),  # noqa: E501
     Case("deploy dynamic", "deploy", lambda _: ["deploy", DYNAMIC, "--json"]),
-    Case("deploy ground test", "deploy", lambda _: ["deploy", str(EXAMPLES / "paper_cc16_ground_test.toml"), "--json"]),  # noqa: E501
+    Case(
+        "deploy ground test",
+        "deploy",
+        lambda _: ["deploy", str(EXAMPLES / "paper_cc16_ground_test.toml"), "--json"],
+    ),  # noqa: E501
     Case("deploy stall and warnings", "deploy", _stalling),
-    Case("deploy two-node heating", "deploy", lambda f: ["deploy", _two_node(f), "-T", "25", "-m", "dynamic", "--json"]),  # noqa: E501
+    Case(
+        "deploy two-node heating",
+        "deploy",
+        lambda f: ["deploy", _two_node(f), "-T", "25", "-m", "dynamic", "--json"],
+    ),  # noqa: E501
     Case("deploy compliant mesh", "deploy", _compliant),
     Case("fit drop-test", "fit_drop_test", lambda _: ["fit", "drop-test", DROP, "--json"]),
-    Case("fit drop-test timing noise", "fit_drop_test", lambda _: ["fit", "drop-test", DROP, "--noise", "timing", "--json"]),  # noqa: E501
+    Case(
+        "fit drop-test timing noise",
+        "fit_drop_test",
+        lambda _: ["fit", "drop-test", DROP, "--noise", "timing", "--json"],
+    ),  # noqa: E501
     Case("fit drop-test bad rows", "fit_drop_test", _bad_rows),
     Case("fit drop-test one temperature", "fit_drop_test", _one_temperature),
-    Case("fit trace", "fit_trace", lambda _: ["fit", "trace", str(EXAMPLES / "deployment_trace.csv"), "--config", PAPER, "--json"]),  # noqa: E501
-    Case("fit trace spring", "fit_trace", lambda _: ["fit", "trace", str(EXAMPLES / "deployment_trace.csv"), "--config", PAPER, "--fit-spring", "--json"]),  # noqa: E501
+    Case(
+        "fit trace",
+        "fit_trace",
+        lambda _: [
+            "fit",
+            "trace",
+            str(EXAMPLES / "deployment_trace.csv"),
+            "--config",
+            PAPER,
+            "--json",
+        ],
+    ),  # noqa: E501
+    Case(
+        "fit trace spring",
+        "fit_trace",
+        lambda _: [
+            "fit",
+            "trace",
+            str(EXAMPLES / "deployment_trace.csv"),
+            "--config",
+            PAPER,
+            "--fit-spring",
+            "--json",
+        ],
+    ),  # noqa: E501
     Case("size", "size", lambda _: ["size", SIZING, "--catalog", CATALOGUE, "--json"]),
-    Case("size one pair", "size", lambda _: ["size", SIZING, "--catalog", CATALOGUE, "--damper", "CDA Cc-16 damper", "--gearbox", "CDA Cc-16 gearbox", "--json"]),  # noqa: E501
-    Case("compare-fluid", "compare_fluid", lambda _: ["compare-fluid", str(EXAMPLES / "fluid.toml"), "--json"]),  # noqa: E501
+    Case(
+        "size one pair",
+        "size",
+        lambda _: [
+            "size",
+            SIZING,
+            "--catalog",
+            CATALOGUE,
+            "--damper",
+            "CDA Cc-16 damper",
+            "--gearbox",
+            "CDA Cc-16 gearbox",
+            "--json",
+        ],
+    ),  # noqa: E501
+    Case(
+        "compare-fluid",
+        "compare_fluid",
+        lambda _: ["compare-fluid", str(EXAMPLES / "fluid.toml"), "--json"],
+    ),  # noqa: E501
     Case("montecarlo", "montecarlo", _montecarlo),
     Case("montecarlo torque margin", "montecarlo", lambda f: _montecarlo(f, margin=True)),
     Case("repeat", "repeat", _repeat(DYNAMIC)),
     Case("repeat two-node", "repeat", _repeat(_two_node)),
-    Case("sweep", "sweep", lambda _: ["sweep", PAPER, "--vary", "gearbox.ratio=300,380", "--vary", "load.start_torque=3.2,3.73 N*m", "-T", "25", "--json"]),  # noqa: E501
-    Case("sweep dynamic", "sweep", lambda _: ["sweep", DYNAMIC, "--vary", "load.inertia=1,5", "-T", "25", "--json"]),  # noqa: E501
+    Case(
+        "sweep",
+        "sweep",
+        lambda _: [
+            "sweep",
+            PAPER,
+            "--vary",
+            "gearbox.ratio=300,380",
+            "--vary",
+            "load.start_torque=3.2,3.73 N*m",
+            "-T",
+            "25",
+            "--json",
+        ],
+    ),  # noqa: E501
+    Case(
+        "sweep dynamic",
+        "sweep",
+        lambda _: ["sweep", DYNAMIC, "--vary", "load.inertia=1,5", "-T", "25", "--json"],
+    ),  # noqa: E501
 )
 
 

@@ -392,6 +392,9 @@ def test_nested_overrides_merge_into_their_table() -> None:
         overrides={"gearbox": {"ratio": 400}, "load": {"system_friction": {"at_0C": "0.5 N*m"}}},
     )
     assert nested.deployment_time() == dotted.deployment_time()
+    # None removes a key: a required one is then missing, by name.
+    with pytest.raises(ConfigError, match="gearbox.coulomb_friction: missing"):
+        ecdsim.load(PAPER, overrides={"gearbox": {"coulomb_friction": None}})
     # The table's other keys are kept (the gearbox's friction, the law's slope).
     assert nested.config.spec.gearbox.coulomb_friction == pytest.approx(4.5e-4, rel=1e-15)
     assert nested.prediction.problem.friction.ravel()[0] == pytest.approx(

@@ -125,8 +125,8 @@ def test_a_compliant_mesh_is_refused_by_the_damper_fmu(tmp_path: Path) -> None:
 
 
 def test_heat_balance_matches_the_adiabatic_closed_form(tmp_path: Path) -> None:
-    # The [damper.thermal] table replaced by one without a resistance: adiabatic.
-    thermal = {"heat_capacity": "0.05 J/K"}
+    # The [damper.thermal] table without its resistance (None removes it): adiabatic.
+    thermal = {"heat_capacity": "0.05 J/K", "thermal_resistance": None}
     config = ecdsim.load(heated_config(tmp_path), overrides={"damper.thermal": thermal})
     model = DamperModel.from_config(config, 25.0)
     u = 0.1  # slow shaft [rad/s]

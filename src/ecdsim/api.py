@@ -236,7 +236,18 @@ def _document(
                 "a TOML mapping or an ecdsim Config"
             ]
         )
-    return apply_overrides(raw, overrides), source
+    # None removes a key (the field's default applies, or the section is absent): with
+    # merging, the way to drop a key of a table, e.g. a thermal resistance (adiabatic).
+    removed = [key for key, value in overrides.items() if value is None]
+    document = apply_overrides(raw, {k: v for k, v in overrides.items() if v is not None})
+    for key in removed:
+        *tables, last = key.split(".")
+        node: Any = document
+        for part in tables:
+            node = node.get(part) if isinstance(node, dict) else None
+        if isinstance(node, dict):
+            node.pop(last, None)
+    return document, source
 
 
 def _overrides(overrides: object) -> dict[str, object]:
@@ -244,7 +255,8 @@ def _overrides(overrides: object) -> dict[str, object]:
 
     A nested mapping merges into its table key by key (``{"gearbox": {"ratio": 400}}``
     sets ``gearbox.ratio`` and keeps the table's other keys), as TOML's dotted keys do;
-    NumPy scalars and arrays become Python numbers and lists. Keys must be strings.
+    a value of None removes its key; NumPy scalars and arrays become Python numbers and
+    lists. Keys must be strings.
     Raises :class:`ConfigError` naming the key.
     """
     from ecdsim.config.units import quoted

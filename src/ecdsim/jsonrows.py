@@ -46,7 +46,9 @@ def schema(name: str) -> dict[str, Any]:
     'ecdsim deploy --json'
     """
     if not isinstance(name, str) or name not in SCHEMAS:
-        raise ValueError(f"{name!r} is not a JSON document of ecdsim; expected one of {list(SCHEMAS)}")
+        raise ValueError(
+            f"{name!r} is not a JSON document of ecdsim; expected one of {list(SCHEMAS)}"
+        )
     found: dict[str, Any] = json.loads((SCHEMA_DIR / f"{name}.schema.json").read_text("utf-8"))
     return found
 

@@ -404,9 +404,7 @@ def _label(column: str) -> str:
 
 def _json_row(row: Mapping[str, Any]) -> dict[str, Any]:
     """A row with NaN and infinities as null (JSON has neither)."""
-    return {
-        k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in row.items()
-    }
+    return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in row.items()}
 
 
 def _number(value: object) -> float:
