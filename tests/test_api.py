@@ -427,7 +427,8 @@ def test_deeply_nested_overrides_are_refused_without_recursion() -> None:
 
 
 def test_fit_takes_a_dataframe() -> None:
-    pandas = pytest.importorskip("pandas")
+    import pandas
+
     csv = ROOT / "examples" / "drop_test.csv"
     from_file = ecdsim.fit(csv).to_dataframe()
     fitted = ecdsim.fit(pandas.read_csv(csv))
@@ -551,7 +552,8 @@ def test_sweep_api_matches_deploy_and_the_command_line(tmp_path: Path) -> None:
 def test_sweep_parquet_carries_units_hash_and_version(tmp_path: Path) -> None:
     import hashlib
 
-    pq = pytest.importorskip("pyarrow.parquet")
+    import pyarrow.parquet as pq
+
     out = tmp_path / "s.parquet"
     run = CliRunner().invoke(
         app,

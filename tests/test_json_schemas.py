@@ -14,12 +14,11 @@ import json
 from pathlib import Path
 from typing import Any
 
+import jsonschema  # type: ignore[import-untyped]
 import pytest
 
 from ecdsim.jsonrows import SCHEMA_DIR, SCHEMAS, schema
 from tests.json_documents import CASES, ROOT, Case, document
-
-jsonschema = pytest.importorskip("jsonschema")
 
 
 def _strict(node: Any) -> Any:

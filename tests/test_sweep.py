@@ -169,6 +169,7 @@ def test_help_lists_the_options_and_its_example_runs(
             "--method": "-m",
             "--plot": None,
             "--output": None,
+            "--json": None,
             "--help": None,
         },
     )
