@@ -44,6 +44,7 @@ typecheck: $(STAMP_TEST)
 browser:
 	@bash scripts/ensure-chromium.sh
 	@bash scripts/ensure-axe.sh
+	@bash scripts/ensure-cc.sh
 
 pytest: $(STAMP_TEST) browser
 	$(BIN)/python -m pytest

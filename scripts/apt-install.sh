@@ -20,7 +20,7 @@ if [ "$(id -u)" -ne 0 ]; then
         exit 2
     fi
 fi
-echo "installing Debian's $PACKAGES for the browser tests (apt-get)..."
+echo "installing Debian's $PACKAGES for make test (apt-get)..."
 # shellcheck disable=SC2086 # one word per package
 if ! { $SUDO apt-get update -qq && $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $PACKAGES >/dev/null; }; then
     echo "error: apt-get could not install '$PACKAGES' (its messages above): install it, then rerun make test" >&2

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -34,7 +33,7 @@ from ecdsim.model import (
     Load,
 )
 from tests import hand
-from tests.conftest import ROOT, paper_system, require
+from tests.conftest import paper_system, require
 from tests.dynamics_reference import assert_energy_closes
 
 T_ZERO = 25.0 + 1.0 / 0.004  # Eq. 1's BD_T = 0 [degC]
@@ -341,28 +340,3 @@ def test_the_housing_temperature_is_reported_only_with_a_housing() -> None:
         if has_housing:
             assert housing is not None
             assert case["final_housing_temperature_C"] == float(housing[0])
-
-
-def test_the_fmu_refuses_two_node_heating(tmp_path: Path) -> None:
-    # The FMU's damper has one temperature: a housing would be silently dropped and the
-    # rotor-to-housing resistance read as rotor to ambient. One line, exit status 2.
-    from typer.testing import CliRunner
-
-    from ecdsim.cli.app import app
-
-    text = (
-        (ROOT / "examples" / "paper_cc16_dynamic.toml")
-        .read_text("utf-8")
-        .replace(
-            "[gearbox]",
-            '[damper.thermal]\nheat_capacity = "4 J/K"\nthermal_resistance = "5 K/W"\n'
-            'housing_heat_capacity = "90 J/K"\n\n[gearbox]',
-        )
-    )
-    config = tmp_path / "two_node.toml"
-    config.write_text(text, "utf-8")
-    result = CliRunner().invoke(app, ["export-fmu", str(config), "-o", str(tmp_path / "d.fmu")])
-    assert result.exit_code == 2
-    assert result.stderr.count("\n") == 1
-    assert "damper.thermal.housing_heat_capacity" in result.stderr
-    assert not (tmp_path / "d.fmu").exists()

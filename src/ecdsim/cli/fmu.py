@@ -1,4 +1,4 @@
-"""``ecdsim export-fmu``: an FMI 2.0 co-simulation FMU of the damper or the deployment.
+"""``ecdsim export-fmu``: an FMI 2.0 FMU of the damper (C) or of the deployment (Python).
 
 Only typer is imported at start-up; the builder (:mod:`ecdsim.fmu`) inside the command.
 """
@@ -14,8 +14,9 @@ from ecdsim.cli.common import fail
 
 EPILOG = (
     "Example: [bold]ecdsim export-fmu examples/paper_cc16_dynamic.toml -o damper.fmu[/bold]"
-    "\n\nNeeds pythonfmu (pip install 'ecdsim\\[fmu]'); the FMU runs in a Python with "
-    "ecdsim installed (docs/fmu.md)."
+    "\n\nThe damper FMU is compiled with the system's C compiler (cc) and needs no Python "
+    "to run; the deployment FMU needs pythonfmu to build (pip install 'ecdsim\\[fmu]') "
+    "and a Python with this ecdsim to run (docs/fmu.md)."
 )
 
 
@@ -37,24 +38,34 @@ def export_fmu(
         typer.Option(
             "--deployment",
             help="Export the whole spring-driven hinge (dynamic method; no inputs; outputs "
-            "angle, speed, latched) instead of the damper.",
+            "angle, speed, latched, status) instead of the damper.",
         ),
     ] = False,
+    name: Annotated[
+        str | None,
+        typer.Option(
+            "--name",
+            help="The FMU's model identifier (default: the file name and a hash of the "
+            "config, unique per export).",
+            metavar="NAME",
+        ),
+    ] = None,
 ) -> None:
-    """Write an FMI 2.0 co-simulation FMU: the damper + gearbox at the slow shaft (inputs
-    shaft speed and ambient temperature; outputs damper torque, friction torque, damper
-    temperature), or with --deployment the whole hinge."""
+    """Write an FMI 2.0 FMU: the damper + gearbox at the slow shaft (model exchange and
+    co-simulation, in C; inputs shaft speed and ambient temperature; outputs damper
+    torque, frictions, damper temperature), or with --deployment the whole hinge
+    (co-simulation, in Python)."""
     from ecdsim.config import ConfigError
-    from ecdsim.fmu import FmuDependencyError, build_fmu
+    from ecdsim.fmu import FmuCompilerError, FmuDependencyError, FmuNameError, build_fmu
 
     target = out or Path("deployment.fmu" if deployment else "damper.fmu")
     if target.suffix.lower() != ".fmu":
         fail([f"--out {target}: expected a file name ending .fmu"])
     try:
-        written = build_fmu(config, target, deployment=deployment)
+        written = build_fmu(config, target, deployment=deployment, name=name)
     except ConfigError as exc:
         fail(str(exc).splitlines())
-    except FmuDependencyError as exc:
+    except (FmuDependencyError, FmuNameError, FmuCompilerError) as exc:
         fail([str(exc)])
     except OSError as exc:
         fail([f"--out {target}: cannot write ({exc.strerror or exc})"])

@@ -1,12 +1,11 @@
 """What the FMUs compute, in plain Python: testable without pythonfmu or an FMI host.
 
-:class:`DamperModel` is the ECD (damper + gearbox) referred to the slow shaft, driven by
-the shaft speed and the ambient temperature: the damping torque of the dynamic method
-(``N (T_eddy(N u, T_d) + BG N u)``, the eddy law of :mod:`ecdsim.dynamics.damping` at
-the damper temperature T_d), the ECD's Coulomb friction ``FECD(T_ambient)`` and, when
-``[damper.thermal]`` is configured, the lumped self-heating of
-:mod:`ecdsim.physics.thermal`, ``C dT_d/dt = T_eddy N u - (T_d - T_ambient) / R``
-(Incropera et al., Eq. 5.2), the same balance the dynamic method integrates.
+:class:`DamperModel` is the ECD (damper + gearbox) referred to the slow shaft: the
+values of a config that the equations of :mod:`ecdsim.fmu.equations` take, and those
+equations called in Python. The damper FMU is the same equations translated to C, its
+parameters started at these values (:mod:`ecdsim.fmu.native`); the model holds no law
+of its own and no integrator: in model exchange the host integrates the temperature
+states, in co-simulation the FMU's RK4 does (docs/fmu.md).
 
 :class:`DeploymentReplay` is the whole spring-driven hinge: the dynamic method is run
 once at initialisation and its solution is evaluated at the times asked.
@@ -14,40 +13,46 @@ once at initialisation and its solution is evaluated at the times asked.
 
 from __future__ import annotations
 
+import inspect
 import math
-from dataclasses import dataclass, field
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ecdsim.fmu import equations
+
 if TYPE_CHECKING:
     from ecdsim.config import Config
     from ecdsim.deployment import Prediction
-    from ecdsim.dynamics.damping import EddyLaw
-    from ecdsim.model import DeploymentSystem
 
-# The config keys an FMU exposes as parameters (FMI name -> config key). Their start
-# values are the config's; a host may change them before initialisation.
-DAMPER_PARAMETERS = {
+# The config keys the deployment FMU exposes as parameters (FMI name -> config key).
+# Their start values are the config's; a host may change them before initialisation.
+DEPLOYMENT_PARAMETERS = {
     "gear_ratio": "gearbox.ratio",
     "damping_rate": "damper.damping_rate",
     "damping_temperature_coefficient": "damper.damping_temperature_coefficient",
     "damper_coulomb_friction": "damper.coulomb_friction",
     "gearbox_coulomb_friction": "gearbox.coulomb_friction",
-}
-THERMAL_PARAMETERS = {
-    "heat_capacity": "damper.thermal.heat_capacity",
-    "thermal_resistance": "damper.thermal.thermal_resistance",
-}
-DEPLOYMENT_PARAMETERS = {
-    **DAMPER_PARAMETERS,
     "load_inertia": "load.inertia",
     "start_torque": "load.start_torque",
     "end_torque": "load.end_torque",
 }
-# The longest internal integration step of the heat balance [s]: a communication step
-# is cut into equal Runge-Kutta steps no longer than this.
-MAX_STEP = 1e-3
+
+# The results of equations.damper_outputs, in its order.
+DAMPER_OUTPUTS = (
+    "damper_torque",
+    "friction_torque",
+    "coulomb_friction",
+    "breakaway_friction",
+    "eddy_power",
+)
+# The arguments of the equations that are inputs and states, not model values.
+INPUTS = ("shaft_speed", "ambient_temperature")
+STATES = ("damper_temperature", "housing_temperature")
+
+Value = float | bool | int | tuple[float, ...]
 
 
 def config_values(config: Config, names: dict[str, str]) -> dict[str, float]:
@@ -65,157 +70,221 @@ def config_values(config: Config, names: dict[str, str]) -> dict[str, float]:
     return out
 
 
-def _dynamic_parameters(config: Config) -> Any:
-    from ecdsim.dynamics.params import DynamicParameters
-
-    params = config.spec.dynamics()
-    if params is not None:
-        return params
-    damper = config.spec.damper
-    # The damper alone needs no load inertia; any positive value builds its laws.
-    return DynamicParameters(
-        load_inertia=1.0,
-        rolloff=damper.rolloff.to_model() if damper.rolloff else None,
-        thermal=damper.thermal.to_model() if damper.thermal else None,
-    )
+def _float(value: object, key: str) -> float:
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return float(value)
+    raise TypeError(f"{key}: the FMU takes one value, not {type(value).__name__}")
 
 
-@dataclass
+def _values(config: Config) -> tuple[dict[str, Value], list[str]]:
+    """The equations' model values of ``config`` and the names a host may set."""
+    from ecdsim.model import LinearTemperatureLaw, TabulatedTemperatureLaw
+
+    damper = config.system.ecd.damper
+    gearbox = config.system.ecd.gearbox
+    spec = config.spec.damper
+    values: dict[str, Value] = {
+        "gear_ratio": _float(gearbox.ratio, "gearbox.ratio"),
+        "damping_rate": _float(damper.damping_rate, "damper.damping_rate"),
+        "reference_temperature": _float(
+            damper.reference_temperature, "damper.reference_temperature"
+        ),
+        "damping_temperature_coefficient": _float(
+            damper.damping_temperature_coefficient, "damper.damping_temperature_coefficient"
+        ),
+        "rolloff": spec.rolloff is not None,
+        "peak_speed": 0.0,
+        "resistivity_coefficient": 0.0,
+        "gearbox_damping_rate": 0.0,
+        "gearbox_damping_fraction": 0.0,
+        "forward_efficiency": 1.0,
+        "damper_coulomb_friction": _float(damper.coulomb_friction, "damper.coulomb_friction"),
+        "gearbox_coulomb_friction": _float(gearbox.coulomb_friction, "gearbox.coulomb_friction"),
+        "lubrication_friction_slope": 0.0,
+        "lubrication_friction_at_0c": 0.0,
+        "lubrication_temperatures": (0.0,),
+        "lubrication_frictions": (0.0,),
+        "lubrication_points": 0,
+        "static_friction_factor": float(spec.static_friction_factor),
+        "stribeck_speed": math.inf,
+        "heat_capacity": 1.0,
+        "thermal_resistance": math.inf,
+        "housing": False,
+        "housing_heat_capacity": 1.0,
+        "housing_thermal_resistance": math.inf,
+    }
+    exposed = [
+        "gear_ratio",
+        "damping_rate",
+        "reference_temperature",
+        "damper_coulomb_friction",
+        "gearbox_coulomb_friction",
+        "static_friction_factor",
+    ]
+    if spec.rolloff is None:
+        exposed.append("damping_temperature_coefficient")
+    else:
+        values["peak_speed"] = float(spec.rolloff.peak_speed)
+        values["resistivity_coefficient"] = float(spec.rolloff.resistivity_coefficient)
+        exposed += ["peak_speed", "resistivity_coefficient"]
+    if gearbox.damping_rate is not None:
+        values["gearbox_damping_rate"] = _float(gearbox.damping_rate, "gearbox.damping_rate")
+        exposed.append("gearbox_damping_rate")
+    else:
+        values["gearbox_damping_fraction"] = _float(
+            gearbox.damping_fraction, "gearbox.damping_fraction"
+        )
+        exposed.append("gearbox_damping_fraction")
+    if gearbox.efficiency is not None:
+        values["forward_efficiency"] = _float(gearbox.efficiency.forward, "gearbox.efficiency")
+        exposed.append("forward_efficiency")
+    law = damper.lubrication_friction
+    if isinstance(law, TabulatedTemperatureLaw):
+        values["lubrication_temperatures"] = tuple(float(t) for t in law.temperatures)
+        values["lubrication_frictions"] = tuple(float(v) for v in law.values)
+        values["lubrication_points"] = len(law.temperatures)
+        exposed += ["lubrication_temperatures", "lubrication_frictions"]
+    elif isinstance(law, LinearTemperatureLaw):
+        values["lubrication_friction_slope"] = _float(law.slope, "damper.lubrication_friction")
+        values["lubrication_friction_at_0c"] = _float(law.at_0c, "damper.lubrication_friction")
+        exposed += ["lubrication_friction_slope", "lubrication_friction_at_0c"]
+    else:  # pragma: no cover - the config knows only these two laws
+        raise TypeError(f"damper.lubrication_friction: no FMU form for {law!r}")
+    if spec.stribeck_speed is not None:
+        values["stribeck_speed"] = float(spec.stribeck_speed)
+        exposed.append("stribeck_speed")
+    thermal = spec.thermal
+    if thermal is not None:
+        values["heat_capacity"] = float(thermal.heat_capacity)
+        exposed.append("heat_capacity")
+        if thermal.thermal_resistance is not None:
+            values["thermal_resistance"] = float(thermal.thermal_resistance)
+            exposed.append("thermal_resistance")
+        if thermal.housing_heat_capacity is not None:
+            values["housing"] = True
+            values["housing_heat_capacity"] = float(thermal.housing_heat_capacity)
+            exposed.append("housing_heat_capacity")
+            if thermal.housing_thermal_resistance is not None:
+                values["housing_thermal_resistance"] = float(thermal.housing_thermal_resistance)
+                exposed.append("housing_thermal_resistance")
+    return values, exposed
+
+
+def _call(function: Callable[..., Any], known: Mapping[str, Value]) -> Any:
+    """``function`` called with the values of its arguments, by name."""
+    names = inspect.signature(function).parameters
+    return function(*(known[name] for name in names))
+
+
+@dataclass(frozen=True)
 class DamperModel:
-    """The ECD referred to the slow shaft, with its temperature as the one state.
+    """The ECD at the slow shaft: the equations' values of one config, and the equations.
 
     Attributes
     ----------
-    system : the deployment system (its ECD gives FECD at any ambient temperature)
-    ratio : gear ratio N [-]
-    gearbox_damping : BG at the high-speed shaft [N*m*s/rad]
-    eddy : the eddy-current law (linear or Kloss roll-off), one case
-    heating : whether the damper temperature evolves ([damper.thermal] given)
-    heat_capacity : C [J/K] (inf without heating)
-    thermal_resistance : R [K/W] (inf: adiabatic)
-    forward_efficiency : eta_f of a lossy mesh (1: ideal); the damping torque at the
-        slow shaft is divided by it (the shaft always drives this inertia-free damper)
-    static_friction_factor : f_D, the damper's breakaway over kinetic friction
-    stribeck_speed : w_St [rad/s at the slow shaft] (inf: no Stribeck curve)
-    temperature : the damper temperature T_d [degC], the state
-    max_step : the longest internal Runge-Kutta step [s]
+    values : every argument of :func:`~ecdsim.fmu.equations.damper_outputs` and
+        :func:`~ecdsim.fmu.equations.damper_heating` but the inputs and the states, in SI
+        (temperatures in degC); a tuple for a table, bools for the structure (``rolloff``,
+        ``housing``)
+    parameters : the names among ``values`` that the FMU exposes as parameters (the
+        config's keys; the others are fixed by its structure)
+    heating : whether the damper heats ([damper.thermal]): the damper temperature is
+        then a state, else the ambient temperature
+    ambient : the config's first analysis temperature [degC], the FMU's start value
     """
 
-    system: DeploymentSystem
-    ratio: float
-    gearbox_damping: float
-    eddy: EddyLaw
+    values: dict[str, Value]
+    parameters: tuple[str, ...]
     heating: bool
-    heat_capacity: float
-    thermal_resistance: float
-    forward_efficiency: float = 1.0
-    static_friction_factor: float = 1.0
-    stribeck_speed: float = math.inf
-    temperature: float = 25.0
-    max_step: float = MAX_STEP
-    _friction_cache: dict[float, float] = field(default_factory=dict, repr=False)
+    ambient: float
 
     @classmethod
-    def from_config(cls, config: Config, ambient: float) -> DamperModel:
-        """The model of ``config``'s ECD, its damper at ``ambient`` [degC]."""
-        from ecdsim.deployment import build_problem
-        from ecdsim.dynamics.problem import dynamic_problem
-
-        temps = np.array([float(ambient)])
-        ecd = config.system.ecd.at(temps)
-        base, fs = build_problem(config.system, ecd, temps)
-        problem = dynamic_problem(config.system, ecd, temps, base, fs, _dynamic_parameters(config))
-        damper = config.spec.damper
+    def from_config(cls, config: Config) -> DamperModel:
+        """The model of ``config``'s ECD (each value a single number)."""
+        values, exposed = _values(config)
         return cls(
-            system=config.system,
-            ratio=float(np.ravel(problem.gear_ratio)[0]),
-            gearbox_damping=float(np.ravel(problem.gearbox_damping_rate)[0]),
-            eddy=problem.eddy,
-            heating=bool(problem.thermal),
-            heat_capacity=float(np.ravel(problem.heat_capacity)[0]),
-            thermal_resistance=float(np.ravel(problem.thermal_resistance)[0]),
-            forward_efficiency=float(np.ravel(ecd.forward_efficiency)[0]),
-            static_friction_factor=float(damper.static_friction_factor),
-            stribeck_speed=math.inf if damper.stribeck_speed is None else damper.stribeck_speed,
-            temperature=float(ambient),
+            values=values,
+            parameters=tuple(exposed),
+            heating=config.spec.damper.thermal is not None,
+            ambient=float(config.temperatures[0]),
         )
 
-    def _factor(self, temperature: float) -> float:
-        # Eq. 1's bracket (or the Kloss law's factor), never below 0: the law's zero is
-        # approached by heating, never crossed (ecdsim.physics.thermal).
-        return max(float(np.ravel(self.eddy.factor(temperature))[0]), 0.0)
+    @property
+    def housing(self) -> bool:
+        """Two-node heating: the rotor and its housing."""
+        return bool(self.values["housing"])
 
-    def eddy_torque(self, speed: float, temperature: float) -> float:
-        """T_eddy at the high-speed shaft for slow-shaft speed ``speed`` [N*m]."""
-        shaft = self.ratio * speed
-        return float(np.ravel(self.eddy.torque_at_factor(shaft, self._factor(temperature)))[0])
+    def with_values(self, **changes: Value) -> DamperModel:
+        """The model with some values changed (as an FMU host sets parameters)."""
+        unknown = set(changes) - set(self.values)
+        if unknown:
+            raise KeyError(f"no model value {sorted(unknown)}; choose from {sorted(self.values)}")
+        return replace(self, values={**self.values, **changes})
 
-    def damper_torque(self, speed: float, temperature: float | None = None) -> float:
-        """Damping torque at the slow shaft, opposing ``speed`` [N*m]:
-        N (T_eddy + BG N u) / eta_f (Eq. 1, 3; a lossy mesh as Modelica's LossyGear in
-        its forward mode, which this damper without inertia is always in: the shaft
-        drives it)."""
-        t = self.temperature if temperature is None else temperature
-        shaft = self.ratio * speed
-        torque = self.ratio * (self.eddy_torque(speed, t) + self.gearbox_damping * shaft)
-        return torque / self.forward_efficiency
+    def outputs(
+        self, speed: float, ambient: float, damper_temperature: float | None = None
+    ) -> dict[str, float]:
+        """The outputs at slow-shaft speed [rad/s], ambient and damper temperature [degC].
 
-    def friction_torque(self, speed: float, ambient: float) -> float:
-        """Coulomb friction of the ECD at the slow shaft, opposing ``speed`` [N*m].
-
-        ``FECD(T_ambient)`` (Eq. 2 and 4, at the ambient temperature as in the dynamic
-        method, a lossy mesh's 1/eta_f included) times the sign of the speed; with a
-        Stribeck speed the dynamic method's curve for the ECD's part,
-        ``FECD [1 + (f_D - 1) exp(-(u / w_St)^2)]`` (docs/dynamics.md, "Stribeck
-        friction"); 0 at rest, where the holding torque depends on the rest of the
-        mechanism.
+        Without heating the damper is at the ambient temperature (``damper_temperature``
+        must then be None or equal to it).
         """
-        if speed == 0.0 or math.isnan(speed):
-            return 0.0
-        key = float(ambient)
-        if key not in self._friction_cache:
-            state = self.system.ecd.at(np.array([key]))
-            self._friction_cache.clear()
-            self._friction_cache[key] = float(np.ravel(state.ecd_friction)[0])
-        kinetic = self._friction_cache[key]
-        excess = (self.static_friction_factor - 1.0) * kinetic
-        if excess != 0.0 and math.isfinite(self.stribeck_speed):
-            kinetic += excess * math.exp(-((speed / self.stribeck_speed) ** 2))
-        return math.copysign(kinetic, speed)
+        temperature = ambient if damper_temperature is None else damper_temperature
+        known = {
+            **self.values,
+            "shaft_speed": speed,
+            "ambient_temperature": ambient,
+            "damper_temperature": temperature,
+        }
+        return dict(zip(DAMPER_OUTPUTS, _call(equations.damper_outputs, known), strict=True))
 
-    def _rate(self, speed: float, temperature: float, ambient: float) -> float:
-        power = self.eddy_torque(speed, temperature) * self.ratio * speed
-        loss = (
-            (temperature - ambient) / self.thermal_resistance
-            if math.isfinite(self.thermal_resistance)
-            else 0.0
-        )
-        return (power - loss) / self.heat_capacity
-
-    def advance(self, speed: float, slope: float, ambient: float, step: float) -> None:
-        """Integrate the damper temperature over ``step`` [s] (classical Runge-Kutta).
-
-        The speed is ``speed + slope * tau`` at ``tau`` into the step [rad/s]; without
-        heating the damper is at the ambient temperature.
-        """
+    def derivatives(
+        self,
+        speed: float,
+        ambient: float,
+        damper_temperature: float,
+        housing_temperature: float | None = None,
+    ) -> tuple[float, float]:
+        """(dT_d/dt, dT_h/dt) [K/s] at the given speed and temperatures (heating only)."""
         if not self.heating:
-            self.temperature = float(ambient)
-            return
-        if step <= 0.0:
-            return
-        n = max(1, math.ceil(step / self.max_step - 1e-9))
-        h = step / n
-        t = self.temperature
-        for i in range(n):
-            u0 = speed + slope * (i * h)
-            um = u0 + slope * (0.5 * h)
-            u1 = u0 + slope * h
-            k1 = self._rate(u0, t, ambient)
-            k2 = self._rate(um, t + 0.5 * h * k1, ambient)
-            k3 = self._rate(um, t + 0.5 * h * k2, ambient)
-            k4 = self._rate(u1, t + h * k3, ambient)
-            t += h * (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
-        self.temperature = t
+            raise ValueError("this damper has no [damper.thermal]: its temperature is the ambient")
+        housing = ambient if housing_temperature is None else housing_temperature
+        known = {
+            **self.values,
+            "shaft_speed": speed,
+            "ambient_temperature": ambient,
+            "damper_temperature": damper_temperature,
+            "housing_temperature": housing,
+        }
+        rates: tuple[float, float] = _call(equations.damper_heating, known)
+        return rates
+
+
+# Deployment status (the deployment FMU's `status` output): FMI enumeration values.
+MOVING, LATCHED, SETTLED, STUCK, STALLED, INCOMPLETE = 1, 2, 3, 4, 5, 6
+STATUS_NAMES = {
+    MOVING: "moving",
+    LATCHED: "latched",
+    SETTLED: "settled",
+    STUCK: "stuck",
+    STALLED: "stalled",
+    INCOMPLETE: "incomplete",
+}
+STATUS_DESCRIPTIONS = {
+    MOVING: "deploying (before the run's end)",
+    LATCHED: "caught at the end of travel (restitution 0), from the latch time on",
+    SETTLED: "rebounds against the end stop died out, from then on",
+    STUCK: "held at rest short of the end by static friction (or on the start stop)",
+    STALLED: "creeps to a static equilibrium short of the end, reached only "
+    "asymptotically: known from the release, so reported from t = 0",
+    INCOMPLETE: "the run was cut short (event limit or integration horizon)",
+}
+_OUTCOMES = {
+    "latched": LATCHED,
+    "settled": SETTLED,
+    "stuck": STUCK,
+    "creep": STALLED,
+}
 
 
 @dataclass
@@ -225,11 +294,17 @@ class DeploymentReplay:
     Attributes
     ----------
     prediction : the prediction (dynamic method only)
-    latch_time : when the hinge reaches the end of travel [s] (inf if it stalls)
+    latch_time : when the hinge first reaches the end of travel [s] (inf if never)
+    outcome : how the run ends (:data:`STATUS_NAMES`: latched, settled, stuck, stalled
+        or incomplete)
+    end_time : when it ends [s]: the latch, settling or sticking time; 0 for a stall
+        (reported from the release on); inf where no end is known
     """
 
     prediction: Prediction
     latch_time: float
+    outcome: int = LATCHED
+    end_time: float = math.inf
 
     @classmethod
     def from_config(cls, config: Config, ambient: float) -> DeploymentReplay:
@@ -239,16 +314,36 @@ class DeploymentReplay:
         prediction = predict(
             config.system, [float(ambient)], ["dynamic"], dynamics=config.spec.dynamics()
         )
-        time = float(np.ravel(prediction.solutions["dynamic"].deployment_time)[0])
-        return cls(prediction, time)
+        solution: Any = prediction.solutions["dynamic"]
+        latch = float(np.ravel(solution.deployment_time)[0])
+        result = solution.result
+        name = result.status_names()[0]
+        outcome = _OUTCOMES.get(name, INCOMPLETE)
+        if outcome == STALLED:
+            end = 0.0
+        elif outcome == STUCK:
+            end = float(np.ravel(result.stuck_time)[0])
+        elif outcome == LATCHED:
+            end = latch
+        else:
+            end = float(np.ravel(result.final_time)[0])
+        return cls(prediction, latch, outcome, end)
+
+    def status(self, time: float) -> int:
+        """The status at ``time`` [s]: moving before the run's end, its outcome from it."""
+        return self.outcome if time >= self.end_time else MOVING
 
     def at(self, time: float) -> tuple[float, float, bool]:
         """(angle [rad], speed [rad/s], latched) at ``time`` [s].
 
-        From the latch time on the hinge is latched at the end of travel: speed 0.
+        ``latched`` is true from the first arrival at the end of travel on; with a
+        rebounding end stop (restitution > 0) the angle and speed then follow the
+        rebounds until they settle.
         """
         trajectory = self.prediction.trajectory("dynamic", np.array([float(time)]))
         angle = float(np.ravel(trajectory.angle)[0])
+        speed = float(np.ravel(trajectory.speed)[0])
         latched = bool(time >= self.latch_time)
-        speed = 0.0 if latched else float(np.ravel(trajectory.speed)[0])
+        if self.outcome == LATCHED and latched:
+            speed = 0.0  # caught: the solution's arrival speed is not the hinge's any more
         return angle, speed, latched
