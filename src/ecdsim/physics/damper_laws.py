@@ -72,7 +72,8 @@ def kloss_eddy_torque(shaft_speed: float, peak_torque: float, peak_speed: float)
 
     Evaluated as ``2 T_peak omega_d omega_peak / (omega_d^2 + omega_peak^2)``, finite (0)
     where the peak speed is 0 and 0 where both speeds are (Wouterse 1991,
-    doi:10.1049/ip-b.1991.0019; :func:`ecdsim.physics.rolloff.kloss_torque`).
+    doi:10.1049/ip-b.1991.0019; :func:`ecdsim.physics.rolloff.kloss_torque`): the
+    roll-off beyond the linear range of paper section 2.1.
 
     Parameters
     ----------
@@ -109,7 +110,7 @@ def eddy_torque(
     factor : f, the law's temperature factor at the damper temperature [-]
     damping_rate : BD at the reference temperature [N*m*s/rad]
     reference_peak_speed : omega_peak_ref [rad/s] (used with roll-off only)
-    rolloff : the Kloss law (True) or the linear one (False)
+    rolloff : the Kloss law (True) or the linear one (False) [bool]
 
     >>> round(eddy_torque(2000.0, 1.0, 1.3e-4, 2000.0, True), 12)  # T_peak at the peak speed
     0.13
@@ -157,6 +158,12 @@ def linear_in_temperature(temperature: float, slope: float, at_0c: float) -> flo
 
     :func:`ecdsim.physics.laws.linear_in_temperature` for one temperature.
 
+    Parameters
+    ----------
+    temperature : T [degC]
+    slope : change per kelvin [unit of the quantity / K]
+    at_0c : value at 0 degC [unit of the quantity]
+
     >>> round(linear_in_temperature(25.0, -0.0044, 0.58), 12)
     0.47
     """
@@ -175,8 +182,8 @@ def table_in_temperature(
     ----------
     temperature : T [degC]
     temperatures : strictly increasing table temperatures [degC]
-    values : the quantity at those temperatures
-    count : number of table points, >= 1
+    values : the quantity at those temperatures [unit of the quantity]
+    count : number of table points, >= 1 [-]
 
     >>> table_in_temperature(10.0, [0.0, 20.0], [1.0, 3.0], 2)
     2.0
@@ -206,6 +213,14 @@ def input_coulomb_friction(
     Eq. 2 (``FT_T = FD + FL_T + FG``) referred to the input (Eq. 4), through a lossy
     mesh driven forward (``ecdsim.physics.gearing``; eta_f = 1 for an ideal mesh).
 
+    Parameters
+    ----------
+    damper_friction : FD at the high-speed shaft [N*m]
+    lubrication_friction : FL_T at the high-speed shaft [N*m]
+    gearbox_friction : FG at the high-speed shaft [N*m]
+    gear_ratio : N [-]
+    forward_efficiency : eta_f, in (0, 1] [-]
+
     >>> round(input_coulomb_friction(7.9e-4, 1.67e-4, 4.5e-4, 380.0, 1.0), 12)
     0.53466
     """
@@ -222,7 +237,8 @@ def stribeck_friction(
     LuGre model's steady curve, Canudas de Wit et al. 1995): from the breakaway
     ``f F_C`` near rest to the kinetic ``F_C`` as speed grows; ``F_C`` at every speed
     without a Stribeck speed (w_St = inf). 0 at rest (u = 0) and for a NaN speed: the
-    holding torque at rest depends on the rest of the mechanism.
+    holding torque at rest depends on the rest of the mechanism. F_C is the ECD's FECD_T
+    (Eq. 2, 4).
 
     Parameters
     ----------
@@ -248,7 +264,14 @@ def heat_flow(temperature: float, sink_temperature: float, thermal_resistance: f
     """Heat flow through a thermal resistance: ``(T - T_sink) / R`` [W]; 0 where R is inf.
 
     The resistance form of conduction (Incropera, DeWitt, Bergman and Lavine 2007,
-    section 3.1.3); :func:`ecdsim.physics.thermal.heat_loss` for one case.
+    section 3.1.3); :func:`ecdsim.physics.thermal.heat_loss` for one case: the loss term
+    of the damper's lumped self-heating (the ECD's eddy-current power heats it).
+
+    Parameters
+    ----------
+    temperature : the hot side's temperature T [degC]
+    sink_temperature : T_sink [degC]
+    thermal_resistance : R [K/W], > 0; inf for none (adiabatic)
 
     >>> heat_flow(30.0, 25.0, 2.5)
     2.0
