@@ -417,13 +417,14 @@ def test_the_translator_refuses_what_it_does_not_translate() -> None:
 
 
 def test_the_translation_keeps_pythons_arithmetic(tmp_path: Path) -> None:
-    # True division of ints, ** as pow, min/max as Python's, loops and int locals.
+    # True division of ints, ** as pow, min/max as Python's, loops, int locals, module
+    # constants and math.pi.
     def arithmetic2(a: float, n: int) -> float:
         total = 0.0
         for i in range(n):
             total += (i + 1) / 2 + a**2
         k = n if a > 0.0 else -n
-        return max(total, -a) + min(a, 0.0) - k / 4
+        return max(total, -a) + min(a, 0.0) - k / 4 + N * math.pi  # a module constant
 
     library = _compile(tmp_path, _exported([arithmetic2]), "arith")
     function = library.py_arithmetic2

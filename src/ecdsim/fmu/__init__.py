@@ -189,12 +189,16 @@ def _stop_time(config: Config, deployment: bool) -> float:
     """
     import numpy as np
 
-    from ecdsim.deployment import predict
+    from ecdsim.deployment import ModelDomainError, predict
 
-    if deployment:
+    methods = ["dynamic"] if deployment else ["exact"]
+    try:
         prediction = predict(
-            config.system, config.temperatures, ["dynamic"], dynamics=config.spec.dynamics()
+            config.system, config.temperatures, methods, dynamics=config.spec.dynamics()
         )
+    except ModelDomainError as exc:  # the config's own temperatures: a one-line error
+        raise ConfigError([str(exc)], config.source) from None
+    if deployment:
         solution: Any = prediction.solutions["dynamic"]
         result = solution.result
         ends = np.concatenate(
@@ -205,7 +209,6 @@ def _stop_time(config: Config, deployment: bool) -> float:
             ]
         )
     else:
-        prediction = predict(config.system, config.temperatures, ["exact"])
         ends = np.ravel(prediction.solutions["exact"].deployment_time)
     finite = ends[np.isfinite(ends) & (ends > 0.0)]
     return _round_up(1.1 * float(finite.max())) if finite.size else 100.0

@@ -227,15 +227,18 @@ class _Translator:
         result: tuple[str, str] = method(node)
         return result
 
-    def _Constant(self, node: ast.Constant) -> tuple[str, str]:
-        value = node.value
+    def _number(self, value: object, node: ast.AST, what: str) -> tuple[str, str]:
+        """(C literal, C type) of a Python number; ``what`` says what else it was."""
         if isinstance(value, bool):
             return ("1" if value else "0"), "int"
         if isinstance(value, int):
             return str(value), "int"
         if isinstance(value, float):
             return c_literal(value), "double"
-        raise self.unit.fail(node, f"constant {value!r} is not a number")
+        raise self.unit.fail(node, what)
+
+    def _Constant(self, node: ast.Constant) -> tuple[str, str]:
+        return self._number(node.value, node, f"constant {node.value!r} is not a number")
 
     def _Name(self, node: ast.Name) -> tuple[str, str]:
         if node.id in self.arguments or node.id in self.unit.local_types:
@@ -250,13 +253,7 @@ class _Translator:
 
     def _global_value(self, node: ast.expr) -> tuple[str, str]:
         value = self._resolve(node)
-        if isinstance(value, bool):
-            return ("1" if value else "0"), "int"
-        if isinstance(value, int):
-            return str(value), "int"
-        if isinstance(value, float):
-            return c_literal(value), "double"
-        raise self.unit.fail(node, "only numeric module constants can be read")
+        return self._number(value, node, "only numeric module constants can be read")
 
     def _BinOp(self, node: ast.BinOp) -> tuple[str, str]:
         left, left_type = self.expression(node.left)
