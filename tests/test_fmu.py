@@ -35,6 +35,7 @@ from typer.testing import CliRunner
 import ecdsim
 from ecdsim.cli.app import app
 from ecdsim.fmu.model import DamperModel
+from ecdsim.fmu.native import compiler
 from ecdsim.physics import damper_laws, thermal
 from tests import hand
 from tests.conftest import require
@@ -283,7 +284,7 @@ def _compile(tmp_path: Path, source: str, name: str) -> ctypes.CDLL:
     library = tmp_path / f"{name}.so"
     subprocess.run(
         [
-            "cc",
+            *compiler(),
             "-shared",
             "-fPIC",
             "-O2",
@@ -967,7 +968,7 @@ def test_a_c_program_hosts_the_damper_fmu(tmp_path: Path) -> None:
     host = tmp_path / "host"
     (tmp_path / "host.c").write_text(C_HOST, encoding="utf-8")
     subprocess.run(
-        ["cc", "-std=c99", "-o", str(host), str(tmp_path / "host.c"), "-ldl"], check=True
+        [*compiler(), "-std=c99", "-o", str(host), str(tmp_path / "host.c"), "-ldl"], check=True
     )
     done = subprocess.run(
         [
