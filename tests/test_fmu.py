@@ -765,6 +765,31 @@ def test_co_simulation_rk4_against_a_tight_integration(tmp_path: Path) -> None:
     assert 12.0 < error_coarse / error_half < 20.0  # fourth order: 2^4 = 16
 
 
+def test_co_simulation_matches_the_adiabatic_closed_form(tmp_path: Path) -> None:
+    # An adiabatic damper (no thermal_resistance) at a constant speed: C dT/dt =
+    # BD f(T) (N u)^2 with f = 1 + c (T - 25), so f(t) = exp(c k t), k = BD (N u)^2 / C,
+    # and T = 25 + (f - 1) / c, by hand. The FMU's RK4 (1 ms) over 10 s of 1 s steps.
+    require("fmpy")
+    config = variant(
+        tmp_path,
+        "adiabatic",
+        ("[gearbox]", '[damper.thermal]\nheat_capacity = "0.05 J/K"\n\n[gearbox]'),
+    )
+    fmu = export(config, tmp_path / "adiabatic.fmu")
+    u = 0.1  # slow shaft [rad/s]
+    cs = Loaded(fmu, tmp_path, "cs").start(ambient_temperature=25.0)
+    cs.set(shaft_speed=u)
+    for k in range(10):
+        cs.fmu.doStep(float(k), 1.0)
+    temperature = cs.get("damper_temperature")[0]
+    cs.free()
+    k_rate = BD * (N * u) ** 2 / 0.05
+    expected = 25.0 + (math.exp(C_T * k_rate * 10.0) - 1.0) / C_T
+    assert expected - 25.0 > 30.0  # a real rise, so that the factor matters
+    # RK4 with 1 ms steps on a smooth exponential: far below 1e-9 K.
+    assert temperature == pytest.approx(expected, abs=1e-9)
+
+
 def test_damper_fmu_reproduces_a_dynamic_run(tmp_path: Path) -> None:
     # Driven with the speed history of an ecdsim dynamic run (2 ms steps), the FMU's
     # damper temperature and torque are the run's: ecdsim's own heat balance, integrated
