@@ -92,7 +92,12 @@ def _commands(folder: Path) -> list[list[str]]:
     ``folder`` holding a copy of examples/ (relative paths: short, like a user's)."""
     shutil.copytree(ROOT / "examples", folder / "examples")
     tomls = sorted(p.name for p in (folder / "examples").glob("*.toml"))
-    runs = [["deploy", f"examples/{name}"] for name in tomls if name != "catalogue.toml"]
+    # A wing file is refused by deploy until the wing's solver lands (docs/wing.md).
+    runs = [
+        ["deploy", f"examples/{name}"]
+        for name in tomls
+        if name != "catalogue.toml" and "wing" not in name
+    ]
     return [
         *runs,
         ["demo", "--out", "demo"],

@@ -5,7 +5,7 @@ from __future__ import annotations
 import hashlib
 import os
 import tomllib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -157,6 +157,8 @@ def validate(raw: dict[str, Any], source: str = "<string>") -> ConfigSpec | Core
         raise ConfigError(
             [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"], source
         )
+    if "wing" in raw:  # a wing file (ecdsim.config.wing_schema), not a single hinge's
+        raise ConfigError([WING_FILE], source)
     try:
         if any(section in raw for section in STUDY_SECTIONS):
             with _without_pydantic_plugins():
@@ -165,7 +167,22 @@ def validate(raw: dict[str, Any], source: str = "<string>") -> ConfigSpec | Core
             return ConfigSpec.model_validate(raw)
         return CoreConfigSpec.model_validate(raw)
     except ValidationError as exc:
-        raise ConfigError([_message(e) for e in exc.errors()], source) from None
+        raise ConfigError(error_lines(exc), source) from None
+
+
+# A wing file read where a single hinge's config is expected (docs/wing.md).
+WING_FILE = (
+    "wing: this is a wing file (docs/wing.md); the wing's dynamics are not built yet, so "
+    "this command cannot solve it"
+)
+
+Describe = Callable[[tuple[Any, ...]], tuple[str | None, list[str]]]
+
+
+def error_lines(exc: ValidationError, describe: Describe | None = None) -> list[str]:
+    """One line per validation error; ``describe`` gives a key path's expected unit and
+    its section's keys (default: the deployment config's; the wing file passes its own)."""
+    return [_message(error, describe) for error in exc.errors()]
 
 
 def _path(loc: tuple[Any, ...]) -> str:
@@ -175,14 +192,16 @@ def _path(loc: tuple[Any, ...]) -> str:
     return text or "(top level)"
 
 
-def _message(error: Any) -> str:
+def _message(error: Any, describe: Describe | None = None) -> str:
     loc = tuple(error["loc"])
     path = _path(loc)
     kind = error["type"]
-    # Errors only: the whole schema describes every key (and knows the study sections).
-    from ecdsim.config.full_schema import describe_field
+    if describe is None:
+        # Errors only: the whole schema describes every key (and knows the study sections).
+        from ecdsim.config.full_schema import describe_field
 
-    expected, known = describe_field(loc)
+        describe = describe_field
+    expected, known = describe(loc)
     if kind == "missing":
         return f"{path}: missing; {expected}" if expected else f"{path}: missing"
     if kind == "extra_forbidden":
