@@ -156,8 +156,16 @@ def test_one_panel_ground_test_maps_onto_load_gravity() -> None:
     gx, gy = wing.ground_test.gravity if wing.ground_test else (0.0, 0.0)
     for phi in (0.0, 0.4, 1.2):
         q = wing.relative_angles(np.array([phi]))
-        force = chain.gravity_forces(q, arrays["mass"], arrays["cg_along"], arrays["cg_across"],
-                                     arrays["length"], arrays["offload"], gx, gy)  # fmt: skip
+        force = chain.gravity_forces(
+            q,
+            arrays["mass"],
+            arrays["cg_along"],
+            arrays["cg_across"],
+            arrays["length"],
+            arrays["offload"],
+            gx,
+            gy,
+        )
         opposing = float(gravity.torque_at(phi))
         assert wing.directions[0] * force[0] == pytest.approx(-opposing, abs=1e-13)
 
@@ -202,10 +210,12 @@ def test_cables_latches_and_names() -> None:
         '[[wing.cables]]\nhinges = [2, 3]\nratio = 1\nstiffness = "500 N*m/rad"\n'
         'pretension = "150 N"\npulley_radius = "20 mm"\n'
     )
-    text = _wing_text(("90 deg", "0 deg"), ("-180 deg", "0 deg"), ("180 deg", "0 deg"),
-                      extra=extra)  # fmt: skip
-    text = text.replace('ecd = "cc16"\n', 'ecd = "cc16"\nlatch = { stiffness = "2000 N*m/rad", '
-                        'damping = "3 N*m*s/rad" }\n', 1)  # fmt: skip
+    text = _wing_text(("90 deg", "0 deg"), ("-180 deg", "0 deg"), ("180 deg", "0 deg"), extra=extra)
+    text = text.replace(
+        'ecd = "cc16"\n',
+        'ecd = "cc16"\nlatch = { stiffness = "2000 N*m/rad", damping = "3 N*m*s/rad" }\n',
+        1,
+    )
     wing = parse_wing_config(text).wing
     assert wing.cables == (
         Cable(inboard=0, ratio=2.0),
@@ -234,17 +244,17 @@ def test_field_errors_are_one_line_each_with_the_unit() -> None:
     assert caught.value.problems == [
         "wing.ecds.cc16.damper.damping_rate: '1.3e-4 N*m' has the wrong dimension; expected a "
         "damping rate in N*m*s/rad or compatible units, e.g. '1.3e-4 N*m*s/rad'",
-        "wing.ecds.cc16.gearbox.colour: unknown key (known keys here: " + known
+        "wing.ecds.cc16.gearbox.colour: unknown key (known keys here: "
+        + known
         + "stiffness, mesh_damping, efficiency)",
-        "wing.panels[0].mass: missing; expected a mass in kg or compatible units, e.g. "
-        "'0.185 kg'",
+        "wing.panels[0].mass: missing; expected a mass in kg or compatible units, e.g. '0.185 kg'",
         "wing.panels[0].length: '0.8' has no unit; expected a length in m or compatible "
         "units, e.g. '63 mm'",
         "wing.cables[0]: hinges = [1, 3]: give two adjacent hinge numbers counted from the "
         "root (1), inboard first, e.g. [1, 2]",
         "wing.ground_test.offload[0]: '120 %' must be in [0, 1]; expected a dimensionless "
         "number (a plain number, e.g. 380)",
-    ]  # fmt: skip
+    ]
 
 
 def test_cross_key_problems_name_their_keys() -> None:
@@ -269,25 +279,42 @@ def test_cross_key_problems_name_their_keys() -> None:
 @pytest.mark.parametrize(
     ("change", "expected"),
     [
-        (('deployed_angle = "0 deg"', 'deployed_angle = "90 deg"'),
-         "wing.hinges[0]: deployed_angle equals stowed_angle (1.5708 rad): no travel"),
-        (('end_torque = "1.58 N*m"\n', ""),
-         "wing.hinges[0]: missing end_torque; expected a torque in N*m or compatible units, "
-         "e.g. '3.73 N*m' (or give spring_table)"),
-        (('start_torque = "3.73 N*m"\nend_torque = "1.58 N*m"',
-          'spring_table = [["0 deg", "3 N*m"], ["45 deg", "2 N*m"]]'),
-         "wing.hinges[0]: spring_table ends at 0.785398 rad, before the travel 1.5708 rad"),
-        (('ecd = "cc16"', 'ecd = "cc16"\nlatch = { damping = "1 N*m*s/rad" }'),
-         "wing.hinges[0].latch: damping needs stiffness (a compliant latch's N*m/rad)"),
-        (('ecd = "cc16"', 'ecd = "cc16"\nlatch = { restitution = 0.3, stiffness = "1e3 N*m/rad" }'),
-         "wing.hinges[0].latch: give restitution (a rigid latch) or stiffness and damping (a "
-         "compliant latch), not both"),
-        (("[wing.ecds.cc16.gearbox]", "[wing.ecds.cc17]\n[wing.ecds.cc16.gearbox]"),
-         "wing.ecds.cc17: missing damper: an ECD is a [damper] and a [gearbox] section (every "
-         "key they take in a single-hinge file), or catalogue = { file, damper, gearbox, "
-         "ratio }"),
+        (
+            ('deployed_angle = "0 deg"', 'deployed_angle = "90 deg"'),
+            "wing.hinges[0]: deployed_angle equals stowed_angle (1.5708 rad): no travel",
+        ),
+        (
+            ('end_torque = "1.58 N*m"\n', ""),
+            "wing.hinges[0]: missing end_torque; expected a torque in N*m or compatible units, "
+            "e.g. '3.73 N*m' (or give spring_table)",
+        ),
+        (
+            (
+                'start_torque = "3.73 N*m"\nend_torque = "1.58 N*m"',
+                'spring_table = [["0 deg", "3 N*m"], ["45 deg", "2 N*m"]]',
+            ),
+            "wing.hinges[0]: spring_table ends at 0.785398 rad, before the travel 1.5708 rad",
+        ),
+        (
+            ('ecd = "cc16"', 'ecd = "cc16"\nlatch = { damping = "1 N*m*s/rad" }'),
+            "wing.hinges[0].latch: damping needs stiffness (a compliant latch's N*m/rad)",
+        ),
+        (
+            (
+                'ecd = "cc16"',
+                'ecd = "cc16"\nlatch = { restitution = 0.3, stiffness = "1e3 N*m/rad" }',
+            ),
+            "wing.hinges[0].latch: give restitution (a rigid latch) or stiffness and damping (a "
+            "compliant latch), not both",
+        ),
+        (
+            ("[wing.ecds.cc16.gearbox]", "[wing.ecds.cc17]\n[wing.ecds.cc16.gearbox]"),
+            "wing.ecds.cc17: missing damper: an ECD is a [damper] and a [gearbox] section (every "
+            "key they take in a single-hinge file), or catalogue = { file, damper, gearbox, "
+            "ratio }",
+        ),
     ],
-)  # fmt: skip
+)
 def test_section_rules(change: tuple[str, str], expected: str) -> None:
     text = _wing_text(("90 deg", "0 deg")).replace(*change)
     with pytest.raises(ConfigError) as caught:
