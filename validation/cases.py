@@ -51,6 +51,7 @@ from validation.scipy_reference import (
     two_node_relaxed,
     two_node_time,
 )
+from validation.wing_cases import one_panel_limit
 
 HERE = Path(__file__).resolve().parent
 REFERENCES = HERE / "references"
@@ -1080,6 +1081,8 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     two_node_heating,
     lossy_gear,
     compliant_backlash,
+    # The wing (docs/wing.md): what runs before the wing's solver lands.
+    one_panel_limit,
 )
 
 

@@ -151,8 +151,8 @@ def _draw_shape(ax: Axes, wing: Wing, angles: FloatArray, colors: Sequence[objec
 
     outlines = wing.outlines(angles)
     extent = sum(p.length for p in wing.panels)
-    # A drawn thickness of at least 1.5 % of the wing, so that a thin panel shows.
-    drawn = max(0.015 * extent, max(p.thickness for p in wing.panels))
+    # A drawn thickness of at least 2.5 % of the wing, so that a thin panel shows.
+    drawn = max(0.025 * extent, max(p.thickness for p in wing.panels))
     for i, corners in enumerate(outlines):
         axis = (corners[1] + corners[2]) / 2 - (corners[0] + corners[3]) / 2
         normal = np.array([-axis[1], axis[0]]) / max(float(np.hypot(*axis)), 1e-300)
@@ -167,7 +167,8 @@ def _draw_shape(ax: Axes, wing: Wing, angles: FloatArray, colors: Sequence[objec
                 facecolor=colors[i],
                 edgecolor="black",
                 linewidth=0.6,
-                alpha=0.55,
+                alpha=0.6,
+                gid=f"panel {i + 1}",
             )
         )
     hinges = (outlines[:, 0] + outlines[:, 3]) / 2
@@ -199,6 +200,14 @@ def plot_wing_shapes(
         ax.set_xlabel("x [m]")
         ax.grid(True, alpha=0.3)
     axes[0].set_ylabel("y [m]")
+    from matplotlib.patches import Patch
+
+    handles = [
+        Patch(facecolor=colors[i], edgecolor="black", alpha=0.6, label=panel.name)
+        for i, panel in enumerate(wing.panels)
+    ]
+    handles.append(Patch(facecolor="0.85", hatch="///", edgecolor="0.6", label="spacecraft"))
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize="small")
     fig.suptitle(plot_title(result.wing, f"the wing's shape at {temperature:+g} degC"))
     return fig
 
