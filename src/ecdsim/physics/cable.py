@@ -34,13 +34,13 @@ def cable_torque(deflection: float, stiffness: float, slack_torque: float) -> fl
     """Torque of the loop on the outboard hinge, ``tau(delta)`` [N*m].
 
     Hooke's law on two pretensioned strands, one of which slackens beyond
-    ``|tau| = slack_torque`` (Hooke's law per strand; module docstring).
+    ``|tau| = slack_torque`` (the closed loops of doi:10.1007/978-81-322-2229-3_2,
+    section 1; module docstring).
 
     Parameters
     ----------
     deflection : delta = phi_outboard - r phi_inboard [rad]
-    stiffness : K, the loop's torsional stiffness with both strands taut, at the outboard
-        hinge [N*m/rad], > 0
+    stiffness : K, the loop's stiffness with both strands taut, outboard [N*m/rad], > 0
     slack_torque : tau_s = 2 T0 rho, the torque at which a strand slackens [N*m], >= 0
 
     >>> cable_torque(0.01, 100.0, 2.0), cable_torque(0.03, 100.0, 2.0)
@@ -55,7 +55,8 @@ def cable_torque(deflection: float, stiffness: float, slack_torque: float) -> fl
 def cable_energy(deflection: float, stiffness: float, slack_torque: float) -> float:
     """Elastic energy of the loop, ``-int_0^delta tau(u) du`` [J].
 
-    The integral of :func:`cable_torque` (Hooke's law per strand; module docstring):
+    The integral of :func:`cable_torque` (Hooke's law per strand of the closed loops of
+    doi:10.1007/978-81-322-2229-3_2, section 1; module docstring):
     ``K delta^2 / 2`` while both strands are taut, then
     ``K delta_s^2 / 2 + tau_s (|delta| - delta_s) / 2 + K (delta^2 - delta_s^2) / 4``.
 

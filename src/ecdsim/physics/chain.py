@@ -355,8 +355,7 @@ def gravity_forces(
     cg_along : centre of gravity along each panel a [m]
     cg_across : centre of gravity across each panel b [m]
     length : hinge-to-hinge length L [m]
-    offload : fraction of each panel's weight carried by the ground-support equipment
-        [-], 0..1
+    offload : fraction of each panel's weight carried by the support equipment [-], 0..1
     gravity_x : the gravity vector's component along the base's x axis [m/s^2]
     gravity_y : its component along the base's y axis [m/s^2]
 
