@@ -293,6 +293,7 @@ def _compiled(module: Any, numba: Any) -> dict[str, Any]:
 
 def test_numba_compiles_the_same_source() -> None:
     import numba  # a test dependency (the suite refuses skips)
+
     rng = np.random.default_rng(3)
     c = _random_chain(rng, 3)
     q = rng.uniform(-math.pi, math.pi, 3)
