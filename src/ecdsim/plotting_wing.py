@@ -39,6 +39,11 @@ MARKERS: dict[str, tuple[str, float, str]] = {
 }
 
 
+# Hinges that move together (a synchronised or symmetric wing) would hide each other's
+# curve: each hinge also has its own line style.
+LINESTYLES = ("-", "--", "-.")
+
+
 def hinge_colors(n: int) -> list[tuple[float, float, float, float]]:
     """``n`` distinct colours, one per hinge (root first)."""
     from matplotlib import colormaps
@@ -107,7 +112,15 @@ def plot_hinge_angles(
     kinds: set[str] = set()
     for ax, case in zip(axes, cases, strict=False):
         for j, name in enumerate(result.hinges):
-            ax.plot(case.time, case.angle[:, j], color=colors[j], label=name, linewidth=1.6)
+            style = LINESTYLES[j % len(LINESTYLES)]
+            ax.plot(
+                case.time,
+                case.angle[:, j],
+                color=colors[j],
+                linestyle=style,
+                label=name,
+                linewidth=1.6,
+            )
             if wing is not None:
                 ax.axhline(wing.hinges[j].travel, color=colors[j], linestyle=":", linewidth=1.0)
         kinds |= _mark_events(ax, result, case, list(colors))
@@ -117,7 +130,10 @@ def plot_hinge_angles(
         ax.set_ylim(bottom=0.0)
         ax.grid(True, alpha=0.3)
     axes[-1].set_xlabel("time [s]")
-    handles = [Line2D([], [], color=colors[j], label=n) for j, n in enumerate(result.hinges)]
+    handles = [
+        Line2D([], [], color=colors[j], linestyle=LINESTYLES[j % len(LINESTYLES)], label=n)
+        for j, n in enumerate(result.hinges)
+    ]
     if wing is not None:
         handles.append(Line2D([], [], color="grey", linestyle=":", label="travel (latch)"))
     for kind in MARKERS:
