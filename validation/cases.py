@@ -51,7 +51,7 @@ from validation.scipy_reference import (
     two_node_relaxed,
     two_node_time,
 )
-from validation.wing_cases import one_panel_limit
+from validation.wing_cases import wing_one_panel_limit
 
 HERE = Path(__file__).resolve().parent
 REFERENCES = HERE / "references"
@@ -1082,7 +1082,7 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     lossy_gear,
     compliant_backlash,
     # The wing (docs/wing.md): what runs before the wing's solver lands.
-    one_panel_limit,
+    wing_one_panel_limit,
 )
 
 

@@ -13,7 +13,7 @@ What runs today (docs/wing.md):
   run closing to 1e-8;
 - :func:`rigid_cable_limit`: stiffer and stiffer elastic cables approach the rigid
   cable's deployment (the error falling as 1/K);
-- :func:`one_panel_limit`: a one-panel wing against ecdsim's single-hinge dynamic
+- :func:`wing_one_panel_limit`: a one-panel wing against ecdsim's single-hinge dynamic
   method (``Wing.as_single_hinge``), in flight and in a ground test.
 
 What the wing's solver adds: :func:`compare` turns ecdsim's
@@ -453,7 +453,7 @@ def compare(item: WingValidationCase, ecdsim: WingResult) -> CaseResult:
     )
 
 
-def one_panel_limit() -> CaseResult:
+def wing_one_panel_limit() -> CaseResult:
     """A one-panel wing against ecdsim's single-hinge dynamic method, now.
 
     The wing files' one panel as today's hinge (``Wing.as_single_hinge``: the panel's
@@ -589,7 +589,7 @@ def main() -> int:
     """``python -m validation.wing_cases``: run every reference case and its checks."""
     failed = False
     results = [reference_checks(item) for item in CASES]
-    results += [rigid_cable_limit(), one_panel_limit()]
+    results += [rigid_cable_limit(), wing_one_panel_limit()]
     for result in results:
         for check in result.checks:
             status = check.status
@@ -618,7 +618,7 @@ __all__ = [
     "WingValidationCase",
     "as_result",
     "compare",
-    "one_panel_limit",
+    "wing_one_panel_limit",
     "reference",
     "reference_checks",
     "rigid_cable_limit",
