@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -41,7 +41,7 @@ MARKERS: dict[str, tuple[str, float, str]] = {
 
 # Hinges that move together (a synchronised or symmetric wing) would hide each other's
 # curve: each hinge also has its own line style.
-LINESTYLES = ("-", "--", "-.")
+LINESTYLES: tuple[Literal["-", "--", "-."], ...] = ("-", "--", "-.")
 
 
 def hinge_colors(n: int) -> list[tuple[float, float, float, float]]:
