@@ -8,7 +8,11 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 import pytest
 from typer.testing import CliRunner
@@ -136,19 +140,135 @@ def test_bad_vary_is_one_line_exit_2(vary: str, needle: str, tmp_path: Path) -> 
 def test_duplicate_key_and_bad_output() -> None:
     with pytest.raises(SweepError, match="given more than once"):
         design([parse_vary("gearbox.ratio=1,2"), parse_vary("gearbox.ratio=3,4")])
-    code, _, stderr = _run("--vary", "gearbox.ratio=300,400", "--plot", "x.png", "--output", "z")
+    code, _, stderr = _run("--vary", "gearbox.ratio=300,400", "--plot", "x", "--column", "z")
     assert code == 2
-    assert "--output 'z'" in stderr
+    assert "--column 'z'" in stderr
+    code, _, stderr = _run("--vary", "gearbox.ratio=300,400", "--plot", "x", "--plot-method", "q")
+    assert code == 2
+    assert "--plot-method 'q': not run" in stderr
 
 
-def test_plot(tmp_path: Path) -> None:
+def test_plot_old_forms_still_work_with_a_note(tmp_path: Path) -> None:
+    """Before issue 26 --plot took a PNG file and --output named the column: both still
+    work for a deprecation period, each with a note on stderr."""
     png = tmp_path / "sweep.png"
-    code, _, stderr = _run(
+    code, stdout, stderr = _run(
         "--vary", "gearbox.ratio=200:600:9", "--vary", "load.start_torque=3.2,3.73",
         "-o", str(tmp_path / "s.csv"), "--plot", str(png), "--output", "end_speed_rad_s",
     )  # fmt: skip
     assert code == 0, stderr
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "--output is deprecated: it is --column now" in stderr
+    assert "a file name is deprecated; --plot takes a folder" in stderr
+    assert f"wrote {png}" in stdout
+
+
+def test_plot_takes_a_folder(tmp_path: Path) -> None:
+    code, stdout, stderr = _run(
+        "--vary", "gearbox.ratio=200:600:3", "-o", str(tmp_path / "s.csv"),
+        "--plot", str(tmp_path / "plots"), "--column", "end_speed_rad_s",
+    )  # fmt: skip
+    assert code == 0, stderr
+    written = tmp_path / "plots" / "sweep_end_speed_rad_s.png"
+    assert written.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"wrote {written}" in stdout
+    assert not stderr
+
+
+def exact_time(t: float, ratio: float, ts: float) -> float:
+    """The exact quasi-static time by hand: with a linear spring the speed is linear in
+    the angle (Eq. 5), so t = travel * ln(ws / we) / (ws - we), ws and we by Eq. 8-9."""
+    bd = 1.3e-4
+    becd = (bd * (1.0 - 0.004 * (t - 25.0)) + 0.26 * bd) * ratio**2
+    ws = (ts - friction(t, ratio)) / becd
+    we = (1.58 - friction(t, ratio)) / becd
+    return 1.57 * math.log(ws / we) / (ws - we)
+
+
+def _sweep(*varies: str, methods: tuple[str, ...] = ("paper", "exact")) -> Any:
+    import tomllib
+
+    from ecdsim.sweeps import run_sweep
+
+    parsed = [parse_vary(v) for v in varies]
+    raw = tomllib.loads(PAPER.read_text(encoding="utf-8"))
+    return run_sweep(raw, str(PAPER), parsed, design(parsed), None, methods)
+
+
+def test_plot_draws_the_exact_method_one_line_per_level_stalls_marked() -> None:
+    """Issue 26 item 1: the plot's data series, read back from the figure, are the exact
+    method's times (by hand), one line per start torque in a panel per temperature, and
+    the ratios where the -40 degC deployment stalls are crosses, not gaps."""
+    result = _sweep("gearbox.ratio=200:600:21", "load.start_torque=3.2,3.73,4.2")
+    fig = result.plot()
+    assert "by the exact method" in " ".join(fig.get_suptitle().split())
+    axes = [ax for ax in fig.axes if ax.get_title()]
+    assert [ax.get_title() for ax in axes] == ["T = -40 degC", "T = 25 degC", "T = 100 degC"]
+    ratios = np.linspace(200.0, 600.0, 21)
+    for ax, temp in zip(axes, (-40.0, 25.0, 100.0), strict=True):
+        lines = [line for line in ax.get_lines() if line.get_linestyle() == "-"]
+        assert [line.get_label() for line in lines] == ["3.2 N*m", "3.73 N*m", "4.2 N*m"]
+        for line, ts in zip(lines, (3.2, 3.73, 4.2), strict=True):
+            x = np.asarray(line.get_xdata(), dtype=float)
+            y = np.asarray(line.get_ydata(), dtype=float)
+            np.testing.assert_allclose(x, ratios)
+            # A stall (least spring torque 1.58 N*m at most the friction) is no point.
+            deploys = 1.58 > np.array([friction(temp, n) for n in ratios])
+            assert np.all(np.isnan(y[~deploys]))
+            hand = [exact_time(temp, n, ts) for n in ratios[deploys]]
+            # The exact solver's own accuracy is ~1e-12 relative; the hand formula's
+            # rounding is far smaller: 1e-9 leaves room for neither to matter.
+            np.testing.assert_allclose(y[deploys], hand, rtol=1e-9)
+        crosses = [line for line in ax.get_lines() if line.get_marker() == "x"]
+        stalled = ratios[1.58 <= np.array([friction(temp, n) for n in ratios])]
+        if temp == -40.0:
+            # 533.4 = (1.58 - FS(-40)) / FT(-40): 540 to 600, for each start torque.
+            np.testing.assert_allclose(stalled, [540.0, 560.0, 580.0, 600.0])
+            assert len(crosses) == 3
+            for line in crosses:
+                np.testing.assert_allclose(np.asarray(line.get_xdata(), dtype=float), stalled)
+        else:
+            assert stalled.size == 0 and not crosses
+    # The issue's point: N = 380, 3.73 N*m, -40 degC is 48.13 s (exact), not the paper's 34.
+    line = [ln for ln in axes[0].get_lines() if ln.get_label() == "3.73 N*m"][0]
+    at = int(np.flatnonzero(np.isclose(line.get_xdata(), 380.0))[0])
+    assert abs(float(line.get_ydata()[at]) - 48.13) < 0.005
+    legend = fig.legends[0]
+    assert legend.get_title().get_text() == "load.start_torque"
+    assert "x at the top: stalls (no deployment)" in [t.get_text() for t in legend.get_texts()]
+
+
+def test_plot_method_and_units_can_be_chosen() -> None:
+    result = _sweep("gearbox.ratio=300:400:3")
+    fig = result.plot(method="paper", units="us")
+    assert "by the paper method" in " ".join(fig.get_suptitle().split())
+    (ax,) = fig.axes
+    labels = [line.get_label() for line in ax.get_lines()]
+    assert labels == ["-40 degF", "77 degF", "212 degF"]  # one line per temperature
+    y = np.asarray(ax.get_lines()[0].get_ydata(), dtype=float)
+    np.testing.assert_allclose(y, [paper_time(-40.0, n, 3.73) for n in (300, 350, 400)],
+                               rtol=1e-12)  # fmt: skip
+    with pytest.raises(KeyError, match="'dynamic' is not a method of this sweep"):
+        result.plot(method="dynamic")
+
+
+def test_plot_of_a_latin_hypercube_is_points_against_each_key() -> None:
+    import tomllib
+
+    from ecdsim.sweeps import run_sweep
+
+    parsed = [parse_vary("gearbox.ratio=200:700:11"), parse_vary("load.end_torque=1,2")]
+    raw = tomllib.loads(PAPER.read_text(encoding="utf-8"))
+    result = run_sweep(raw, str(PAPER), parsed, design(parsed, latin=30, seed=1), None, None)
+    fig = result.plot()
+    assert "every point" in " ".join(fig.get_suptitle().split())
+    panels = [ax for ax in fig.axes if ax.get_xlabel()]
+    assert [ax.get_xlabel() for ax in panels] == ["gearbox.ratio", "load.end_torque [N*m]"]
+    dots = [ln for ln in panels[0].get_lines() if ln.get_marker() == "o"]
+    assert len(dots) == 3  # one colour per temperature
+    drawn = sum(int(np.isfinite(np.asarray(ln.get_ydata(), dtype=float)).sum()) for ln in dots)
+    crosses = sum(len(ln.get_xdata()) for ln in panels[0].get_lines() if ln.get_marker() == "x")
+    assert drawn + crosses == 30 * 3  # every point is drawn or marked as a stall
 
 
 def test_help_lists_the_options_and_its_example_runs(
@@ -168,12 +288,15 @@ def test_help_lists_the_options_and_its_example_runs(
             "--temperature": "-T",
             "--method": "-m",
             "--plot": None,
-            "--output": None,
+            "--column": None,
             "--json": None,
+            "--plot-method": None,
+            "--units": None,
             "--help": None,
         },
     )
     run_example(runner, app, screen, tmp_path, monkeypatch)
     rows = list(csv.DictReader(io.StringIO((tmp_path / "sweep.csv").read_text("utf-8"))))
     assert len(rows) == 21 * 3 * 3 * 2  # ratios x torques x temperatures x methods
-    assert (tmp_path / "sweep.png").read_bytes().startswith(b"\x89PNG")
+    png = tmp_path / "plots" / "sweep_deployment_time_s.png"
+    assert png.read_bytes().startswith(b"\x89PNG")

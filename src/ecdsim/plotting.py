@@ -6,6 +6,7 @@ non-interactive Agg backend is used, so plotting works on machines with no displ
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal, cast
 
@@ -21,6 +22,24 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 _LINESTYLES = {"exact": "-", "paper": "--"}
+
+# The methods from the most complete model to the least: the dynamic method integrates the
+# equation of motion (inertia, stiction, end stop), the exact method solves the paper's
+# quasi-static equations exactly, and the paper's Eq. 8-11 underestimate that by up to
+# 29 % (docs/model.md). A plot that shows one method shows the first of these that ran.
+MOST_EXACT_FIRST = ("dynamic", "exact", "paper")
+
+
+def most_exact(methods: tuple[str, ...] | list[str]) -> str:
+    """The most exact of the methods run (:data:`MOST_EXACT_FIRST`); else the first one.
+
+    >>> most_exact(("paper", "exact")), most_exact(["paper"])
+    ('exact', 'paper')
+    """
+    for name in MOST_EXACT_FIRST:
+        if name in methods:
+            return name
+    return methods[0]
 
 
 def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
@@ -82,7 +101,7 @@ def _plot_against_time(
     fig, ax = _target(ax)
     times = np.linspace(0.0, time_span(prediction), n_points)
     temps = np.ravel(prediction.temperatures)
-    colors = temperature_colors(len(temps))
+    colors = temperature_colors(temps)
     for name, solution in prediction.solutions.items():
         trajectory = prediction.trajectory(name, times)
         solved = np.ravel(np.broadcast_to(solution.solved_mask, prediction.temperatures.shape))
@@ -163,7 +182,7 @@ def plot_torque_speed(
     end = np.ravel(reference.end_speed)
     top = 1.2 * float(np.max(start)) if np.max(start) > 0 else 1.0
     speeds = np.linspace(0.0, top, n_points)
-    colors = temperature_colors(len(temps))
+    colors = temperature_colors(temps)
     for j, temp in enumerate(temps):
         ax.plot(
             speeds,
@@ -184,14 +203,44 @@ def plot_torque_speed(
     return fig
 
 
-def temperature_colors(n: int) -> list[tuple[float, float, float, float]]:
-    """``n`` RGBA colours from cold blue to hot red, one per temperature in rising order."""
+# Cold blue, a dark green, hot red (ColorBrewer's darkest of each hue): every temperature
+# stays readable as a thin line on white, which the light middle of a rainbow (lime) or of
+# a diverging map (grey) is not. The explorer uses the same three (webapp/static/app.js).
+TEMPERATURE_ANCHORS = ("#2166ac", "#1b7837", "#b2182b")
+
+
+def temperature_colors(
+    temperatures: int | Sequence[float],
+) -> list[tuple[float, float, float, float]]:
+    """One RGBA colour per temperature, cold blue through green to hot red.
+
+    Given temperatures, each colour follows its value over their range (so a temperature
+    keeps its colour when another is added in between); given a count ``n``, ``n``
+    evenly spaced colours for temperatures in rising order. A single temperature is blue.
+    """
+    from matplotlib.colors import LinearSegmentedColormap
+
+    cmap = LinearSegmentedColormap.from_list("ecdsim_temperature", TEMPERATURE_ANCHORS)
+    if isinstance(temperatures, int):
+        positions = np.linspace(0.0, 1.0, temperatures) if temperatures > 1 else np.zeros(1)
+    else:
+        values = np.asarray(temperatures, dtype=float)
+        finite = values[np.isfinite(values)]
+        low = float(finite.min()) if finite.size else 0.0
+        span = float(finite.max()) - low if finite.size else 0.0
+        positions = (values - low) / span if span > 0.0 else np.zeros(values.shape)
+    return [tuple(float(c) for c in cmap(float(x))) for x in positions]  # type: ignore[misc]
+
+
+def level_colors(n: int) -> list[tuple[float, float, float, float]]:
+    """``n`` colours for the levels of a varied key (dark purple to orange, rising): a
+    sequential map whose lightest end stays readable on white, and whose hues are none of
+    the temperatures' blue, green and red."""
     from matplotlib import colormaps
 
-    # Cold blue to hot red through green: every temperature stays readable on white,
-    # which a diverging map with a pale middle (coolwarm) is not.
-    cmap = colormaps["turbo"]
-    return [cmap(x) for x in np.linspace(0.1, 0.9, n)] if n > 1 else [cmap(0.1)]
+    cmap = colormaps["plasma"]
+    positions = np.linspace(0.0, 0.8, n) if n > 1 else np.zeros(1)
+    return [tuple(float(c) for c in cmap(float(x))) for x in positions]  # type: ignore[misc]
 
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> Path:

@@ -157,7 +157,7 @@ def plot_dynamic(
     series = result.sample(n_points=n_points)
     times, values = _columns(series, series.angle if quantity == "angle" else series.speed)
     temps = np.ravel(result.temperature)
-    colors = temperature_colors(len(temps))
+    colors = temperature_colors(temps)
     fig = _figure()
     ax = fig.add_subplot()
     for j, temp in enumerate(temps):
@@ -191,7 +191,7 @@ def plot_damper_temperature(
     series = result.sample(n_points=n_points)
     times, values = _columns(series, series.damper_temperature)
     temps = np.ravel(result.temperature)
-    colors = temperature_colors(len(temps))
+    colors = temperature_colors(temps)
     fig = _figure()
     ax = fig.add_subplot()
     for j, temp in enumerate(temps):
@@ -236,7 +236,7 @@ def plot_sequence(result: SequenceResult, system: str, units: UnitSystem = "si")
     changes; the axis is logarithmic from 20 deployments on (the drift settles early)."""
     u = Shown(units)
     temps = result.temperatures
-    colors = temperature_colors(len(temps))
+    colors = temperature_colors(temps)
     number = np.arange(1, result.cycle.count + 1)
     fig = _figure(7.5, 6.4)
     top, bottom = fig.subplots(2, 1, sharex=True)

@@ -32,8 +32,11 @@ from ecdsim.config.units import NUMBER_PATTERN
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+    from numpy.typing import NDArray
 
+    from ecdsim._types import FloatArray
     from ecdsim.deployment import Prediction
+    from ecdsim.units_display import UnitSystem
 
 MAX_POINTS = 100_000
 
@@ -323,41 +326,156 @@ class SweepResult:
         table = parquet_table(self.to_dataframe(), self.metadata())
         return atomic.write_with(target, lambda handle: pq.write_table(table, handle))
 
-    def plot(self, output: str = "deployment_time_s", method: str | None = None) -> Figure:
-        """``output`` against each varied key (one panel each), a colour per temperature.
+    def plot(
+        self,
+        column: str = "deployment_time_s",
+        method: str | None = None,
+        units: UnitSystem = "si",
+        *,
+        output: str | None = None,
+    ) -> Figure:
+        """``column`` of the sweep against its varied keys, by one method.
 
-        Only the rows of ``method`` (default: the first method run) are drawn. With one
-        varied key the points of each temperature are joined by a line.
+        ``method`` defaults to the most exact method run (dynamic, else exact, else
+        paper: :func:`ecdsim.plotting.most_exact`). A full factorial sweep draws one panel
+        per temperature with the key of most levels along x and one line per level of the
+        other key (per combination of the others, when there are more, up to
+        :data:`MAX_LINES`); a Latin hypercube (or more combinations) draws the points
+        against each varied key, a colour per temperature. A point that stalls (or sticks,
+        or cannot start) has no deployment: it is marked by a cross at the top of its
+        panel, in its line's colour, never dropped. ``output`` is the old name of
+        ``column`` (before issue 26).
         """
-        from ecdsim.plotting import _figure, plot_title, temperature_colors
+        from ecdsim.plotting import most_exact
 
-        chosen = method or self.methods[0]
+        column = output if output is not None else column
+        chosen = method or most_exact(self.methods)
         rows = [r for r in self.rows if r.get("method") == chosen]
-        if not rows or output not in self.columns:
+        if chosen not in self.methods or not rows:
+            raise KeyError(f"{chosen!r} is not a method of this sweep; ran: {list(self.methods)}")
+        if column not in self.columns:
             known = [c for c in self.columns if c not in {v.column for v in self.varies}]
-            raise KeyError(f"{output!r} is not an output of this sweep; known: {known}")
+            raise KeyError(f"{column!r} is not an output of this sweep; known: {known}")
+        lines = _line_plan(self.varies, rows)
+        if lines is None:
+            return self._scatter(rows, column, chosen, units)
+        return self._lines(rows, column, chosen, units, *lines)
+
+    def _frame(
+        self, column: str, method: str, units: UnitSystem, how: str, fig: Figure
+    ) -> tuple[str, str]:
+        """The figure's title, wrapped to the figure's width, and the y label (``column``
+        with its display unit)."""
+        from ecdsim.plotting import plot_title
+
+        what = f"{_label(column, units)} by the {method} method, {how}".rstrip(", ")
+        width = int(12 * fig.get_figwidth())  # characters of the title's font per line
+        return plot_title(self.title, what, width=width), _label(column, units)
+
+    def _lines(
+        self,
+        rows: list[dict[str, Any]],
+        column: str,
+        method: str,
+        units: UnitSystem,
+        x_vary: Vary,
+        others: list[Vary],
+    ) -> Figure:
+        from ecdsim.plotting import _figure, level_colors, temperature_colors
+        from ecdsim.units_display import Shown
+
+        u = Shown(units)
         temps = sorted({float(r["temperature_C"]) for r in rows})
-        colors = temperature_colors(len(temps))
-        n = len(self.varies)
-        fig = _figure(width=max(5.0, 4.2 * min(n, 3)), height=4.4 if n <= 3 else 8.0)
+        # One key: one panel, a line per temperature in its colour. More keys: a panel per
+        # temperature, a line per level of the others.
+        panels: list[float | None] = list(temps) if others else [None]
+        if others:
+            groups = sorted({tuple(r[v.column] for v in others) for r in rows})
+            colors = level_colors(len(groups))
+        else:
+            groups = [(t,) for t in temps]
+            colors = temperature_colors(temps)
+        n = len(panels)
         cols = min(n, 3)
-        for k, vary in enumerate(self.varies):
-            ax = fig.add_subplot((n + cols - 1) // cols, cols, k + 1)
-            for temp, color in zip(temps, colors, strict=True):
-                mine = [r for r in rows if float(r["temperature_C"]) == temp]
-                x = np.array([float(r[vary.column]) for r in mine])
-                y = np.array([_number(r.get(output)) for r in mine])
-                order = np.argsort(x, kind="stable")
-                style = "o-" if n == 1 else "o"
-                ax.plot(
-                    x[order], y[order], style, color=color, ms=4, alpha=0.8, label=f"{temp:g} degC"
-                )
-            ax.set_xlabel(vary.column)
-            ax.set_ylabel(_label(output))
+        fig = _figure(width=max(6.0, 4.3 * cols), height=4.8 if n <= 3 else 8.4)
+        axes = []
+        stalls_drawn = False
+        for k, panel in enumerate(panels):
+            ax = fig.add_subplot(
+                (n + cols - 1) // cols, cols, k + 1, sharey=axes[0] if axes else None
+            )
+            axes.append(ax)
+            for row, (group, color) in enumerate(zip(groups, colors, strict=True)):
+                if others:
+                    mine = [
+                        r
+                        for r in rows
+                        if float(r["temperature_C"]) == panel
+                        and tuple(r[v.column] for v in others) == group
+                    ]
+                    label = _group_label(others, group, units)
+                else:
+                    mine = [r for r in rows if float(r["temperature_C"]) == group[0]]
+                    label = u.text(group[0], "temperature")
+                x, y, stalled = _series(mine, x_vary, column, units)
+                ax.plot(x, np.where(stalled, np.nan, y), "o-", color=color, ms=3.5, label=label)
+                if np.any(stalled):
+                    _mark_stalls(ax, x[stalled], color, row)
+                    stalls_drawn = True
+            if panel is not None:
+                ax.set_title(f"T = {u.text(panel, 'temperature')}", fontsize="medium")
+            ax.set_xlabel(_vary_label(x_vary, units))
+            if k % cols == 0:
+                ax.set_ylabel(_label(column, units))
             ax.grid(True, alpha=0.3)
-            if k == 0:
-                ax.legend(title=f"{chosen} method", fontsize="small")
-        fig.suptitle(plot_title(self.title, f"sweep of {_label(output)}", width=100))
+        _legend(fig, axes[0], others, stalls_drawn)
+        how = f"one line per {' and '.join(v.key for v in others)}" if others else ""
+        title, _ = self._frame(column, method, units, how, fig)
+        fig.suptitle(title)
+        return fig
+
+    def _scatter(
+        self, rows: list[dict[str, Any]], column: str, method: str, units: UnitSystem
+    ) -> Figure:
+        from ecdsim.plotting import _figure, temperature_colors
+        from ecdsim.units_display import Shown
+
+        u = Shown(units)
+        temps = sorted({float(r["temperature_C"]) for r in rows})
+        colors = temperature_colors(temps)
+        n = len(self.varies)
+        cols = min(n, 3)
+        fig = _figure(width=max(5.5, 4.3 * cols), height=4.6 if n <= 3 else 8.4)
+        axes = []
+        stalls_drawn = False
+        for k, vary in enumerate(self.varies):
+            ax = fig.add_subplot(
+                (n + cols - 1) // cols, cols, k + 1, sharey=axes[0] if axes else None
+            )
+            axes.append(ax)
+            for row, (temp, color) in enumerate(zip(temps, colors, strict=True)):
+                mine = [r for r in rows if float(r["temperature_C"]) == temp]
+                x, y, stalled = _series(mine, vary, column, units)
+                label = u.text(temp, "temperature")
+                ax.plot(
+                    x,
+                    np.where(stalled, np.nan, y),
+                    "o",
+                    color=color,
+                    ms=3.5,
+                    alpha=0.8,
+                    label=label,
+                )
+                if np.any(stalled):
+                    _mark_stalls(ax, x[stalled], color, row)
+                    stalls_drawn = True
+            ax.set_xlabel(_vary_label(vary, units))
+            if k % cols == 0:
+                ax.set_ylabel(_label(column, units))
+            ax.grid(True, alpha=0.3)
+        _legend(fig, axes[0], [], stalls_drawn, title="temperature")
+        title, _ = self._frame(column, method, units, "every point", fig)
+        fig.suptitle(title)
         return fig
 
 
@@ -383,23 +501,156 @@ def parquet_table(frame: Any, metadata: dict[str, Any]) -> Any:
     return table.replace_schema_metadata({**(schema.metadata or {}), PARQUET_KEY: document})
 
 
-_UNIT_SUFFIXES = (
-    ("_Nms_per_rad", "N*m*s/rad"),
-    ("_rad_s", "rad/s"),
-    ("_Nm", "N*m"),
-    ("_rad", "rad"),
-    ("_s", "s"),
-    ("_C", "degC"),
-    ("_J", "J"),
-)
+# At most this many lines per panel: more combinations of the other keys are drawn as points.
+MAX_LINES = 12
 
 
-def _label(column: str) -> str:
-    """``deployment_time_s`` -> ``deployment time [s]``."""
-    for suffix, unit in _UNIT_SUFFIXES:
-        if column.endswith(suffix):
-            return f"{column[: -len(suffix)].replace('_', ' ')} [{unit}]"
-    return column.replace("_", " ")
+def _line_plan(
+    varies: Sequence[Vary], rows: list[dict[str, Any]]
+) -> tuple[Vary, list[Vary]] | None:
+    """For a full factorial sweep: the key along x (the one of most levels, the first on a
+    tie) and the keys whose levels make the lines; None for points (a Latin hypercube, or
+    more than :data:`MAX_LINES` lines)."""
+    levels = [sorted({float(r[v.column]) for r in rows}) for v in varies]
+    points = {tuple(float(r[v.column]) for v in varies) for r in rows}
+    factorial = len(points) == math.prod(len(found) for found in levels) and all(
+        set(found) <= {float(x) for x in v.si} for v, found in zip(varies, levels, strict=True)
+    )
+    if not factorial:
+        return None
+    x_index = max(range(len(varies)), key=lambda i: (len(levels[i]), -i))
+    others = [v for i, v in enumerate(varies) if i != x_index]
+    if math.prod(len(levels[i]) for i in range(len(varies)) if i != x_index) > MAX_LINES:
+        return None
+    return varies[x_index], others
+
+
+def _not_deployed(row: Mapping[str, Any]) -> bool:
+    """A point that stalls, sticks or cannot start (no deployment time), not an error."""
+    return "error" not in row and bool(row.get("stalled") or row.get("stuck"))
+
+
+def _series(
+    rows: list[dict[str, Any]], vary: Vary, column: str, units: UnitSystem
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """x (the varied key in display units), y (``column`` in display units) and which
+    points do not deploy, sorted along x."""
+    from ecdsim.units_display import convert
+
+    x = np.array([_shown(float(r[vary.column]), vary.unit or "", units) for r in rows])
+    kind = kind_of_column(column)
+    y = np.array([_number(r.get(column)) for r in rows])
+    if kind is not None:
+        y = np.array([convert(v, kind, units) if math.isfinite(v) else v for v in y])
+    stalled = np.array([_not_deployed(r) for r in rows], dtype=bool)
+    order = np.argsort(x, kind="stable")
+    return x[order], y[order], stalled[order]
+
+
+def _mark_stalls(ax: Any, x: FloatArray, color: Any, row: int = 0) -> None:
+    """Crosses at the top of the panel over the x values that do not deploy; ``row``
+    (the line's index) moves each line's crosses down a little, so none hides another."""
+    ax.plot(
+        x,
+        np.full(x.shape, 0.97 - 0.045 * row),
+        "x",
+        color=color,
+        ms=8,
+        mew=2,
+        transform=ax.get_xaxis_transform(),
+        clip_on=False,
+    )
+
+
+def _legend(fig: Any, ax: Any, others: list[Vary], stalls: bool, title: str | None = None) -> None:
+    """One legend for the figure, below the panels: the lines, then what a cross means."""
+    from matplotlib.lines import Line2D
+
+    handles, labels = ax.get_legend_handles_labels()
+    if stalls:
+        handles.append(Line2D([], [], marker="x", ls="", color="0.2", ms=8, mew=2))
+        labels.append("x at the top: stalls (no deployment)")
+    if title is None:
+        title = ", ".join(v.key for v in others) if others else "temperature"
+    fig.legend(
+        handles,
+        labels,
+        title=title,
+        loc="outside lower center",
+        ncols=min(len(labels), 4),
+        fontsize="small",
+    )
+
+
+def kind_of_column(column: str) -> str | None:
+    """The kind of quantity a table column holds ("time", "torque"), from its unit: a
+    bracketed SI unit (``load.start_torque [N*m]``) or a key suffix
+    (``deployment_time_s``); None for a plain number."""
+    from ecdsim.units_display import KIND_BY_SI_UNIT, kind_of_key
+
+    name, unit = _split_unit(column)
+    if unit is not None:
+        return KIND_BY_SI_UNIT.get(unit)
+    return kind_of_key(name)
+
+
+def _split_unit(column: str) -> tuple[str, str | None]:
+    """``"key [unit]"`` -> ("key", "unit"); anything else -> (column, None)."""
+    if column.endswith("]") and " [" in column:
+        name, _, unit = column[:-1].rpartition(" [")
+        return name, unit
+    return column, None
+
+
+def _label(column: str, units: UnitSystem = "si") -> str:
+    """A column as an axis label in ``units``: ``deployment_time_s`` -> ``deployment time
+    [s]``, ``load.start_torque_Nm`` -> ``load.start_torque [lbf*in]`` in US units."""
+    from ecdsim.units_display import KEY_SUFFIXES, header
+
+    name, unit = _split_unit(column)
+    kind = kind_of_column(column)
+    if unit is None:
+        # A config key (dotted: load.end_torque_Nm) keeps its underscores; a result
+        # column reads as words (deployment_time_s -> deployment time).
+        words = (lambda text: text) if "." in name else (lambda text: text.replace("_", " "))
+        for suffix, _ in KEY_SUFFIXES:
+            if kind is not None and name.endswith(suffix):
+                name = words(name[: -len(suffix)])
+                break
+        else:
+            name = words(name)
+    if kind is None:
+        return f"{name} [{unit}]" if unit else name
+    return header(name, kind, units)
+
+
+def _vary_label(vary: Vary, units: UnitSystem) -> str:
+    return _label(vary.column, units)
+
+
+def _shown(value: float, si_unit: str, units: UnitSystem) -> float:
+    """An SI value of a quantity in ``si_unit`` in the display ``units``."""
+    from ecdsim.units_display import KIND_BY_SI_UNIT, convert
+
+    kind = KIND_BY_SI_UNIT.get(si_unit)
+    return value if kind is None or not math.isfinite(value) else convert(value, kind, units)
+
+
+def _group_label(others: Sequence[Vary], group: tuple[Any, ...], units: UnitSystem) -> str:
+    """One line's label: the other keys' values with their display units ("3.2 N*m")."""
+    from ecdsim.formatting import format_number
+    from ecdsim.units_display import KIND_BY_SI_UNIT, format_quantity
+
+    parts = []
+    for vary, value in zip(others, group, strict=True):
+        kind = KIND_BY_SI_UNIT.get(vary.unit or "")
+        text = (
+            format_quantity(float(value), kind, units)
+            if kind is not None
+            else format_number(float(value))
+        )
+        parts.append(text if len(others) == 1 else f"{vary.key} = {text}")
+    return ", ".join(parts)
 
 
 def _json_row(row: Mapping[str, Any]) -> dict[str, Any]:

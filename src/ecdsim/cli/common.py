@@ -99,6 +99,27 @@ UnitsOpt = Annotated[
 ]
 
 
+# Every command's --plot takes a folder and writes named PNG files into it (issue 26 item 9).
+# A path ending in an image suffix was the form of `repeat` and `sweep` before: still
+# written as that file, with a note, for one deprecation period.
+_IMAGE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def plot_file(option: Path, name: str, *, quiet: bool = False) -> Path:
+    """Where a command writes its plot ``name`` (``sweep.png``) for ``--plot DIR``:
+    ``DIR/name``. The old form ``--plot FILE.png`` still writes ``FILE.png``, after a
+    ``note:`` on stderr saying that ``--plot`` takes a folder (unless ``quiet``)."""
+    if option.suffix.lower() in _IMAGE_SUFFIXES and not option.is_dir():
+        if not quiet:
+            typer.echo(
+                f"note: --plot {option}: a file name is deprecated; --plot takes a folder in "
+                f"every command (--plot {option.parent} writes {option.parent / name})",
+                err=True,
+            )
+        return option
+    return option / name
+
+
 def units_option(option: str | None, config: Config | None = None) -> UnitSystem:
     """The display unit system: ``--units`` if given, else the config's ``[output] units``.
 

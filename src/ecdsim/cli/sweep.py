@@ -10,11 +10,11 @@ from typing import Annotated
 
 import typer
 
-from ecdsim.cli.common import fail
+from ecdsim.cli.common import UnitsOpt, fail
 
 EPILOG = (
     "Example: [bold]ecdsim sweep examples/paper_cc16.toml --vary gearbox.ratio=200:600:21 "
-    "--vary load.start_torque=3.2,3.73,4.2 -o sweep.csv --plot sweep.png[/bold]"
+    "--vary load.start_torque=3.2,3.73,4.2 -o sweep.csv --plot plots[/bold]"
 )
 
 
@@ -76,14 +76,17 @@ def sweep(
     plot: Annotated[
         Path | None,
         typer.Option(
-            "--plot", help="Write a PNG of --output against each varied key.", metavar="FILE.png"
+            "--plot",
+            help="Write sweep_COLUMN.png into this folder: --column against the varied keys "
+            "by --plot-method, one line per level, stalls marked.",
+            metavar="DIR",
         ),
     ] = None,
-    output: Annotated[
+    column: Annotated[
         str,
         typer.Option(
-            "--output",
-            help="The column --plot draws (e.g. deployment_time_s, end_speed_rad_s).",
+            "--column",
+            help="The table column --plot draws (e.g. deployment_time_s, end_speed_rad_s).",
             metavar="COLUMN",
         ),
     ] = "deployment_time_s",
@@ -91,16 +94,31 @@ def sweep(
         bool,
         typer.Option("--json", help="Print the table as JSON on stdout (docs/json.md)."),
     ] = False,
+    plot_method: Annotated[
+        str | None,
+        typer.Option(
+            "--plot-method",
+            help="The method --plot draws. Default: the most exact method run (dynamic, "
+            "else exact, else paper).",
+            metavar="METHOD",
+        ),
+    ] = None,
+    output: Annotated[
+        str | None,
+        typer.Option("--output", hidden=True, help="Deprecated: --column.", metavar="COLUMN"),
+    ] = None,
+    units: UnitsOpt = None,
 ) -> None:
     """Vary config keys (full factorial or Latin hypercube) and tabulate every result."""
     import tomllib
 
-    from ecdsim.cli.common import load_run
+    from ecdsim.cli.common import load_run, units_option
     from ecdsim.config import ConfigError
     from ecdsim.config.loader import read_config_text
     from ecdsim.sweeps import SweepError, design, parse_vary, run_sweep
 
     loaded = load_run(config, temperature, method)  # the base config, checked once
+    system = units_option(units, loaded)
     try:
         raw = tomllib.loads(read_config_text(config))
     except (ConfigError, tomllib.TOMLDecodeError) as exc:  # pragma: no cover - load_run read it
@@ -123,9 +141,16 @@ def sweep(
         )
     except SweepError as exc:
         fail(exc.problems)
-    if plot is not None and output not in result.columns:
+    if output is not None:
+        typer.echo(
+            "note: --output is deprecated: it is --column now (the plotted column)", err=True
+        )
+        column = output
+    if plot is not None and column not in result.columns:
         known = [c for c in result.columns if c not in {v.column for v in varies}]
-        fail([f"--output {output!r}: not a column of the table; expected one of {known}"])
+        fail([f"--column {column!r}: not a column of the table; expected one of {known}"])
+    if plot is not None and plot_method is not None and plot_method not in result.methods:
+        fail([f"--plot-method {plot_method!r}: not run; expected one of {list(result.methods)}"])
     if out is None and not as_json:
         out = Path("sweep.csv")
     if out is not None:
@@ -145,10 +170,20 @@ def sweep(
 
         write_json(result.to_document(), sys.stdout.write)
     if plot is not None:
+        from ecdsim.cli.common import plot_file
         from ecdsim.plotting import save_figure
 
+        target = plot_file(plot, f"sweep_{_file_name(column)}.png")
         try:
-            save_figure(result.plot(output), plot)
+            save_figure(result.plot(column, plot_method, system), target)
         except OSError as exc:
             fail([f"--plot {plot}: cannot write ({exc.strerror or exc})"])
-        typer.echo(f"wrote {plot}", err=as_json)
+        typer.echo(f"wrote {target}", err=as_json)
+
+
+def _file_name(column: str) -> str:
+    """A column name as part of a file name: ``load.start_torque_Nm`` (or, before the
+    tidy column names, ``load.start_torque [N*m]``) -> ``load.start_torque_Nm``."""
+    import re
+
+    return re.sub(r"[^A-Za-z0-9.]+", "_", column).strip("_")
