@@ -256,6 +256,7 @@ MONTECARLO_OPTIONS: dict[str, str | None] = {
     "--chunk-size": None,
     "--temperature": "-T",
     "--plot": None,
+    "--no-plot": None,
     "--progress": None,
     "--units": None,
     "--wide": None,

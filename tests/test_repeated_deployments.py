@@ -236,12 +236,38 @@ def test_repeat_help(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
             "--temperature": "-T",
             "--json": None,
             "--plot": None,
+            "--units": None,
             "--wide": None,
             "--plain": None,
             "--help": None,
         },
     )
     run_example(runner, app, screen, tmp_path, monkeypatch)
+    # --plot takes a folder, as in every command (issue 26 item 9).
+    assert (tmp_path / "plots" / "repeat.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_repeat_in_us_units(tmp_path: Path) -> None:
+    """--units us: the temperatures in degF (-40 degC is -40 degF; 100 degC is 212), the
+    drift in degF (9/5 of a kelvin), the stow heat in in*lbf."""
+    config = ROOT / "examples" / "paper_cc16_ground_test.toml"
+    args = ["repeat", str(config), "-n", "3", "--cool-down", "60 s", "--stow-time", "30 s"]
+    si = runner.invoke(app, [*args, "-T", "100"], env={"COLUMNS": "200"})
+    us = runner.invoke(app, [*args, "-T", "100", "--units", "us"], env={"COLUMNS": "200"})
+    assert si.exit_code == 0, si.stderr
+    assert us.exit_code == 0, us.stderr
+    assert "Repeated deployments at T = 100 degC" in si.stdout
+    assert "Repeated deployments at T = 212 degF" in us.stdout
+    assert "[degF]" in us.stdout
+    assert "[degC]" not in us.stdout
+
+    def drift(text: str) -> float:
+        return float(text.split("drift 1 to")[1].split("peak rotor ")[1].split()[0])
+
+    # Both printed to 4 significant digits: a difference of 9/5 to that rounding.
+    assert drift(us.stdout) == pytest.approx(1.8 * drift(si.stdout), rel=1e-3)
+    assert " in*lbf per stow" in us.stdout
+    assert " J per stow" in si.stdout
 
 
 @pytest.mark.parametrize("resistance", [40.0, math.inf])

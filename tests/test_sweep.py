@@ -13,7 +13,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 import pytest
 from typer.testing import CliRunner
 
@@ -213,14 +212,14 @@ def test_plot_draws_the_exact_method_one_line_per_level_stalls_marked() -> None:
             y = np.asarray(line.get_ydata(), dtype=float)
             np.testing.assert_allclose(x, ratios)
             # A stall (least spring torque 1.58 N*m at most the friction) is no point.
-            deploys = 1.58 > np.array([friction(temp, n) for n in ratios])
+            deploys = np.array([friction(temp, n) for n in ratios]) < 1.58
             assert np.all(np.isnan(y[~deploys]))
             hand = [exact_time(temp, n, ts) for n in ratios[deploys]]
             # The exact solver's own accuracy is ~1e-12 relative; the hand formula's
             # rounding is far smaller: 1e-9 leaves room for neither to matter.
             np.testing.assert_allclose(y[deploys], hand, rtol=1e-9)
         crosses = [line for line in ax.get_lines() if line.get_marker() == "x"]
-        stalled = ratios[1.58 <= np.array([friction(temp, n) for n in ratios])]
+        stalled = ratios[np.array([friction(temp, n) for n in ratios]) >= 1.58]
         if temp == -40.0:
             # 533.4 = (1.58 - FS(-40)) / FT(-40): 540 to 600, for each start torque.
             np.testing.assert_allclose(stalled, [540.0, 560.0, 580.0, 600.0])
@@ -228,7 +227,8 @@ def test_plot_draws_the_exact_method_one_line_per_level_stalls_marked() -> None:
             for line in crosses:
                 np.testing.assert_allclose(np.asarray(line.get_xdata(), dtype=float), stalled)
         else:
-            assert stalled.size == 0 and not crosses
+            assert stalled.size == 0
+            assert not crosses
     # The point: N = 380, 3.73 N*m, -40 degC is 48.13 s (exact), not the paper's 34.
     line = [ln for ln in axes[0].get_lines() if ln.get_label() == "3.73 N*m"][0]
     at = int(np.flatnonzero(np.isclose(line.get_xdata(), 380.0))[0])

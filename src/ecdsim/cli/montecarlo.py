@@ -112,10 +112,18 @@ def montecarlo(
         ),
     ] = None,
     plot: Annotated[
-        bool, typer.Option("--plot/--no-plot", help="Write PNG plots into DIR/plots.")
-    ] = True,
+        Path | None,
+        typer.Option(
+            "--plot", help="Folder for the PNG plots (default: DIR/plots).", metavar="DIR"
+        ),
+    ] = None,
+    no_plot: Annotated[bool, typer.Option("--no-plot", help="Write no plots.")] = False,
     show_progress: Annotated[
-        bool, typer.Option("--progress/--no-progress", help="Show the progress bar.")
+        bool,
+        typer.Option(
+            "--progress/--no-progress",
+            help="Show the progress bar (only ever on a terminal, never in a pipe or log).",
+        ),
     ] = True,
     units: UnitsOpt = None,
     wide: WideOpt = False,
@@ -137,6 +145,16 @@ def montecarlo(
     loaded = load_run(config, temperature, None)
     u = Shown(units_option(units, loaded))
     folder = out if out is not None else Path(f"{config.stem}-montecarlo")
+    if plot is not None and str(plot).startswith("-"):
+        # `--plot` was a switch before issue 26 (plots are on by default): a bare --plot
+        # followed by another option would take that option as the folder.
+        fail(
+            [
+                f"--plot {plot}: --plot takes a folder now (plots go to DIR/plots by "
+                "default: drop a bare --plot; --no-plot writes none)"
+            ]
+        )
+    plots = None if no_plot else (plot if plot is not None else folder / "plots")
     if resume and overwrite:
         fail(["--resume continues the run in --out and --overwrite replaces it: give one"])
     _check_folder(folder, resume, overwrite)
@@ -166,19 +184,21 @@ def montecarlo(
         f"method, {plan.sampling} sampling, seed {plan.seed}, {plan.chunks:,} chunk(s) of "
         f"{plan.chunk_size:,}; {executor.describe()} -> {folder}",
         highlight=False,
+        soft_wrap=False,  # wrapped to the terminal's width (80 in a pipe)
     )
     resume_command = _resume_command(config, plan, folder, workers, scheduler)
     try:
-        with _progress(console, show_progress) as update:
+        # The bar redraws itself: on a terminal only, never into a pipe or a log file.
+        with _progress(console, show_progress and console.is_terminal) as update:
             report = run(plan, folder, executor, resume=resume, progress=update)
         for note in report.notes:
-            console.print(f"note: {note}", highlight=False)
+            console.print(f"note: {note}", highlight=False, soft_wrap=False)
         console.print(
             f"{report.chunks_computed:,} chunk(s) computed, {report.chunks_reused:,} reused, "
             f"in {report.elapsed_s:.1f} s",
             highlight=False,
         )
-        summary = _summarize(plan, folder, plot, console, u.system)
+        summary = _summarize(plan, folder, plots, console, u.system)
     except RunInterrupted as exc:
         console.print(
             f"interrupted: {exc.chunks_done:,} of {exc.chunks_total:,} chunks are on disk in "
@@ -337,7 +357,7 @@ class _progress:  # noqa: N801 - used as a context manager, like a function
 
 
 def _summarize(
-    plan: Plan, out: Path, plot: bool, console: Console, units: UnitSystem = "si"
+    plan: Plan, out: Path, plots: Path | None, console: Console, units: UnitSystem = "si"
 ) -> dict[str, Any]:
     from ecdsim import atomic
     from ecdsim.montecarlo.stats import summarize
@@ -346,10 +366,10 @@ def _summarize(
     summary = summarize(plan, out)
     text = json.dumps(summary, indent=2, sort_keys=True, allow_nan=False) + "\n"
     written = [atomic.write_text(out / SUMMARY, text)]
-    if plot:
+    if plots is not None:
         from ecdsim.montecarlo.plots import write_plots
 
-        written += write_plots(plan, out, summary, units)
+        written += write_plots(plan, out, summary, units, plots)
     for path in written:
         console.print(f"wrote {path}", highlight=False)
     return summary

@@ -12,15 +12,16 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from ecdsim.cli.common import fail
+from ecdsim.cli.common import UnitsOpt, fail
 from ecdsim.cli.display import PlainOpt, WideOpt
 
 if TYPE_CHECKING:
     from ecdsim.dynamics.sequence import SequenceResult
+    from ecdsim.units_display import UnitSystem
 
 EPILOG = (
     "Example: [bold]ecdsim repeat examples/paper_cc16_dynamic.toml --count 500 "
-    '--cool-down "60 s" --stow-time "30 s" --plot life.png[/bold]'
+    '--cool-down "60 s" --stow-time "30 s" --plot plots[/bold]'
 )
 
 
@@ -76,26 +77,33 @@ def _stall_note(stalls: list[int], count: int) -> str:
     )
 
 
-def _print(result: SequenceResult, heat_per_stow: list[float], heated: bool) -> None:
+def _print(
+    result: SequenceResult, heat_per_stow: list[float], heated: bool, units: UnitSystem = "si"
+) -> None:
     import numpy as np
     from rich.markup import escape
     from rich.table import Table
 
     from ecdsim.cli import display
-    from ecdsim.formatting import format_number
+    from ecdsim.units_display import Shown
+
+    u = Shown(units, digits=6)
 
     def short(value: float) -> str:
-        return format_number(float(value), 6)
+        return u.num(float(value), "temperature")
 
     console = display.make_console()
     housing = result.start_housing_temperature
     drift = result.drift()
     for j, temp in enumerate(result.temperatures):
-        table = Table(title=f"Repeated deployments at T = {temp:g} degC", title_justify="left")
-        headers = ["deployment", "start rotor [degC]"]
+        table = Table(
+            title=f"Repeated deployments at T = {Shown(units).text(float(temp), 'temperature')}",
+            title_justify="left",
+        )
+        headers = ["deployment", u.head("start rotor", "temperature")]
         if housing is not None:
-            headers.append("start housing [degC]")
-        headers += ["peak rotor [degC]", "time [s]", "time change [%]"]
+            headers.append(u.head("start housing", "temperature"))
+        headers += [u.head("peak rotor", "temperature"), "time [s]", "time change [%]"]
         for header in headers:
             table.add_column(escape(header), justify="right")
         first = float(result.deployment_time[0, j])
@@ -120,18 +128,21 @@ def _print(result: SequenceResult, heat_per_stow: list[float], heated: bool) -> 
         )
         time_drift = float(drift["deployment_time_s"][j])
         time_text = f"{time_drift:+.4g} s" if math.isfinite(time_drift) else "- (stalled)"
+        kelvin = u.value(1.0, "temperature_difference")
+        degree = u.unit("temperature_difference")
         display.note(
             console,
             f"drift 1 to {result.cycle.count}: time {time_text}, "
-            f"peak rotor {drift['peak_rotor_temperature_K'][j]:+.4g} K, start rotor "
-            f"{drift['start_rotor_temperature_K'][j]:+.4g} K; {state}",
+            f"peak rotor {kelvin * drift['peak_rotor_temperature_K'][j]:+.4g} {degree}, "
+            f"start rotor {kelvin * drift['start_rotor_temperature_K'][j]:+.4g} {degree}; "
+            f"{state}",
         )
     if not heated:
         display.note(console, "no [damper.thermal]: the damper does not heat, nothing drifts")
     if all(math.isfinite(e) for e in heat_per_stow):
         estimate = (
             "back-driving an engaged damper at travel / stow time would add about "
-            + ", ".join(f"{format_number(e, 3)} J" for e in heat_per_stow)
+            + ", ".join(Shown(units, digits=3).text(e, "energy") for e in heat_per_stow)
             + " per stow (BD_T N^2 travel^2 / t_stow)"
         )
     else:  # --stow-time 0: no speed to estimate it from
@@ -183,10 +194,12 @@ def repeat(
         Path | None,
         typer.Option(
             "--plot",
-            help="Write a PNG of the deployment time and rotor temperatures.",
-            metavar="FILE.png",
+            help="Write repeat.png into this folder: the deployment time and rotor "
+            "temperatures against the deployment number.",
+            metavar="DIR",
         ),
-    ] = None,  # fmt: skip
+    ] = None,
+    units: UnitsOpt = None,
     wide: WideOpt = False,
     plain: PlainOpt = False,
 ) -> None:
@@ -194,7 +207,7 @@ def repeat(
     import json
 
     from ecdsim.cli import display
-    from ecdsim.cli.common import echo_warnings, load_run
+    from ecdsim.cli.common import echo_warnings, load_run, plot_file, units_option
     from ecdsim.deployment import ModelDomainError, Prediction, predict
     from ecdsim.dynamics import DynamicParameters, DynamicResult
     from ecdsim.dynamics.method import DynamicSolution
@@ -207,6 +220,7 @@ def repeat(
     cool = _duration("--cool-down", cool_down)
     stow = _duration("--stow-time", stow_time)
     loaded = load_run(config, temperature, ["dynamic"])
+    system = units_option(units, loaded)
     params = loaded.spec.dynamics()
     if params is None:
         problems.append(
@@ -230,7 +244,7 @@ def repeat(
         result = run_sequence(solve, params, temps, Cycle(count, cool, stow))
     except ModelDomainError as exc:
         fail([f"{config}: {exc}"])
-    echo_warnings(first[0])
+    echo_warnings(first[0], system)
     state = loaded.system.ecd.at(list(temps))
     heat = stow_heat(state.damper_damping_rate * state.gear_ratio**2, loaded.system.load.travel,
                      stow)  # fmt: skip
@@ -241,14 +255,14 @@ def repeat(
         ]
         typer.echo(json.dumps(document, indent=2))
     else:
-        _print(result, [float(e) for e in heat.ravel()], params.thermal is not None)
+        _print(result, [float(e) for e in heat.ravel()], params.thermal is not None, system)
     if plot is not None:
         from ecdsim.plotting import save_figure
         from ecdsim.plotting_dynamic import plot_sequence
 
+        target = plot_file(plot, "repeat.png")
         try:
-            save_figure(plot_sequence(result, loaded.system.name), plot)
+            save_figure(plot_sequence(result, loaded.system.name, system), target)
         except OSError as exc:
             fail([f"--plot {plot}: cannot write ({exc.strerror or exc})"])
-        if not as_json:
-            typer.echo(f"wrote {plot}")
+        typer.echo(f"wrote {target}", err=as_json)

@@ -213,9 +213,14 @@ def plot_tornado(summary: Mapping[str, Any], units: UnitSystem = "si") -> Figure
 
 
 def write_plots(
-    plan: Plan, out: Path, summary: Mapping[str, Any], units: UnitSystem = "si"
+    plan: Plan,
+    out: Path,
+    summary: Mapping[str, Any],
+    units: UnitSystem = "si",
+    folder: Path | None = None,
 ) -> list[Path]:
-    """Write the study's plots as PNG files into ``out/plots``, temperatures in ``units``."""
+    """Write the study's plots as PNG files into ``folder`` (default ``out/plots``),
+    temperatures in ``units``; ``out`` is the run's folder, which holds the samples."""
     from ecdsim.montecarlo.columns import output_column
     from ecdsim.montecarlo.store import ChunkReader
     from ecdsim.plotting import save_figure
@@ -239,4 +244,5 @@ def write_plots(
         ),
         "tornado": plot_tornado(summary, units),
     }
-    return [save_figure(figures[name], out / "plots" / f"{name}.png") for name in PLOT_NAMES]
+    target = folder if folder is not None else out / "plots"
+    return [save_figure(figures[name], target / f"{name}.png") for name in PLOT_NAMES]
