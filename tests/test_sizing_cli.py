@@ -80,11 +80,57 @@ def test_size_tables_and_plots(tmp_path: Path, saved_figures: SavedFigures) -> N
     np.testing.assert_allclose(seconds, expected, rtol=1e-12)  # the same closed form
     (margins,) = saved_figures.axes("ratio_margins.png")
     assert margins.get_xlabel() == "gear ratio N [-]"
-    assert margins.get_ylabel() == "margin (clipped to +-1.5) [-]"
-    assert margins.get_title().endswith(": margins against ratio")
-    assert {"min_deployment_time", "max_deployment_time", "no_stall"} <= set(
-        saved_figures.legend(margins)
+    assert margins.get_ylabel() == "margin, >= 0 where met [-] (clipped to +-1.5)"
+    assert margins.get_title().endswith("the requirements that limit the gear ratio")
+    # Issue 26 item 7: the requirements in words, those at the interval's ends said so,
+    # the green band and the catalogue ratios in the legend, the never-binding named.
+    legend = [t.get_text() for t in margins.figure.legends[0].get_texts()]
+    assert "deployment time >= 10 s (sets an end)" in legend
+    assert "deployment time <= 60 s (sets an end)" in legend
+    assert "no stall" in legend
+    assert not [entry for entry in legend if "_" in entry]  # no code names
+    (band,) = [entry for entry in legend if entry.startswith("meets every requirement")]
+    # The best-ranked pair (illustrative): the band is its interval of the JSON, to 4 digits.
+    document = json.loads(
+        runner.invoke(app, ["size", str(SIZING), "--catalog", str(CATALOGUE), "--json"]).stdout
     )
+    (interval,) = document["ratio_intervals"]["intervals"]
+    assert band == f"meets every requirement: N {interval['low']:.4g} to {interval['high']:.4g}"
+    assert "catalogue ratio, meets every requirement" in legend  # its 500:1
+    assert "catalogue ratio, misses a requirement" in legend  # its 100:1 to 400:1
+    (note,) = [entry for entry in legend if entry.startswith("met at every N")]
+    assert "ECD input torque <= 4 N*m" in note.replace("\n", " ")
+    drawn = [line.get_label() for line in margins.get_lines() if line.get_linestyle() == "-"]
+    assert "ECD input torque <= 4 N*m" not in drawn  # never binds: not drawn
+
+
+def test_ratio_intervals_in_words(tmp_path: Path) -> None:
+    """The interval table never prints an end of the scanned range as a bound."""
+    pair = ["--damper", "CDA Cc-16 damper", "--gearbox", "CDA Cc-16 gearbox"]
+    result = runner.invoke(
+        app, ["size", str(SIZING), "--catalog", str(CATALOGUE), *pair], env={"COLUMNS": "200"}
+    )
+    assert result.exit_code == 0, result.output
+    table = result.stdout.split("Gear ratios N meeting the requirements")[1]
+    rows = {
+        cells[0]: cells[1:]
+        for line in table.splitlines()
+        if line.startswith("│")
+        for cells in [[c.strip() for c in line.strip("│").split("│")]]
+    }
+    # The Cc-16's exact roots (docs/sizing.md), to 4 digits, with what sets each end.
+    assert rows["all requirements"] == [
+        "313.7 to 408.2",
+        "low: deployment time >= 10 s; high: deployment time <= 60 s",
+    ]
+    assert rows["deployment time >= 10 s"][0] == ">= 313.7"
+    assert rows["deployment time <= 60 s"][0] == "<= 408.2"
+    assert rows["ECD input torque <= 4 N*m"][0] == "no bound in the scanned range"
+    # 533.4 = (1.58 - FS(-40)) / FT(-40) (docs/sizing.md): an upper bound only.
+    assert rows["no stall"][0] == "<= 533.4"
+    cells = " ".join(" ".join(row) for row in rows.values())
+    assert "10 to" not in cells  # the scan's ends are named in the title only
+    assert "5000" not in cells
 
 
 def test_compare_fluid_json_and_plot(tmp_path: Path, saved_figures: SavedFigures) -> None:

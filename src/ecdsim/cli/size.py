@@ -76,9 +76,9 @@ def _config(path: Path, section: str) -> Config:
 
 # Secondary columns of the sizing tables, hidden in this order when a table is wider than
 # the terminal (--wide shows them), and the text columns that may wrap at spaces.
-_DROP = ("at [deg", "torque margin", "spread", "mass", "at T", "value (worst)", "limited by")
+_DROP = ("at [deg", "torque margin", "spread", "mass", "at T", "value (worst)")
 _FLUID_DROP = ("fluid deadband", "engage speed", "fluid t (damped)", "fluid c", "BECD")
-_WRAP = ("damper + gearbox", "requirement", "limit", "check", "N interval", "recommended")
+_WRAP = ("damper + gearbox", "requirement", "limit", "check", "gear ratios", "recommended")
 
 
 def _print(
@@ -184,6 +184,7 @@ def size(
             "torque margin: no uncertainty factors applied (all 1); take the factors from the "
             "standard your project applies (docs/sizing.md)"
         )
+    labels = report.check_labels(result, chosen_damper, chosen_gearbox, u)
     written: list[Path] = []
     if plot is not None:
         from ecdsim.sizing.plots import write_sizing_plots
@@ -198,7 +199,7 @@ def size(
         written = _write_plots(
             plot,
             lambda: write_sizing_plots(
-                plot, top, temps, times, requirements, intervals, units=u.system
+                plot, top, temps, times, requirements, intervals, units=u.system, labels=labels
             ),
         )
     if as_json:
@@ -221,7 +222,7 @@ def size(
             tables.append(report.torque_margin_table(chosen[0], u))
             notes[:0] = report.margin_definitions(chosen[0], u)
         if intervals is not None:
-            tables.append(report.intervals_table(intervals))
+            tables.append(report.intervals_table(intervals, labels))
         _print(tables, notes, lead=report.recommendation(result, u))
     for c in result.candidates:
         for warning in c.warnings:

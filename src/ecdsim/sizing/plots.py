@@ -5,7 +5,7 @@ matplotlib is imported lazily (see :mod:`ecdsim.plotting`).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -75,27 +75,107 @@ def plot_candidate_times(
     return fig
 
 
-def plot_ratio_margins(intervals: RatioIntervals) -> Figure:
-    """Each requirement's margin (worst over temperature) against gear ratio N.
+# Curve colours of the margins: none is the green of the feasible band or the grey of the
+# catalogue ratios.
+_MARGIN_COLORS = ("#1f77b4", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 
-    Feasible intervals are shaded; their ends are exact roots (docs/sizing.md); the
-    gearbox's catalogued ratios are marked.
+
+def binding_checks(intervals: RatioIntervals) -> list[str]:
+    """The checks that bind somewhere in the scanned range: those whose margin changes
+    sign there (an interval end that is not the scan's) or is never met. A check met at
+    every scanned ratio limits no ratio."""
+    from ecdsim.sizing.ratio import SCAN_RANGE
+
+    found = []
+    for name, own in intervals.by_check.items():
+        ends = [i.low_limited_by for i in own] + [i.high_limited_by for i in own]
+        if not own or any(end != SCAN_RANGE for end in ends):
+            found.append(name)
+    return found
+
+
+def plot_ratio_margins(
+    intervals: RatioIntervals, labels: Mapping[str, str] | None = None
+) -> Figure:
+    """The margin (worst over temperature) of each requirement that binds, against N.
+
+    Only the requirements whose margin crosses zero in the scanned range (or is never
+    met) are drawn, labelled in words (``labels``, e.g. "deployment time <= 60 s"); the
+    ones met at every scanned ratio are named in a note. The feasible interval is shaded
+    and in the legend with its ends (exact roots, docs/sizing.md); the gearbox's
+    catalogued ratios are dashed grey lines, marked whether they meet every requirement.
     """
-    fig = _figure()
+    import textwrap
+
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    from ecdsim.sizing.report import PLAIN_NAMES, interval_text
+
+    words = dict(PLAIN_NAMES, **(labels or {}))
+    fig = _figure(8.0, 5.4)
     ax = fig.add_subplot()
-    for name, margins in intervals.grid_margins.items():
-        ax.plot(intervals.grid, np.clip(margins, -1.5, 1.5), label=name)
+    binding = binding_checks(intervals)
+    # The requirements at the feasible interval's ends: bold, and said so in the legend.
+    ends = {i.low_limited_by for i in intervals.intervals}
+    ends |= {i.high_limited_by for i in intervals.intervals}
+    for k, name in enumerate(binding):
+        margins = intervals.grid_margins[name]
+        sets = name in ends
+        ax.plot(
+            intervals.grid,
+            np.clip(margins, -1.5, 1.5),
+            color=_MARGIN_COLORS[k % len(_MARGIN_COLORS)],
+            linewidth=2.6 if sets else 1.3,
+            alpha=1.0 if sets else 0.75,
+            label=words.get(name, name) + (" (sets an end)" if sets else ""),
+        )
+    handles, texts = ax.get_legend_handles_labels()
     for interval in intervals.intervals:
-        ax.axvspan(interval.low, interval.high, color="tab:green", alpha=0.15)
+        ax.axvspan(interval.low, interval.high, color="tab:green", alpha=0.15, lw=0)
+    if intervals.intervals:
+        handles.append(Patch(color="tab:green", alpha=0.3))
+        shown = ", ".join(interval_text(i) for i in intervals.intervals)
+        texts.append(f"meets every requirement: N {shown}")
+    else:
+        handles.append(Patch(color="white"))
+        texts.append("no N meets every requirement in the scanned range")
     for ratio, feasible in intervals.catalogue_ratios:
-        ax.axvline(ratio, color="tab:green" if feasible else "tab:red", linestyle="--")
+        ax.axvline(ratio, color="0.35", linestyle="--" if feasible else ":", linewidth=1.2)
+        ax.annotate(
+            f"{ratio:g}:1",
+            (ratio, 1.0),
+            xycoords=("data", "axes fraction"),
+            xytext=(2, -2),
+            textcoords="offset points",
+            fontsize="x-small",
+            color="0.3",
+            va="top",
+            rotation=90,
+        )
+    kinds = {feasible for _, feasible in intervals.catalogue_ratios}
+    for feasible in sorted(kinds, reverse=True):
+        handles.append(Line2D([], [], color="0.35", linestyle="--" if feasible else ":"))
+        texts.append(
+            "catalogue ratio, meets every requirement"
+            if feasible
+            else "catalogue ratio, misses a requirement"
+        )
     ax.axhline(0.0, color="0.2", linewidth=0.8)
     ax.set_xscale("log")
     ax.set_xlabel("gear ratio N [-]")
-    ax.set_ylabel("margin (clipped to +-1.5) [-]")
-    ax.set_title(f"{intervals.damper} + {intervals.gearbox}: margins against ratio")
+    ax.set_ylabel("margin, >= 0 where met [-] (clipped to +-1.5)")
+    ax.set_title(
+        f"{intervals.damper} + {intervals.gearbox}:\nthe requirements that limit the gear ratio"
+    )
     ax.grid(True, alpha=0.3, which="both")
-    ax.legend(fontsize="x-small")
+    always = [words.get(n, n) for n in intervals.by_check if n not in binding]
+    if always:
+        low, high = intervals.ratio_range
+        handles.append(Patch(color="none"))
+        said = f"met at every N from {low:g} to {high:g}, not drawn: " + "; ".join(always)
+        texts.append("\n".join(textwrap.wrap(said, 48)))
+    fig.legend(handles, texts, loc="outside lower center", ncols=2, fontsize="small")
     return fig
 
 
@@ -146,8 +226,11 @@ def write_sizing_plots(
     requirements: Requirements,
     intervals: RatioIntervals | None,
     units: UnitSystem = "si",
+    labels: Mapping[str, str] | None = None,
 ) -> list[Path]:
-    """Write the sizing plots as PNG files into ``folder``, in ``units``; returns the paths."""
+    """Write the sizing plots as PNG files into ``folder``, in ``units``; returns the paths.
+
+    ``labels``: each check's name in words, for the margins plot."""
     out = Path(folder)
     written = [
         save_figure(
@@ -156,7 +239,9 @@ def write_sizing_plots(
         )
     ]
     if intervals is not None:
-        written.append(save_figure(plot_ratio_margins(intervals), out / "ratio_margins.png"))
+        written.append(
+            save_figure(plot_ratio_margins(intervals, labels), out / "ratio_margins.png")
+        )
     return written
 
 

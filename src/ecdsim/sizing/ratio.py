@@ -43,6 +43,10 @@ RTOL = 1e-12
 CLIP = 1e3
 
 
+# The "limited by" of an interval end that is only the end of the scanned range.
+SCAN_RANGE = "scan range"
+
+
 @dataclass(frozen=True)
 class Interval:
     """A closed interval of gear ratios [low, high].

@@ -12,7 +12,7 @@ import numpy as np
 
 from ecdsim.formatting import format_number
 from ecdsim.sizing.fluid import DeadbandDeployment, FluidComparison
-from ecdsim.sizing.ratio import RatioIntervals
+from ecdsim.sizing.ratio import SCAN_RANGE, Interval, RatioIntervals
 from ecdsim.sizing.search import CandidateResult, SearchResult
 from ecdsim.units_display import KIND_BY_SI_UNIT, Shown, convert_text
 
@@ -277,27 +277,87 @@ def torque_margin_table(candidate: CandidateResult, u: Shown = SI) -> Table:
     return title, headers, rows
 
 
-def intervals_table(intervals: RatioIntervals) -> Table:
-    """The exact feasible gear-ratio intervals, and each check's own."""
+# A check's name in words, where no candidate's label is at hand.
+PLAIN_NAMES = {
+    "min_deployment_time": "shortest deployment time",
+    "max_deployment_time": "longest deployment time",
+    "max_end_speed": "end speed",
+    "max_input_torque": "ECD input torque",
+    "no_stall": "no stall",
+    "min_torque_margin": "torque margin",
+    "damper_max_torque": "damper torque <= catalogue max",
+    "damper_linear_speed": "damper speed <= linear-range limit",
+    "damper_linear_torque": "damper eddy torque <= linear-range limit",
+    "gearbox_max_output_torque": "gearbox torque <= catalogue max",
+}
+NO_BOUND = "no bound in the scanned range"
+
+
+def check_labels(
+    result: SearchResult, damper: str | None, gearbox: str | None, u: Shown = SI
+) -> dict[str, str]:
+    """Each check's name in words, as the requirements table says it ("deployment time
+    <= 60 s", in ``u``'s units): from a candidate of ``damper`` and ``gearbox`` (any
+    ratio), else any candidate, else :data:`PLAIN_NAMES`."""
+    labels = dict(PLAIN_NAMES)
+    ordered = sorted(
+        (c for c in result.candidates if c.error is None),
+        key=lambda c: (c.candidate.damper.name, c.candidate.gearbox.name) == (damper, gearbox),
+    )
+    for candidate in ordered:  # the chosen pair's labels last, so they win
+        labels.update({o.name: convert_text(o.label, u.system) for o in candidate.checks})
+    return labels
+
+
+def _ratio(value: float) -> str:
+    return format_number(value, 4)
+
+
+def interval_text(interval: Interval) -> str:
+    """A feasible interval in words: "407.1 to 534.8", ">= 407.1" or "<= 729.2" where
+    the other end is only the end of the scan, :data:`NO_BOUND` where both are."""
+    low = interval.low_limited_by != SCAN_RANGE
+    high = interval.high_limited_by != SCAN_RANGE
+    if low and high:
+        return f"{_ratio(interval.low)} to {_ratio(interval.high)}"
+    if low:
+        return f">= {_ratio(interval.low)}"
+    if high:
+        return f"<= {_ratio(interval.high)}"
+    return NO_BOUND
+
+
+def intervals_table(intervals: RatioIntervals, labels: dict[str, str] | None = None) -> Table:
+    """The exact feasible gear-ratio intervals, and each check's own, in words.
+
+    An end that is only the end of the scanned range is no bound: it is never printed
+    as one ("<= 729.2", not "10 to 729.2"). ``labels``: each check's name in words
+    (:func:`check_labels`); :data:`PLAIN_NAMES` by default.
+    """
+    words = labels if labels is not None else PLAIN_NAMES
+
+    def by(name: str) -> str:
+        return NO_BOUND if name == SCAN_RANGE else words.get(name, name.replace("_", " "))
+
     rows = [
         [
             "all requirements",
-            f"{i.low:.6g} to {i.high:.6g}",
-            f"{i.low_limited_by} / {i.high_limited_by}",
+            interval_text(i),
+            f"low: {by(i.low_limited_by)}; high: {by(i.high_limited_by)}",
         ]
         for i in intervals.intervals
     ]
     if not intervals.intervals:
         rows.append(["all requirements", "none in the scanned range", "-"])
     for name, found in intervals.by_check.items():
-        text = ", ".join(f"{i.low:.6g} to {i.high:.6g}" for i in found) or "none"
-        rows.append([name, text, ""])
+        text = ", ".join(interval_text(i) for i in found) or "none in the scanned range"
+        rows.append([words.get(name, name), text, ""])
     low, high = intervals.ratio_range
     title = (
         f"Gear ratios N meeting the requirements: {intervals.damper} + {intervals.gearbox} "
         f"(exact roots; scanned {low:g} to {high:g}, {intervals.n_grid} points)"
     )
-    return title, ["check", "N interval(s)", "limited by (low / high)"], rows
+    return title, ["requirement", "gear ratios N", "limited by"], rows
 
 
 def _time(side: DeadbandDeployment, i: int) -> str:
