@@ -70,6 +70,18 @@ def pytest_runtest_makereport(
     return report
 
 
+def messages(stderr: str) -> list[str]:
+    """The ``warning:``/``note:`` messages of a command's stderr, each on one line again:
+    the CLI wraps them to the terminal's width, continuation lines indented."""
+    found: list[str] = []
+    for line in stderr.splitlines():
+        if line.startswith("  ") and found:
+            found[-1] += " " + line.strip()
+        else:
+            found.append(line)
+    return found
+
+
 def paper_system(**load_overrides: float) -> DeploymentSystem:
     """The paper's section 6 example, every constant as printed in the paper."""
     damper = HighSpeedDamper(

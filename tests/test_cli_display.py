@@ -24,7 +24,7 @@ from typer.testing import CliRunner, Result
 
 from ecdsim.cli.app import app
 from tests import hand
-from tests.conftest import ROOT
+from tests.conftest import ROOT, messages
 
 runner = CliRunner()
 BOX = re.compile("[\u2500-\u257f]")  # box-drawing characters
@@ -235,7 +235,7 @@ def test_cannot_start_in_table_and_warning(tmp_path: Path) -> None:
     assert _rows(result.stdout, "Dynamic method: end of travel")["-40"][0] == "cannot start"
     expected = f"cannot start: drive torque 1.2 N*m < friction {FRICTION_M40:.4g} N*m at -40 degC"
     assert pytest.approx(1.343024, abs=1e-9) == FRICTION_M40  # the sum above, by hand
-    warnings = [line for line in result.stderr.splitlines() if "cannot start" in line]
+    warnings = [line for line in messages(result.stderr) if "cannot start" in line]
     assert len(warnings) == 3  # paper, exact, dynamic (static factor 1: the same friction)
     assert all(expected in line for line in warnings), warnings
 
@@ -254,7 +254,7 @@ def test_the_dynamic_method_quotes_its_breakaway_friction(tmp_path: Path) -> Non
     )
     result = _run(["deploy", str(path), "-T", "-40"])
     assert result.exit_code == 0, result.output
-    lines = [line for line in result.stderr.splitlines() if "cannot start" in line]
+    lines = [line for line in messages(result.stderr) if "cannot start" in line]
     breakaway = 1.5 * FRICTION_M40
     assert lines == [
         f"warning: [dynamic] cannot start: drive torque 1.45 N*m < friction {breakaway:.4g} N*m "

@@ -329,10 +329,10 @@ def test_deploy_table_in_us_units(tmp_path: Any) -> None:
     # ECD table at 77 degF = 25 degC, by hand (paper section 6):
     # BD_T = 1.3e-4 N*m*s/rad = 1.3e-4 / 0.1129848290276167 = 0.0011506 in*lbf*s/rad;
     # BECD = 23.65272 N*m*s/rad -> 209.3 in*lbf*s/rad; FS = 0.47 N*m -> 4.160 lbf*in
-    # (4 significant digits, printed by %g as 4.16).
+    # (4 significant digits: 4.160, its trailing zero kept so the column aligns).
     assert row[1:2] == ["0.001151"]
     assert "209.3" in row
-    assert "4.16" in row
+    assert "4.160" in row
     assert _row(result.stdout, "-40")[0] == "-40"
     assert _row(result.stdout, "212")[0] == "212"
 
@@ -462,7 +462,7 @@ def test_fit_drop_test_in_us_units() -> None:
     # The FECD line in US units: the value at 32 degF (= 0 degC) in lbf*in, and the slope
     # per degF: N*m/K / 1.8 per degF-per-K / 0.1129848290276167 N*m per lbf*in; the table
     # prints 5 significant digits.
-    lines = [line for line in result.stdout.splitlines() if "at_32F [lbf*in]" in line]
+    lines = [line for line in result.stdout.splitlines() if "at 32 degF [lbf*in]" in line]
     assert len(lines) == 1
     assert f"{at_0c / LBF_IN_NM:.5g}" in lines[0]
     lines = [line for line in result.stdout.splitlines() if "slope [lbf*in/degF]" in line]

@@ -30,3 +30,23 @@ def format_number(
     if math.isinf(value):
         return "-inf" if signed_inf and value < 0 else "inf"
     return f"{value:.{digits}g}"
+
+
+# Each deployment method in words, for the lines that name the methods under a table, in
+# a report or a legend (the registry's labels are short names: "exact quasi-static").
+METHOD_DESCRIPTIONS = {
+    "paper": "the paper's Eq. 8-13 (the mean of the start and end speeds)",
+    "exact": "the exact solution of the same quasi-static equations",
+    "dynamic": "the equation of motion in time (inertia, stiction, end stop)",
+}
+
+
+def describe_method(name: str, label: str = "") -> str:
+    """``name``'s description (:data:`METHOD_DESCRIPTIONS`), else its registry ``label``.
+
+    >>> describe_method("exact")
+    'the exact solution of the same quasi-static equations'
+    >>> describe_method("mine", "my method")
+    'my method'
+    """
+    return METHOD_DESCRIPTIONS.get(name, label or name)

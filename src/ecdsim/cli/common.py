@@ -81,6 +81,29 @@ def import_numpy_single_threaded() -> None:
         del os.environ["OPENBLAS_NUM_THREADS"]
 
 
+def terminal_width() -> int:
+    """The terminal's width: ``COLUMNS``, else the real width, else 80 (a pipe, a file)."""
+    import shutil
+
+    return max(shutil.get_terminal_size((80, 24)).columns, 20)
+
+
+def echo_wrapped(text: str, *, err: bool = True) -> None:
+    """A ``warning:`` or ``note:`` line on stderr, wrapped at spaces to the terminal's
+    width (80 in a pipe) with its continuation lines indented, so that every line fits
+    and each message still starts with its word. Long words (a path) are never cut."""
+    import textwrap
+
+    lines = textwrap.wrap(
+        text,
+        terminal_width(),
+        subsequent_indent="  ",
+        break_long_words=False,
+        break_on_hyphens=False,
+    )
+    typer.echo("\n".join(lines) if lines else text, err=err)
+
+
 def fail(problems: list[str]) -> NoReturn:
     """Print user errors on stderr, one line each, and exit with code 2."""
     for problem in problems:
@@ -111,10 +134,9 @@ def plot_file(option: Path, name: str, *, quiet: bool = False) -> Path:
     ``note:`` on stderr saying that ``--plot`` takes a folder (unless ``quiet``)."""
     if option.suffix.lower() in _IMAGE_SUFFIXES and not option.is_dir():
         if not quiet:
-            typer.echo(
+            echo_wrapped(
                 f"note: --plot {option}: a file name is deprecated; --plot takes a folder in "
-                f"every command (--plot {option.parent} writes {option.parent / name})",
-                err=True,
+                f"every command (--plot {option.parent} writes {option.parent / name})"
             )
         return option
     return option / name
@@ -222,4 +244,4 @@ def echo_warnings(prediction: Prediction, units: UnitSystem = "si") -> None:
 
     for warning in prediction.warnings:
         where = f"[{warning.method}] " if warning.method else ""
-        typer.echo(f"warning: {where}{convert_text(warning.message, units)}", err=True)
+        echo_wrapped(f"warning: {where}{convert_text(warning.message, units)}")

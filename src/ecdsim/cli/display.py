@@ -17,6 +17,7 @@ functions: the CLI imports this module at start-up.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Annotated, Any
@@ -146,6 +147,84 @@ def _style(table: Table, wrap: Sequence[str]) -> None:
         table.box = box.HEAVY_HEAD
 
 
+_PLAIN_NUMBER = re.compile(r"^([-+]?)(\d+)(?:\.(\d+))?$")
+
+
+def _significant(integer: str, fraction: str) -> int:
+    """The significant digits of a plain decimal number's digits."""
+    digits = (integer + fraction).lstrip("0")
+    return len(digits) if digits else 1
+
+
+def align_decimals(cells: list[str]) -> list[str]:
+    """Restore the trailing zeros that ``g`` formatting drops, so that a column's numbers
+    align ("22.50" under "34.15", not "22.5"): every plain decimal number (no exponent)
+    gets zeros up to the column's most decimals, but never more significant digits than
+    the column's most precise number shows (a zero is only put back where it is one of
+    the figures the column is printed to). Other cells ("-", "inf", "no") are left alone.
+
+    >>> align_decimals(["34.15", "22.5", "13.86"])
+    ['34.15', '22.50', '13.86']
+    >>> align_decimals(["0.08366", "0.1152", "0.13", "-"])
+    ['0.08366', '0.1152', '0.1300', '-']
+    >>> align_decimals(["-40", "25", "100"])
+    ['-40', '25', '100']
+    """
+    parsed = [_PLAIN_NUMBER.match(cell.strip()) for cell in cells]
+    numbers = [m for m in parsed if m is not None]
+    if not numbers:
+        return cells
+    decimals = max(len(m.group(3) or "") for m in numbers)
+    if decimals == 0:
+        return cells
+    # A small number "g" wrote with an exponent (9.1e-05 among 0.0001638): in the column's
+    # decimals when that keeps all its figures.
+    cells = list(cells)
+    for i, (cell, m) in enumerate(zip(cells, parsed, strict=True)):
+        fixed = _fixed(cell.strip(), decimals) if m is None else None
+        if fixed is not None:
+            cells[i] = fixed
+            parsed[i] = _PLAIN_NUMBER.match(fixed)
+    precision = max(_significant(m.group(2), m.group(3) or "") for m in numbers)
+    out = []
+    for cell, m in zip(cells, parsed, strict=True):
+        if m is None:
+            out.append(cell)
+            continue
+        sign, integer, fraction = m.group(1), m.group(2), m.group(3) or ""
+        room = precision - _significant(integer, fraction)
+        if integer.strip("0") == "" and fraction.strip("0") == "":
+            room = decimals - len(fraction)  # zero itself: "0.000" beside "0.125"
+        pad = max(0, min(decimals - len(fraction), room))
+        if pad == 0:
+            out.append(cell)
+        else:
+            out.append(f"{sign}{integer}.{fraction}{'0' * pad}")
+    return out
+
+
+_EXPONENT = re.compile(r"^[-+]?\d(?:\.(\d+))?e([-+]\d+)$")
+
+
+def _fixed(cell: str, decimals: int) -> str | None:
+    """``9.1e-05`` as ``0.000091`` when ``decimals`` decimals hold all its figures."""
+    m = _EXPONENT.match(cell)
+    if m is None:
+        return None
+    needed = len(m.group(1) or "") - int(m.group(2))
+    if int(m.group(2)) >= 0 or needed > decimals:
+        return None
+    return f"{float(cell):.{needed}f}"
+
+
+def _align_numbers(table: Table) -> None:
+    """:func:`align_decimals` on every column whose cells are all plain strings."""
+    for column in table.columns:
+        cells = column._cells
+        if cells and all(isinstance(cell, str) for cell in cells):
+            column._cells = align_decimals([str(cell) for cell in cells])
+
+
 def _parse_once(console: Console, table: Table) -> None:
     """Replace each str header and cell with the Text rich makes of it.
 
@@ -209,6 +288,7 @@ def show(
     from rich.measure import Measurement
 
     _style(table, wrap)
+    _align_numbers(table)
     _parse_once(console, table)
     hidden, needed = _hide(console, table, drop)
     if (

@@ -20,6 +20,7 @@ import typer
 from ecdsim.cli import display
 from ecdsim.cli.common import (
     UnitsOpt,
+    echo_wrapped,
     fail,
     import_numpy_single_threaded,
     temperature_option,
@@ -105,14 +106,25 @@ def _q(u: Shown, value: float | None, kind: str, digits: int = 4) -> str:
     return _fmt(u.value(value, kind), digits)
 
 
+# A law parameter's short name (the symbol of docs/characterize.md) by its JSON key's stem.
+_PARAMETER_NAMES = {
+    "damping_rate_ref": "B_ref",
+    "temperature_coefficient": "c",
+    "alpha": "alpha",
+    "slope": "slope",
+    "at_0C": "at 0 degC",
+}
+
+
 def _parameter(u: Shown, key: str) -> tuple[str, str]:
-    """A law parameter's row label and kind: the JSON key in SI, ``name [unit]`` otherwise."""
+    """A law parameter's row label and kind: its symbol and unit, ``"B_ref [N*m*s/rad]"``
+    (the JSON key, which bakes the SI unit into the name, stays in ``--json``)."""
     kind = kind_of_key(key) or "number"
-    if u.system == "si":
-        return key, kind
     suffix = next(s for s, k in KEY_SUFFIXES if k == kind) if kind != "number" else ""
-    name = key.removesuffix(suffix) if suffix and key.endswith(suffix) else key
-    name = "at_32F" if name == "at_0C" else name  # 0 degC is 32 degF
+    stem = key.removesuffix(suffix) if suffix and key.endswith(suffix) else key
+    name = _PARAMETER_NAMES.get(stem, stem.replace("_", " "))
+    if stem == "at_0C" and u.system == "us":
+        name = "at 32 degF"  # 0 degC is 32 degF
     return u.head(name, kind), kind
 
 
@@ -168,19 +180,18 @@ def _report(
     bad_rows: list[str], failed: tuple[FailedTemperature, ...], warnings: list[FitWarning]
 ) -> None:
     for line in bad_rows[:MAX_BAD_ROW_LINES]:
-        typer.echo(f"warning: {line}", err=True)
+        echo_wrapped(f"warning: {line}")
     if len(bad_rows) > MAX_BAD_ROW_LINES:
         # A large log can have thousands; all are in the --json document's bad_rows.
         hidden = len(bad_rows) - MAX_BAD_ROW_LINES
-        typer.echo(
+        echo_wrapped(
             f"warning: {hidden} more rows with problems not shown (all are listed under "
-            "bad_rows with --json)",
-            err=True,
+            "bad_rows with --json)"
         )
     for item in failed:
         typer.echo(f"error: not fitted: {item.message()}", err=True)
     for warning in warnings:
-        typer.echo(f"warning: {warning.message}", err=True)
+        echo_wrapped(f"warning: {warning.message}")
 
 
 def _check_fitted(
@@ -472,7 +483,9 @@ def _print_laws(console: Any, laws: Any, u: Shown) -> None:
         title_justify="left",
     )
     for header in ("law", "parameter", "value", "95 % CI", "chi^2 / dof", "p"):
-        table.add_column(escape(header), justify="left" if header == "law" else "right")
+        table.add_column(
+            escape(header), justify="left" if header in ("law", "parameter") else "right"
+        )
     fits = [(f"BECD {name}", fit) for name, fit in laws.damping.items()]
     if laws.friction is not None:
         fits.append(("FECD line", laws.friction))
@@ -487,7 +500,8 @@ def _print_laws(console: Any, laws: Any, u: Shown) -> None:
                 (f"{fit.chi_square:.3g} / {fit.dof}" if i == 0 else ""),
                 (_fmt(fit.p_value, 3) if i == 0 else ""),
             )
-    display.show(console, table, drop=("p", "chi^2 / dof"), wrap=("law",))
+    # Names and units wrap at their space; numbers and intervals stay on one line.
+    display.show(console, table, drop=("p", "chi^2 / dof"), wrap=("law", "parameter"))
     console.print(escape(f"BECD laws: {laws.comparison.statement}"))
     for name, why in laws.damping_failures.items():
         console.print(escape(f"{name} law not fitted: {why}"))

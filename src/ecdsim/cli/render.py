@@ -8,7 +8,7 @@ from typing import Any
 
 from ecdsim.cli import display
 from ecdsim.deployment import Prediction
-from ecdsim.formatting import format_number
+from ecdsim.formatting import describe_method, format_number
 from ecdsim.methods import SOLVERS
 from ecdsim.units_display import Shown, UnitSystem
 
@@ -94,8 +94,11 @@ def print_tables(prediction: Prediction, units: UnitSystem = "si") -> None:
     # the relative difference is the paper's figure of merit (docs/model.md).
     drop = ("paper - exact", "rel.", "start speed")
     display.show(console, table, drop=drop, wrap=("stall",))
-    labels = ", ".join(f"{m} = {SOLVERS[m].label}" for m in methods)
-    display.note(console, f"methods: {labels}; speeds from the {reference} method")
+    labels = "; ".join(f"{m} = {describe_method(m, SOLVERS[m].label)}" for m in methods)
+    said = f"methods: {labels}. Speeds from the {reference} method"
+    if "difference" in cases[0]:
+        said += "; rel. = (paper - exact) / exact, the paper's error in percent"
+    display.note(console, said)
     if "dynamic" in methods:
         print_dynamic_table(console, cases, u)
     if "ground_test" in document:

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 import typer
 
 from ecdsim.cli import display, failon
-from ecdsim.cli.common import UnitsOpt, units_option
+from ecdsim.cli.common import UnitsOpt, echo_wrapped, units_option
 from ecdsim.cli.display import PlainOpt, WideOpt
 from ecdsim.units_display import Shown, convert_text
 
@@ -226,7 +226,7 @@ def size(
         _print(tables, notes, lead=report.recommendation(result, u))
     for c in result.candidates:
         for warning in c.warnings:
-            typer.echo(f"warning: {c.candidate.label}: {warning}", err=True)
+            echo_wrapped(f"warning: {c.candidate.label}: {warning}")
     for path in written:
         typer.echo(f"wrote {path}", err=as_json)
     failon.finish(conditions, _size_failures(conditions, valid, chosen_damper, chosen_gearbox, u))
@@ -347,6 +347,6 @@ def compare_fluid(
             )
         _print([report.fluid_table(comparison, u)], notes, _FLUID_DROP)
     for line in warnings:
-        typer.echo(line, err=True)
+        echo_wrapped(line)
     for path in written:
         typer.echo(f"wrote {path}", err=as_json)

@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from ecdsim.cli.common import UnitsOpt, fail
+from ecdsim.cli.common import UnitsOpt, echo_wrapped, fail
 
 EPILOG = (
     "Example: [bold]ecdsim sweep examples/paper_cc16.toml --vary gearbox.ratio=200:600:21 "
@@ -142,9 +142,7 @@ def sweep(
     except SweepError as exc:
         fail(exc.problems)
     if output is not None:
-        typer.echo(
-            "note: --output is deprecated: it is --column now (the plotted column)", err=True
-        )
+        echo_wrapped("note: --output is deprecated: it is --column now (the plotted column)")
         column = output
     if plot is not None and column not in result.columns:
         known = [c for c in result.columns if c not in {v.column for v in varies}]
@@ -162,7 +160,7 @@ def sweep(
             fail([f"--out {out}: cannot write ({exc.strerror or exc})"])
         typer.echo(f"wrote {out} ({len(points)} points, {len(result.rows)} rows)", err=as_json)
     for index, message in result.errors:
-        typer.echo(f"warning: point {index}: {message}", err=True)
+        echo_wrapped(f"warning: point {index}: {message}")
     if as_json:
         import sys
 
