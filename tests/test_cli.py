@@ -152,8 +152,12 @@ def assert_deployment_plots(figures: SavedFigures) -> None:
     assert torque.get_xlabel() == "input shaft speed [rad/s]"
     assert torque.get_ylabel() == "ECD reaction torque [N*m]"
     assert figures.legend(torque) == [
-        f"{t:g} degC: BECD {hand.becd(t):.3g} N*m*s/rad, FECD {hand.fecd(t):.3g} N*m"
-        for t in temperatures
+        *(
+            f"{t:g} degC: BECD {hand.becd(t):.3g} N*m*s/rad, FECD {hand.fecd(t):.3g} N*m"
+            for t in temperatures
+        ),
+        # The dots of the operating range are explained (issue 26 item 10).
+        "operating range: end (latch) to start speed, exact method",
     ]
     # One line per temperature; the "_"-labelled ones mark the operating range.
     reaction_lines = [line for line in torque.get_lines() if str(line.get_label())[:1] != "_"]

@@ -14,6 +14,7 @@ four significant digits.
 
 from __future__ import annotations
 
+import math
 import re
 import shutil
 from pathlib import Path
@@ -217,14 +218,15 @@ def test_stall_column_says_where_the_mechanism_stops(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     deployment = _rows(result.stdout, "Deployment")
     # Linear spring 3.73 -> 1.2 N*m over 1.57 rad meets the friction 1.343024 N*m at
-    # (3.73 - 1.343024) / ((3.73 - 1.2) / 1.57) = 1.48125 rad: every method agrees.
+    # (3.73 - 1.343024) / ((3.73 - 1.2) / 1.57) = 1.48125 rad: every method agrees,
+    # given in degrees as in the plots, the explorer and the warnings (issue 26 item 4).
     angle = (3.73 - FRICTION_M40) / ((3.73 - 1.2) / 1.57)
-    assert deployment["-40"][-1] == f"at {angle:.3g} rad"
+    assert deployment["-40"][-1] == f"at {math.degrees(angle):.3g} deg"
     assert deployment["25"][-1] == "no"
     dynamic = _rows(result.stdout, "Dynamic method: end of travel")
     assert dynamic["-40"][0] == "creeps to rest"  # the approach to rest is asymptotic
-    # stuck at [rad] to 4 significant digits; then "inf" s (never exactly at rest).
-    assert float(dynamic["-40"][3]) == pytest.approx(angle, rel=5e-4)
+    # stuck at [deg] to 4 significant digits; then "inf" s (never exactly at rest).
+    assert float(dynamic["-40"][3]) == pytest.approx(math.degrees(angle), rel=5e-4)
     assert dynamic["-40"][4] == "inf"
 
 
@@ -318,7 +320,7 @@ def test_dynamic_plots_are_written_with_events(tmp_path: Path) -> None:
     for figure, ylabel in (
         (plot_dynamic(prediction, "angle"), "deployed angle [deg]"),
         (plot_dynamic(prediction, "speed"), "load speed [rad/s]"),
-        (plot_damper_temperature(prediction), "damper temperature [degC]"),
+        (plot_damper_temperature(prediction), "damper temperature above ambient [K]"),
     ):
         ax = figure.axes[0]
         assert ax.get_title()

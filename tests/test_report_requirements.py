@@ -143,8 +143,9 @@ def test_no_requirements_no_section_and_findings_only_as_checked(tmp_path: Path)
     assert 'id="margins"' not in html
     words = " ".join(unescape(html).split())
     # No linear-range limit in the paper's config: nothing claims it was checked.
-    assert "None: no stall finding." in words
-    assert "linear-range finding" not in words
+    assert "No warning: checked for stall, at every temperature and by every method." in words
+    assert "None:" not in words  # (issue 26 item 6: the section began "None:")
+    assert "checked for stall and" not in words
     assert "The damper's linear range is not checked" in words
     # With limits (far above this deployment's shaft speed 0.0837 * 380 = 31.8 rad/s):
     limited = tmp_path / "limited.toml"
@@ -154,7 +155,7 @@ def test_no_requirements_no_section_and_findings_only_as_checked(tmp_path: Path)
         encoding="utf-8",
     )
     words = " ".join(unescape(report(limited, tmp_path, "limited.html")).split())
-    assert "None: no stall or linear-range finding." in words
+    assert "No warning: checked for stall and the damper's linear range, at every" in words
     assert "not checked" not in words
 
 

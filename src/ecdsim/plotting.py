@@ -168,8 +168,9 @@ def plot_torque_speed(
 ) -> Figure:
     """The ECD's input torque against speed at each temperature (paper Fig. 8).
 
-    Each line is ``T = FECD_T + BECD_T * omega`` (Eq. 5 inverted); the markers show the
-    deployment's operating range, from the start to the end speed of the exact solution.
+    Each line is ``T = FECD_T + BECD_T * omega`` (Eq. 5 inverted); a thick band between
+    two dots shows the deployment's operating range, from the end (latch) speed to the
+    start speed of the exact solution, and the legend says so.
     """
     u = Shown(units, digits=3)
     fig, ax = _target(ax)
@@ -192,14 +193,30 @@ def plot_torque_speed(
             f"BECD {u.text(damping[j], 'damping_rate')}, FECD {u.text(friction[j], 'torque')}",
         )
         ends = np.array([end[j], start[j]])
-        ax.plot(ends, u.value(friction[j] + damping[j] * ends, "torque"), "o", color=colors[j])
+        # The deployment's operating range on the line: from the end (latch) speed to the
+        # start speed, a thick band between two dots, explained once in the legend.
+        ax.plot(
+            ends,
+            u.value(friction[j] + damping[j] * ends, "torque"),
+            "o-",
+            color=colors[j],
+            linewidth=5.0,
+            alpha=0.45,
+            markersize=7,
+        )
+    from matplotlib.lines import Line2D
+
+    handles, labels = ax.get_legend_handles_labels()
+    handles.append(Line2D([], [], marker="o", color="0.4", linewidth=5.0, alpha=0.45))
+    method = "exact" if "exact" in prediction.solutions else next(iter(prediction.solutions))
+    labels.append(f"operating range: end (latch) to start speed, {method} method")
     ax.set_xlabel("input shaft speed [rad/s]")
     ax.set_ylabel(u.head("ECD reaction torque", "torque"))
     ax.set_title(plot_title(prediction.system.name, "ECD torque against speed"))
     ax.set_xlim(left=0.0)
     ax.set_ylim(bottom=0.0)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
+    ax.legend(handles, labels, fontsize="small")
     return fig
 
 

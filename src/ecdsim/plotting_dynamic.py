@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -48,6 +48,123 @@ MARKERS: dict[str, _Marker] = {
     "settle": _Marker("s", 7.0, "settles on the end stop"),
     "latch": _Marker("o", 7.0, "latch at the end of travel"),
 }
+
+
+_OUTCOMES = {
+    "latched": "latched",
+    "settled": "settled",  # rebounds died out on the end stop
+    "stuck": "stuck",
+    "creep": "creeps to rest",
+    "stop_time": "stop time reached",
+    "event_limit": "cut short (events)",
+    "horizon": "cut short (horizon)",
+    "running": "running",
+}
+
+
+@dataclass(frozen=True)
+class DynamicTables:
+    """The dynamic method's results as two tables of strings and the notes under them.
+
+    "end of travel": outcome, latch speed and kinetic energy, impacts and rebound, where
+    and when it stuck; "damper": when it engaged (lost motion), its peak temperature
+    (self-heating), the housing's, the compliant mesh's torques. Columns that would only
+    repeat a constant are left out and said in ``notes`` instead; ``damper_rows`` is
+    empty when every one of its columns is.
+    """
+
+    end_title: str
+    end_headers: list[str]
+    end_rows: list[list[str]]
+    damper_title: str
+    damper_headers: list[str]
+    damper_rows: list[list[str]]
+    notes: list[str]
+
+
+def _fmt(value: float | None) -> str:
+    from ecdsim.formatting import format_number
+
+    return format_number(value, 4, signed_inf=False)
+
+
+def dynamic_tables(cases: list[dict[str, Any]], u: Shown) -> DynamicTables:
+    """:class:`DynamicTables` of the cases of ``Prediction.to_dict()`` (each with its
+    ``"dynamic"`` block), in ``u``'s units; ``ecdsim deploy`` prints them, the report
+    shows them."""
+    dyn = [case["dynamic"] for case in cases]
+    temps = [case["temperature_C"] for case in cases]
+    impacts = any(d["impacts"] > 0 or d["rebound_speed_rad_s"] != 0.0 for d in dyn)
+    stuck = any(d["stuck"] for d in dyn)
+    engage = any((d["engagement_time_s"] or 0.0) > 0.0 for d in dyn)
+    heated = any(d["max_damper_temperature_C"] != t for d, t in zip(dyn, temps, strict=True))
+    mesh = "max_mesh_torque_Nm" in dyn[0]  # a compliant gear mesh (compliant backlash)
+    headers = [
+        u.head("T", "temperature", "\n"),
+        "outcome",
+        "latch\nspeed\n[rad/s]",
+        u.head("KE at\nlatch", "energy", "\n"),
+    ]
+    headers += ["im-\npacts", "rebound\n[rad/s]"] if impacts else []
+    headers += ["stuck\nat\n[deg]", "stuck\nat\n[s]"] if stuck else []
+    rows = []
+    for d, t in zip(dyn, temps, strict=True):
+        arrived = d["deployment_time_s"] is not None
+        row = [
+            u.num(t, "temperature"),
+            "cannot start"
+            if d["stuck"] and d["stuck_angle_rad"] == 0.0
+            else _OUTCOMES.get(d["status"], d["status"]),
+            _fmt(d["end_speed_rad_s"]) if arrived else "-",
+            u.num(d["end_kinetic_energy_J"], "energy") if arrived else "-",
+        ]
+        if impacts:
+            row += [str(d["impacts"]), _fmt(d["rebound_speed_rad_s"])]
+        if stuck:
+            when = d["stuck_time_s"]
+            row += [
+                _fmt(math.degrees(d["stuck_angle_rad"])) if d["stuck"] else "-",
+                ("inf" if when is None else _fmt(when)) if d["stuck"] else "-",
+            ]
+        rows.append(row)
+    damper_headers: list[str] = []
+    damper_rows: list[list[str]] = []
+    if engage or heated or mesh:
+        damper_headers = [u.head("T", "temperature", "\n")]
+        damper_headers += ["engaged at\n[s]"] if engage else []
+        damper_headers += [u.head("peak damper\nT", "temperature", "\n")] if heated else []
+        housing = heated and "final_housing_temperature_C" in dyn[0]  # two-node heating
+        damper_headers += [u.head("housing T\nat end", "temperature", "\n")] if housing else []
+        if mesh:
+            damper_headers += [u.head("mesh\ntorque\npeak", "torque", "\n")]
+            damper_headers += [u.head("mesh\ntorque\nlatched", "torque", "\n")]
+        for d, t in zip(dyn, temps, strict=True):
+            row = [u.num(t, "temperature")]
+            row += [_fmt(d["engagement_time_s"])] if engage else []
+            row += [u.num(d["max_damper_temperature_C"], "temperature")] if heated else []
+            row += [u.num(d["final_housing_temperature_C"], "temperature")] if housing else []
+            if mesh:
+                row += [u.num(d["max_mesh_torque_Nm"], "torque")]
+                row += [u.num(d["latch_mesh_torque_Nm"], "torque")]
+            damper_rows.append(row)
+    said = ["latch: speed and kinetic energy on arrival at the end of travel"]
+    if not impacts:
+        said.append("no impacts (no rebound)")
+    if not stuck:
+        said.append("never stuck")
+    if not engage:
+        said.append("no lost motion (engaged at release)")
+    if not heated:
+        said.append("damper at the ambient temperature (no self-heating)")
+    return DynamicTables(
+        "Dynamic method: end of travel",
+        headers,
+        rows,
+        "Dynamic method: damper",
+        damper_headers,
+        damper_rows,
+        said,
+    )
 
 
 def dynamic_result(prediction: Prediction) -> DynamicResult | None:
@@ -185,23 +302,32 @@ def plot_damper_temperature(
     n_points: int = 801,
     result: DynamicResult | None = None,
 ) -> Figure:
-    """The damper's temperature against time at each ambient temperature (self-heating)."""
+    """The damper's temperature rise above ambient against time, at each ambient
+    temperature (self-heating). A rise of a fraction of a kelvin would be a flat line on
+    the scale of the temperatures themselves (-40 to 100 degC): the axis is the rise."""
     result = _result(prediction, result)
     u = Shown(units)
     series = result.sample(n_points=n_points)
     times, values = _columns(series, series.damper_temperature)
     temps = np.ravel(result.temperature)
     colors = temperature_colors(temps)
+    kelvin = u.value(1.0, "temperature_difference")
     fig = _figure()
     ax = fig.add_subplot()
     for j, temp in enumerate(temps):
-        shown = [u.value(float(v), "temperature") for v in values[:, j]]
-        label = f"ambient {u.text(float(temp), 'temperature')}"
-        ax.plot(times[:, j], shown, color=colors[j], label=label)
-    ax.set_title(plot_title(prediction.system.name, "damper temperature (self-heating)"))
+        rise = (values[:, j] - float(temp)) * kelvin
+        peak = float(np.nanmax(rise)) if np.any(np.isfinite(rise)) else 0.0
+        label = (
+            f"ambient {u.text(float(temp), 'temperature')}: "
+            f"peak +{Shown(units, digits=3).num(peak / kelvin, 'temperature_difference')} "
+            f"{u.unit('temperature_difference')}"
+        )
+        ax.plot(times[:, j], rise, color=colors[j], label=label)
+    ax.set_title(plot_title(prediction.system.name, "damper self-heating, rise above ambient"))
     ax.set_xlabel("time since release [s]")
-    ax.set_ylabel(u.head("damper temperature", "temperature"))
+    ax.set_ylabel(u.head("damper temperature above ambient", "temperature_difference"))
     ax.set_xlim(left=0.0)
+    ax.set_ylim(bottom=0.0)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
     return fig

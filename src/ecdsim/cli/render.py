@@ -155,14 +155,15 @@ def _stop_text(outcome: dict[str, Any], method: str) -> str | None:
         angle = outcome["stall_angle_rad"]
     else:
         return None
-    return "cannot start" if angle == 0.0 else f"at {angle:.3g} rad"
+    # Degrees, as the plots, the explorer and the warnings give an angle (issue 26 item 4).
+    return "cannot start" if angle == 0.0 else f"at {math.degrees(angle):.3g} deg"
 
 
 def stall_text(case: dict[str, Any], methods: list[str]) -> str:
     """The stall cell of one temperature: "no" only if no method stalls or sticks.
 
-    Methods that agree are named once ("cannot start", "at 1.48 rad"); otherwise each
-    method that stops is ("dynamic: at 1.5 rad").
+    Methods that agree are named once ("cannot start", "at 84.8 deg"); otherwise each
+    method that stops is ("dynamic: at 85.9 deg").
     """
     stops = {m: _stop_text(case[m], m) for m in methods}
     found = {m: text for m, text in stops.items() if text is not None}
@@ -173,94 +174,16 @@ def stall_text(case: dict[str, Any], methods: list[str]) -> str:
     return "; ".join(f"{m}: {text}" for m, text in found.items())
 
 
-_OUTCOMES = {
-    "latched": "latched",
-    "settled": "settled",  # rebounds died out on the end stop
-    "stuck": "stuck",
-    "creep": "creeps to rest",
-    "stop_time": "stop time reached",
-    "event_limit": "cut short (events)",
-    "horizon": "cut short (horizon)",
-    "running": "running",
-}
-
-
 def print_dynamic_table(console: Any, cases: list[dict[str, Any]], u: Shown | None = None) -> None:
-    """The dynamic method's own results, in two tables that each fit 80 columns.
+    """The dynamic method's own results, in two tables that each fit 80 columns
+    (:func:`ecdsim.plotting_dynamic.dynamic_tables`, which the report shows too)."""
+    from ecdsim.plotting_dynamic import dynamic_tables
 
-    "Dynamic method: end of travel": outcome, latch speed and kinetic energy, impacts and
-    rebound, where and when it stuck. "Dynamic method: damper": when it engaged (lost
-    motion), its peak temperature (self-heating). Columns that would only repeat a
-    constant (no impacts, never stuck, no lost motion, no heating) are replaced by one
-    line saying so.
-    """
-    u = u or Shown()
-    dyn = [case["dynamic"] for case in cases]
-    temps = [case["temperature_C"] for case in cases]
-    impacts = any(d["impacts"] > 0 or d["rebound_speed_rad_s"] != 0.0 for d in dyn)
-    stuck = any(d["stuck"] for d in dyn)
-    engage = any((d["engagement_time_s"] or 0.0) > 0.0 for d in dyn)
-    heated = any(d["max_damper_temperature_C"] != t for d, t in zip(dyn, temps, strict=True))
-    mesh = "max_mesh_torque_Nm" in dyn[0]  # a compliant gear mesh (compliant backlash)
-    headers = [
-        u.head("T", "temperature", "\n"),
-        "outcome",
-        "latch\nspeed\n[rad/s]",
-        u.head("KE at\nlatch", "energy", "\n"),
-    ]
-    headers += ["im-\npacts", "rebound\n[rad/s]"] if impacts else []
-    headers += ["stuck\nat\n[rad]", "stuck\nat\n[s]"] if stuck else []
-    rows = []
-    for d, t in zip(dyn, temps, strict=True):
-        arrived = d["deployment_time_s"] is not None
-        row = [
-            u.num(t, "temperature"),
-            "cannot start"
-            if d["stuck"] and d["stuck_angle_rad"] == 0.0
-            else _OUTCOMES.get(d["status"], d["status"]),
-            _fmt(d["end_speed_rad_s"]) if arrived else "-",
-            u.num(d["end_kinetic_energy_J"], "energy") if arrived else "-",
-        ]
-        if impacts:
-            row += [str(d["impacts"]), _fmt(d["rebound_speed_rad_s"])]
-        if stuck:
-            when = d["stuck_time_s"]
-            row += [
-                _fmt(d["stuck_angle_rad"]),
-                ("inf" if when is None else _fmt(when)) if d["stuck"] else "-",
-            ]
-        rows.append(row)
-    _simple_table(console, "Dynamic method: end of travel", headers, rows)
-    if engage or heated or mesh:
-        headers = [u.head("T", "temperature", "\n")]
-        headers += ["engaged at\n[s]"] if engage else []
-        headers += [u.head("peak damper\nT", "temperature", "\n")] if heated else []
-        housing = heated and "final_housing_temperature_C" in dyn[0]  # two-node heating
-        headers += [u.head("housing T\nat end", "temperature", "\n")] if housing else []
-        if mesh:
-            headers += [u.head("mesh\ntorque\npeak", "torque", "\n")]
-            headers += [u.head("mesh\ntorque\nlatched", "torque", "\n")]
-        rows = []
-        for d, t in zip(dyn, temps, strict=True):
-            row = [u.num(t, "temperature")]
-            row += [_fmt(d["engagement_time_s"])] if engage else []
-            row += [u.num(d["max_damper_temperature_C"], "temperature")] if heated else []
-            row += [u.num(d["final_housing_temperature_C"], "temperature")] if housing else []
-            if mesh:
-                row += [u.num(d["max_mesh_torque_Nm"], "torque")]
-                row += [u.num(d["latch_mesh_torque_Nm"], "torque")]
-            rows.append(row)
-        _simple_table(console, "Dynamic method: damper", headers, rows)
-    said = ["latch: speed and kinetic energy on arrival at the end of travel"]
-    if not impacts:
-        said.append("no impacts (no rebound)")
-    if not stuck:
-        said.append("never stuck")
-    if not engage:
-        said.append("no lost motion (engaged at release)")
-    if not heated:
-        said.append("damper at the ambient temperature (no self-heating)")
-    display.note(console, "; ".join(said))
+    tables = dynamic_tables(cases, u or Shown())
+    _simple_table(console, tables.end_title, tables.end_headers, tables.end_rows)
+    if tables.damper_rows:
+        _simple_table(console, tables.damper_title, tables.damper_headers, tables.damper_rows)
+    display.note(console, "; ".join(tables.notes))
 
 
 def _simple_table(console: Any, title: str, headers: list[str], rows: list[list[str]]) -> None:

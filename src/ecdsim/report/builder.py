@@ -25,7 +25,7 @@ from ecdsim.atomic import write_text
 from ecdsim.config.errors import ConfigError
 from ecdsim.config.units import Kind
 from ecdsim.deployment import Prediction, predict, with_flight
-from ecdsim.formatting import format_number
+from ecdsim.formatting import describe_method, format_number
 from ecdsim.methods import SOLVERS
 from ecdsim.model import TabulatedTemperatureLaw
 from ecdsim.units_display import KIND_BY_SI_UNIT, Shown, UnitSystem, convert_text, kind_of_key
@@ -236,14 +236,14 @@ def _deployment_rows(document: dict[str, Any], shown: Shown | None = None) -> li
 
 def _stall_cell(method: str, result: dict[str, Any]) -> str:
     """The stall cell as ``ecdsim deploy``'s table says it: "no", "cannot start" or
-    "at X rad"; for the dynamic method also a stop for good after a rebound (stuck)."""
+    "at X deg"; for the dynamic method also a stop for good after a rebound (stuck)."""
     if method == "dynamic" and result.get("stuck"):
         angle = result["stuck_angle_rad"]
     elif result["stalled"]:
         angle = result["stall_angle_rad"]
     else:
         return "no"
-    return "cannot start" if angle == 0.0 else f"at {angle:.4g} rad"
+    return "cannot start" if angle == 0.0 else f"at {np.degrees(angle):.4g} deg"
 
 
 # What each requirement check measures, in words, for the report's requirements table.
@@ -432,14 +432,16 @@ def findings_checked(config: Config) -> str:
     checked = ["stall"]
     limited = damper.max_linear_speed is not None or damper.max_linear_torque is not None
     if limited:
-        checked.append("linear-range")
+        checked.append("the damper's linear range")
     laws = (damper.lubrication_friction, config.system.load.system_friction)
     if any(isinstance(law, TabulatedTemperatureLaw) for law in laws):
-        checked.append("table extrapolation")
-    text = "None: no " + (
-        " or ".join(checked) if len(checked) < 3 else f"{checked[0]}, {checked[1]} or {checked[2]}"
+        checked.append("friction-table extrapolation")
+    text = "No warning: checked for " + (
+        " and ".join(checked)
+        if len(checked) < 3
+        else f"{checked[0]}, {checked[1]} and {checked[2]}"
     )
-    text += " finding."
+    text += ", at every temperature and by every method."
     if not limited:
         text += (
             " The damper's linear range is not checked: the config gives no max_linear_speed "
@@ -461,7 +463,7 @@ def solver_appendix(config: Config, prediction: Prediction, document: dict[str, 
     count is not available.
     """
     analysis = config.spec.analysis
-    settings = [("methods", ", ".join(f"{m} ({SOLVERS[m].label})" for m in document["methods"]))]
+    settings = [("methods", "; ".join(f"{m}: {_described(m)}" for m in document["methods"]))]
     if "dynamic" in document["methods"]:
         settings += [("integrator", analysis.integrator), ("rtol", f"{analysis.rtol:g}")]
     rows = []
@@ -526,6 +528,59 @@ def _accepted_steps(solution: Any) -> int | None:
     return None
 
 
+def _described(method: str) -> str:
+    """A method in words ("the exact solution of the same quasi-static equations")."""
+    return describe_method(method, SOLVERS[method].label)
+
+
+def _dynamic_section(prediction: Prediction, document: dict[str, Any], u: Shown) -> Any:
+    """The dynamic method's results as ``ecdsim deploy`` prints them (latch speed and
+    kinetic energy, impacts, sticking, engagement, the damper's peak temperature) and its
+    figures (events marked; the damper's temperature rise when it heats); None without
+    the dynamic method."""
+    if "dynamic" not in document["methods"]:
+        return None
+    from ecdsim.plotting_dynamic import (
+        dynamic_result,
+        dynamic_tables,
+        heated,
+        plot_damper_temperature,
+        plot_dynamic,
+    )
+
+    result = dynamic_result(prediction)
+    tables = dynamic_tables(document["cases"], Shown(u.system))
+    figures = []
+    if result is not None:
+        made = [
+            ("dynamic_angle", "Dynamic method: angle against time, events marked", "angle"),
+            ("dynamic_speed", "Dynamic method: load speed against time, events marked", "speed"),
+        ]
+        for key, caption, quantity in made:
+            fig = plot_dynamic(prediction, quantity, u.system, result=result)  # type: ignore[arg-type]
+            figures.append({"id": key, "caption": caption, "src": figure_data_uri(fig)})
+        if heated(result):
+            fig = plot_damper_temperature(prediction, u.system, result=result)
+            caption = "Dynamic method: the damper's temperature rise above ambient (self-heating)"
+            figures.append(
+                {"id": "dynamic_heating", "caption": caption, "src": figure_data_uri(fig)}
+            )
+    one_line = [
+        [header.replace("\n", " ") for header in h]
+        for h in (tables.end_headers, tables.damper_headers)
+    ]
+    return {
+        "end_title": tables.end_title,
+        "end_headers": one_line[0],
+        "end_rows": tables.end_rows,
+        "damper_title": tables.damper_title,
+        "damper_headers": one_line[1],
+        "damper_rows": tables.damper_rows,
+        "notes": "; ".join(tables.notes),
+        "figures": figures,
+    }
+
+
 def _kind(key: str) -> str:
     return kind_of_key(key.rsplit(".", 1)[-1]) or "number"
 
@@ -576,7 +631,9 @@ def build_context(
         "method_columns": METHOD_COLUMNS,
         "deployment": _deployment_rows(document, u),
         "ground_test": _ground_test(document, u),
-        "methods": [(m, SOLVERS[m].label) for m in document["methods"]],
+        "dynamic": _dynamic_section(prediction, document, u),
+        "methods": [(m, _described(m)) for m in document["methods"]],
+        "units_name": "SI" if units == "si" else "US customary",
         "figures": _figures(prediction, units),
         "u": u,
         "t_unit": u.unit("temperature"),
@@ -620,11 +677,11 @@ def _ground_test(document: dict[str, Any], u: Shown) -> dict[str, Any] | None:
             )
     return {
         "offload": f"{100.0 * ground['offload']:.3g}",
-        "mass": fmt(ground["mass_kg"]),
-        "radius": fmt(ground["cg_radius_m"]),
+        "mass": u.text(ground["mass_kg"], "mass"),
+        "radius": u.text(ground["cg_radius_m"], "length"),
         "release_deg": f"{np.degrees(ground['release_angle_rad']):.4g}",
-        "at_release": fmt(ground["torque_at_release_Nm"]),
-        "at_latch": fmt(ground["torque_at_latch_Nm"]),
+        "at_release": u.text(ground["torque_at_release_Nm"], "torque"),
+        "at_latch": u.text(ground["torque_at_latch_Nm"], "torque"),
         "rows": rows,
     }
 
