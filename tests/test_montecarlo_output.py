@@ -283,11 +283,12 @@ def test_repeatability_table_against_hand_counts(tmp_path: Path) -> None:
     assert cells[3] == f"{100 * p:.3g}"
     assert cells[4] == f"{100 * campaign:.3g}"
     assert cells[5] == f"{worst:.4g}"
-    assert cells[6] == ("yes" if worst <= 0.5 else "no")
+    ratio = np.std(times, ddof=1) / required_std(0.5, 500)
+    assert cells[6] == ("yes" if worst <= 0.5 else f"no: {ratio:.2g}x")
     words = " ".join(result.stdout.split())
     assert "the chance that 500 deployments all do" in words
-    assert "every time within 0.5 s of the original tests" in words
-    assert "one unit's spread must be at most 0.156 s" in words
+    assert "as the paper's one unit was over 500 deployments" in words
+    assert "That needs a spread (1 sigma) of at most 0.156 s" in words
 
 
 def test_unit_to_unit_tolerances_are_called_out(tmp_path: Path) -> None:
@@ -304,11 +305,11 @@ def test_unit_to_unit_tolerances_are_called_out(tmp_path: Path) -> None:
         p = np.count_nonzero(np.abs(times - hand.exact_time(t)) <= 0.5) / times.size
         assert 0.0 < p < 0.9  # far from the paper's repeatability
         assert cells[4] == "< 0.01"  # p^500 < 1e-4: not 1.3e-178
-        assert cells[6] == "no"
-    spreads = [np.std(hand_times(out, t), ddof=1) / required_std(0.5, 500) for t in rows]
-    low, high = min(spreads), max(spreads)
+        # How many times the spread one unit may have (issue 26 item 10: "no" says why).
+        ratio = np.std(times, ddof=1) / required_std(0.5, 500)
+        assert cells[6] == f"no: {ratio:.2g}x"
     words = " ".join(result.stdout.split())
-    assert f"At -40, 25, 100 degC the spread is {low:.2g} to {high:.2g} times that" in words
+    assert "At -40, 25, 100 degC the spread is far wider than one unit's" in words
     assert "'no' says that different units differ by more than +-0.5 s" in words
 
 

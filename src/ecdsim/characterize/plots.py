@@ -54,7 +54,7 @@ def plot_torque_speed(result: DropTestResult, units: UnitSystem = "si") -> Figur
     u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
-    colors = temperature_colors(len(result.fits))
+    colors = temperature_colors([f.temperature for f in result.fits])
     top = max((float(np.max(f.corrected)) for f in result.fits), default=1.0) * 1.1
     speeds = np.linspace(0.0, top, 50)
     for fit, color in zip(result.fits, colors, strict=True):
@@ -160,13 +160,16 @@ def plot_line_residuals(result: DropTestResult, units: UnitSystem = "si") -> Fig
     u = Shown(units)
     fig = _figure()
     ax = fig.add_subplot()
-    for fit, color in zip(result.fits, temperature_colors(len(result.fits)), strict=True):
+    temps = [fit.temperature for fit in result.fits]
+    for fit, color in zip(result.fits, temperature_colors(temps), strict=True):
+        # Points, not a line: residuals are independent scatter, and a line joining them
+        # would suggest a trend between tests that the data do not have.
         ax.plot(
             fit.corrected,
             u.values(fit.torque - fit.line.fitted, "torque"),
-            "o-",
+            "o",
             color=color,
-            markersize=4,
+            markersize=5,
             label=u.text(fit.temperature, "temperature"),
         )
     ax.axhline(0.0, color="black", linewidth=0.8)
@@ -185,7 +188,9 @@ def plot_traces(result: TraceResult, n_points: int = 400, units: UnitSystem = "s
     fig = _figure()
     ax = fig.add_subplot()
     curves = result.curves
-    for curve, color in zip(curves, temperature_colors(len(curves)), strict=True):
+    for curve, color in zip(
+        curves, temperature_colors([c.trace.temperature for c in curves]), strict=True
+    ):
         trace = curve.trace
         times = np.linspace(0.0, float(np.max(trace.time)), n_points)
         ax.plot(trace.time, np.degrees(trace.angle), ".", color=color, markersize=3)
@@ -205,14 +210,14 @@ def plot_trace_residuals(result: TraceResult, units: UnitSystem = "si") -> Figur
     fig = _figure()
     ax = fig.add_subplot()
     curves = result.curves
-    for curve, color in zip(curves, temperature_colors(len(curves)), strict=True):
+    temps = [curve.trace.temperature for curve in curves]
+    for curve, color in zip(curves, temperature_colors(temps), strict=True):
         ax.plot(
             curve.trace.time,
             np.degrees(curve.residuals),
-            ".-",
+            "o",
             color=color,
             markersize=3,
-            linewidth=0.6,
             label=u.text(curve.trace.temperature, "temperature"),
         )
     ax.axhline(0.0, color="black", linewidth=0.8)

@@ -113,7 +113,7 @@ def plot_histogram(
     fig = _figure()
     ax = fig.add_subplot()
     for color, (temperature, x) in zip(
-        temperature_colors(len(samples)), samples.items(), strict=True
+        temperature_colors(list(samples)), samples.items(), strict=True
     ):
         finite = x[np.isfinite(x)]
         stalled = 1.0 - finite.size / x.size if x.size else 0.0
@@ -147,7 +147,7 @@ def plot_cdf(
     fig = _figure()
     ax = fig.add_subplot()
     for color, (temperature, x) in zip(
-        temperature_colors(len(samples)), samples.items(), strict=True
+        temperature_colors(list(samples)), samples.items(), strict=True
     ):
         n = x.size
         if n == 0:
@@ -189,7 +189,8 @@ def plot_tornado(summary: Mapping[str, Any], units: UnitSystem = "si") -> Figure
     ax = fig.add_subplot()
     height = 0.8 / max(1, len(cases))
     positions = np.arange(len(keys))
-    for i, (color, case) in enumerate(zip(temperature_colors(len(cases)), cases, strict=True)):
+    colors = temperature_colors([c["temperature_C"] for c in cases])
+    for i, (color, case) in enumerate(zip(colors, cases, strict=True)):
         r2 = case["sensitivity"]["r_squared"]
         label = u.text(case["temperature_C"], "temperature") + (
             f" (R^2 = {r2:.3f})" if r2 is not None else ""
