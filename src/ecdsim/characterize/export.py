@@ -433,19 +433,26 @@ def model_entries(spec: BaseModel, **replace_values: Any) -> list[Entry]:
 
 
 def placeholder_load(torque: float) -> list[Entry]:
-    """A marked placeholder ``[load]``: constant ``torque`` [N*m] over a 90 deg travel."""
+    """A marked placeholder ``[load]``: constant ``torque`` [N*m] over a 90 deg travel.
+
+    ``placeholder = true`` makes every command flag its results (docs/config.md); the
+    torque is written to 6 significant digits and the travel as "90 deg", without float
+    noise (``"1.5707963267948966 rad"``): a stand-in needs no more digits.
+    """
     note = "PLACEHOLDER: edit"
     return [
-        Entry("start_torque", quantity(torque, "N*m"), note),
-        Entry("end_torque", quantity(torque, "N*m"), note),
-        Entry("travel", quantity(PLACEHOLDER_TRAVEL, "rad"), note),
+        Entry("placeholder", "true", "delete this line once the load below is your mechanism's"),
+        Entry("start_torque", toml_string(f"{torque:.6g} N*m"), note),
+        Entry("end_torque", toml_string(f"{torque:.6g} N*m"), note),
+        Entry("travel", toml_string(f"{math.degrees(PLACEHOLDER_TRAVEL):g} deg"), note),
     ]
 
 
 PLACEHOLDER_NOTICE = (
     "# PLACEHOLDER LOAD: no --config was given, so this [load] is a constant torque equal\n"
     "# to the largest bench torque over a 90 deg travel. Replace it with your mechanism's\n"
-    "# spring and travel before trusting any deployment time."
+    "# spring and travel, then delete `placeholder = true`: until then every command flags\n"
+    "# its results as those of a placeholder load."
 )
 
 

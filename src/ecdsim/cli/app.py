@@ -25,6 +25,7 @@ from ecdsim.cli.common import (
     echo_warnings,
     fail,
     import_numpy_single_threaded,
+    is_placeholder,
     load_run,
     pause_gc,
     predict_run,
@@ -98,7 +99,11 @@ def _write_timeseries(prediction: Prediction, path: Path, as_json: bool) -> None
 
 
 def _render(
-    prediction: Prediction, as_json: bool, plot_dir: Path | None, units: UnitSystem = "si"
+    prediction: Prediction,
+    as_json: bool,
+    plot_dir: Path | None,
+    units: UnitSystem = "si",
+    placeholder: bool = False,
 ) -> None:
     from ecdsim.cli import render
 
@@ -116,9 +121,9 @@ def _render(
     else:
         written = []
     if as_json:
-        typer.echo(render.to_json(prediction, units))
+        typer.echo(render.to_json(prediction, units, placeholder))
     else:
-        render.print_tables(prediction, units)
+        render.print_tables(prediction, units, placeholder)
     echo_warnings(prediction, units)
     for path in written:
         typer.echo(f"wrote {path}", err=as_json)
@@ -189,7 +194,7 @@ def deploy(
     prediction = predict_run(loaded)
     if timeseries is not None:
         _write_timeseries(prediction, timeseries, as_json)
-    _render(prediction, as_json, plot, system)
+    _render(prediction, as_json, plot, system, is_placeholder(loaded))
     reasons = failon.stall_reasons(prediction) if "stall" in conditions else []
     if "requirements" in conditions:
         reasons += failon.requirement_reasons(loaded)

@@ -220,7 +220,26 @@ def load_run(
         chosen = tuple(methods)
     if problems:
         fail(problems)
+    warn_placeholder(config)
     return replace(config, temperatures=temps, methods=chosen)
+
+
+def is_placeholder(config: Config) -> bool:
+    """True when the config's ``[load]`` is marked ``placeholder = true`` (written by
+    ``ecdsim fit drop-test -o`` without ``--config``)."""
+    return bool(getattr(config.spec.load, "placeholder", False))
+
+
+def warn_placeholder(config: Config) -> None:
+    """A ``warning:`` on stderr when the config's load is a placeholder: every command
+    that reads such a file says so until the line is deleted (issue 26 item 2)."""
+    if is_placeholder(config):
+        echo_wrapped(
+            f"warning: {config.source}: PLACEHOLDER LOAD ([load] placeholder = true): the "
+            "spring and travel are stand-ins, so no deployment result here is your "
+            "mechanism's; enter its spring torques and travel in [load], then delete the "
+            "placeholder line"
+        )
 
 
 def predict_run(config: Config) -> Prediction:

@@ -167,9 +167,13 @@ def _load_config(path: Path) -> Config:
     from ecdsim.config import ConfigError, load_config
 
     try:
-        return load_config(path)
+        config = load_config(path)
     except ConfigError as exc:
         fail([f"--config: {line}" for line in str(exc).splitlines()])
+    from ecdsim.cli.common import warn_placeholder
+
+    warn_placeholder(config)
+    return config
 
 
 # Rows with problems listed one per line on stderr before the rest are summarised.

@@ -13,19 +13,36 @@ from ecdsim.methods import SOLVERS
 from ecdsim.units_display import Shown, UnitSystem
 
 
-def to_json(prediction: Prediction, units: UnitSystem = "si") -> str:
-    """The stable JSON document of ``ecdsim deploy --json`` (SI; ``display_units`` noted)."""
+def to_json(prediction: Prediction, units: UnitSystem = "si", placeholder: bool = False) -> str:
+    """The stable JSON document of ``ecdsim deploy --json`` (SI; ``display_units`` noted;
+    ``"placeholder_load": true`` when the config's load is a marked placeholder)."""
     document = prediction.to_dict()
     document["display_units"] = units
+    if placeholder:
+        document["placeholder_load"] = True
     return json.dumps(document, indent=2, sort_keys=True, allow_nan=False)
+
+
+def _percent(fraction: float | None) -> str:
+    """A relative difference in percent, signed, one decimal; "0.0" rather than "-0.0"."""
+    if fraction is None:
+        return "-"
+    text = f"{100.0 * fraction:+.1f}"
+    return "0.0" if text in ("+0.0", "-0.0") else text
 
 
 def _fmt(value: float | None, digits: int = 4) -> str:
     return format_number(value, digits, signed_inf=False)
 
 
-def print_tables(prediction: Prediction, units: UnitSystem = "si") -> None:
-    """Print the component table and the deployment table on stdout, in ``units``."""
+PLACEHOLDER_TITLE = "PLACEHOLDER LOAD: not your mechanism's deployment"
+
+
+def print_tables(
+    prediction: Prediction, units: UnitSystem = "si", placeholder: bool = False
+) -> None:
+    """Print the component table and the deployment table on stdout, in ``units``; with
+    ``placeholder`` (a marked stand-in load) the deployment table's title says so."""
     from rich.markup import escape
     from rich.table import Table
 
@@ -61,6 +78,8 @@ def print_tables(prediction: Prediction, units: UnitSystem = "si") -> None:
 
     # With [load.gravity] the configured system is the ground test; flight follows below.
     title = "Deployment (ground test, 1 g)" if "ground_test" in document else "Deployment"
+    if placeholder:
+        title += f": {PLACEHOLDER_TITLE}"
     table = Table(title=title, title_justify="left")
     table.add_column(escape(u.head("T", "temperature")), justify="right")
     methods = document["methods"]
@@ -87,7 +106,7 @@ def print_tables(prediction: Prediction, units: UnitSystem = "si") -> None:
             diff = case["difference"]
             row.append(_fmt(diff["deployment_time_s"]))
             rel = diff["relative"]
-            row.append("-" if rel is None else f"{100.0 * rel:+.1f}")
+            row.append(_percent(rel))
         row.append(stall_text(case, methods))
         table.add_row(*row)
     # The difference in seconds goes first: it follows from the two time columns, while
@@ -133,7 +152,7 @@ def print_ground_test_table(
                         else math.inf
                     ),
                     _fmt(m["test_minus_flight_s"]),
-                    "-" if rel is None else f"{100.0 * rel:+.1f}",
+                    _percent(rel),
                 ]
             )
     _simple_table(console, title, headers, rows)

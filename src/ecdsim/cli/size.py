@@ -71,6 +71,9 @@ def _config(path: Path, section: str) -> Config:
         _fail(str(exc).splitlines())
     if getattr(config.spec, section) is None:
         _fail([f"{path}: no [{section}] section; see docs/sizing.md"])
+    from ecdsim.cli.common import warn_placeholder
+
+    warn_placeholder(config)
     return config
 
 

@@ -360,6 +360,9 @@ class LoadSpec(_Section):
     # Breakaway over kinetic FS_T (dynamic method); None = [damper] static_friction_factor.
     static_friction_factor: StaticFactor | None = None
     gravity: GravitySpec | None = None
+    # True in a file `ecdsim fit drop-test -o` wrote without --config: this [load] is a
+    # stand-in, and every command flags its results until the line is deleted (issue 26).
+    placeholder: bool = False
 
     @model_validator(mode="after")
     def _one_spring(self) -> LoadSpec:

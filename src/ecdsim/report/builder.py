@@ -634,6 +634,7 @@ def build_context(
         "dynamic": _dynamic_section(prediction, document, u),
         "methods": [(m, _described(m)) for m in document["methods"]],
         "units_name": "SI" if units == "si" else "US customary",
+        "placeholder": bool(getattr(config.spec.load, "placeholder", False)),
         "figures": _figures(prediction, units),
         "u": u,
         "t_unit": u.unit("temperature"),
