@@ -331,7 +331,28 @@ def test_error_marks_results_stale_and_stalls_are_shown(server: str, page: Any) 
     swept = [-40.0 + 140.0 * k / 24 for k in range(25)]
     assert stall_x == pytest.approx([t for t in swept if t < limit], abs=1e-9)
     angle = _plot(page, "angle-plot")
-    assert any("STALLS AT" in name for name in angle["legend"])
+    # Short legend entries (issue 26 item 3), the stall named in the line's entry.
+    assert "-40 degC, exact: stalls 82.3 deg" in angle["legend"]
+    assert not [name for name in angle["legend"] if name != name.lower()[: len(name)] and
+                name.isupper()]  # fmt: skip
+    # The cross at the stall's angle and where the curve reaches it (item 5): the exact
+    # curve approaches 82.3 deg asymptotically, so the cross sits at the first sample
+    # within 0.5 % of it (else at the axis' end), in the -40 degC line's colour.
+    traces: list[dict[str, Any]] = page.evaluate(
+        """() => document.getElementById('angle-plot').data.map(t => ({name: t.name,
+              x: t.x, y: t.y, mode: t.mode, color: t.line ? t.line.color : null,
+              marker: t.marker ? t.marker.color : null}))"""
+    )
+    line = next(t for t in traces if t["name"] == "-40 degC, exact: stalls 82.3 deg")
+    cross = next(
+        t for t in traces if t["mode"] == "markers" and t["name"].startswith("-40 degC, exact")
+    )
+    assert cross["y"] == [pytest.approx(stall_deg, rel=1e-9)]
+    reached = [x for x, y in zip(line["x"], line["y"], strict=True) if y >= 0.995 * stall_deg]
+    assert cross["x"] == [reached[0] if reached else line["x"][-1]]
+    assert cross["marker"] == line["color"]
+    others = {t["color"] for t in traces if t["mode"] == "lines" and "exact" in t["name"]}
+    assert len(others) == 3  # one colour per temperature
     _shot(page, "03-stall")
     _axe(page)
 
@@ -357,7 +378,7 @@ def test_dynamic_config_describes_its_methods(server: str, page: Any) -> None:
     _axe(page)
 
 
-def test_degf_config_keeps_its_units(degf_server: str, page: Any) -> None:
+def test_degf_config_keeps_its_units(degf_server: str, page: Any, tmp_path: Path) -> None:
     _open(page, degf_server + "/")
     # The temperatures field shows the config's own numbers under its own unit.
     assert page.inner_text("#temperatures-label") == "temperatures [degF], comma-separated"
@@ -383,8 +404,31 @@ def test_degf_config_keeps_its_units(degf_server: str, page: Any) -> None:
         )
     # 77 degF is 25 degC: (77 - 32) * 5 / 9; the paper's hand value at 25 degC.
     assert cells["1:exact.deployment_time_s"] == pytest.approx(hand.exact_time(25.0), rel=CELL_REL)
+    # The inputs are in US units too: 3.73 N*m = 33.0133 lbf*in, 25 degC = 77 degF.
+    assert page.input_value("#field-load\\.start_torque") == f"{3.73 / LBF_IN:.6g}"
+    assert "[lbf*in]" in page.inner_text("label[for='slider-load.start_torque']")
+    assert page.inner_text("#fit-reference-label") == "reference temperature [degF]"
+    assert page.input_value("#fit-reference") == "77"
     _shot(page, "04-degF-us-units")
     _axe(page)
+    # A torque typed with its unit is taken as it is (it was refused as "not a number").
+    before = _requests(page)
+    page.fill("#field-load\\.start_torque", "33 lbf*in")
+    page.dispatch_event("#field-load\\.start_torque", "change")
+    _wait_requests(page, before + 1)
+    assert page.inner_text("#errors") == ""
+    assert page.evaluate("window.ecdsim.sentConfig.load.start_torque") == "33 lbf*in"
+    path = tmp_path / "typed.toml"
+    path.write_text(page.evaluate("window.ecdsim.response.toml"), encoding="utf-8")
+    result = runner.invoke(cli, ["deploy", str(path), "--json"])
+    assert result.exit_code == 0, result.output
+    cells = _cells(page)
+    for i, case in enumerate(json.loads(result.stdout)["cases"]):
+        assert case["start_torque_Nm"] == pytest.approx(33 * LBF_IN, rel=1e-12)
+        assert cells[f"{i}:exact.deployment_time_s"] == pytest.approx(
+            case["exact"]["deployment_time_s"], rel=CELL_REL
+        )
+    _wait_requests(page, _requests(page))
 
     # An edit keeps the unit: a bare 300 typed there is 300 degF, not 300 degC.
     page.fill("#temperatures", "-40, 77, 300")
@@ -403,9 +447,12 @@ def test_degf_config_keeps_its_units(degf_server: str, page: Any) -> None:
     temps = [v for k, v in _cell_texts(page).items() if k.endswith(":temperature")]
     assert temps == ["-40", "25", f"{(300.0 - 32.0) * 5.0 / 9.0:.6g}"]
     assert "FECD [N*m]" in page.inner_text("#results thead")
-    # The field still holds the config's degF (the inputs are never converted).
-    assert page.input_value("#temperatures") == "-40, 77, 300"
-    assert page.inner_text("#temperatures-label") == "temperatures [degF], comma-separated"
+    # One unit system per page (issue 26 item 4): the inputs follow the results into SI,
+    # converted: 300 degF = 148.889 degC, the 33 lbf*in typed above = 3.72850 N*m.
+    assert page.input_value("#temperatures") == f"-40, 25, {(300.0 - 32.0) * 5.0 / 9.0:.6g}"
+    assert page.inner_text("#temperatures-label") == "temperatures [degC], comma-separated"
+    assert page.input_value("#field-load\\.start_torque") == f"{33 * LBF_IN:.6g}"
+    assert "[N*m]" in page.inner_text("label[for='slider-load.start_torque']")
     # Legends in degC, to 6 significant digits: (-40 - 32) * 5 / 9 is exactly -40.
     assert "-40 degC, exact" in _plot(page, "angle-plot")["legend"]
 
@@ -656,6 +703,15 @@ def test_a_crafted_link_opens_a_case_that_cannot_start(
     # > 1.58 N*m: stalls at (3.73 - 1.663024) * 1.57 / 2.15 rad = 86.48 deg.
     stall = math.degrees((3.73 - 1.663024) * 1.57 / 2.15)
     assert texts["0:exact.deployment_time_s"] == f"stalls at {float(f'{stall:.4g}'):g} deg"
+    # "cannot start" is a cross at t = 0, 0 deg (issue 26 item 5), named short in the legend.
+    crosses: list[dict[str, Any]] = page.evaluate(
+        """() => document.getElementById('angle-plot').data
+              .filter(t => t.mode === 'markers' && t.name.includes('dynamic'))
+              .map(t => ({name: t.name, x: t.x, y: t.y}))"""
+    )
+    start = next(c for c in crosses if c["name"].startswith("25 degC"))
+    assert (start["x"], start["y"]) == ([0], [0])
+    assert "25 degC, dynamic: cannot start" in _plot(page, "angle-plot")["legend"]
     _shot(page, "09-cannot-start")
     _axe(page)
 
@@ -670,3 +726,96 @@ def test_an_unreadable_link_opens_the_start_config_and_says_so(
     assert _cells(page)["1:exact.deployment_time_s"] == pytest.approx(
         hand.exact_time(25.0), rel=CELL_REL
     )
+
+
+def _geometry(page: Any, element: str) -> dict[str, Any]:
+    """Where plotly drew a plot's parts (CSS px): the plot area (its drag layer), the
+    legend, the title and the toolbar (None where there is none)."""
+    found: dict[str, Any] = page.evaluate(
+        """(id) => {
+            const el = document.getElementById(id);
+            const box = (sel) => {
+                const n = el.querySelector(sel);
+                if (!n) return null;
+                const r = n.getBoundingClientRect();
+                return (r.width || r.height) ? {left: r.left, right: r.right, top: r.top,
+                                                bottom: r.bottom, width: r.width} : null;
+            };
+            return { div: box('.main-svg'), area: box('.nsewdrag'), legend: box('.legend'),
+                     title: box('.gtitle'), modebar: box('.modebar') };
+        }""",
+        element,
+    )
+    return found
+
+
+def _overlap(a: dict[str, float], b: dict[str, float]) -> bool:
+    return not (
+        a["right"] <= b["left"]
+        or b["right"] <= a["left"]
+        or a["bottom"] <= b["top"]
+        or b["bottom"] <= a["top"]
+    )
+
+
+@pytest.mark.parametrize("width", [390, 1280])
+def test_plots_keep_their_width_and_titles_on_a_phone_and_a_desktop(
+    server: str, browser: Any, width: int
+) -> None:
+    """Issue 26 item 3: at 390 x 844 (a phone) and 1280 px, in the state with the most
+    legend entries (a case that cannot start at two temperatures and stalls at a third),
+    every plot's area is at least 80 % of the page's width on a phone (of the plot's
+    width on a desktop), the legend is below the plot, and no title is covered by the
+    toolbar or cut off."""
+    config = tomllib.loads(DYNAMIC_CONFIG.read_text(encoding="utf-8"))
+    config["damper"]["static_friction_factor"] = 3.0
+    config["load"]["system_friction"]["at_0C"] = "0.9 N*m"
+    encoded = base64.urlsafe_b64encode(json.dumps(config).encode()).rstrip(b"=").decode()
+    context = browser.new_context(viewport={"width": width, "height": 844})
+    try:
+        page = context.new_page()
+        page.set_default_timeout(30_000)
+        _open(page, f"{server}/#case={encoded}")
+        page.hover("#angle-plot .nsewdrag")  # the toolbar shows where the pointer is
+        for element in ("angle-plot", "sweep-plot"):
+            g = _geometry(page, element)
+            share = g["area"]["width"] / (width if width < 700 else g["div"]["width"])
+            assert share >= 0.8, (element, g)
+            assert g["legend"]["top"] >= g["area"]["bottom"], (element, g)  # below the plot
+            assert g["title"]["left"] >= 0
+            assert g["title"]["right"] <= min(width, g["div"]["right"]) + 0.5, (element, g)
+            if g["modebar"] is not None:
+                assert not _overlap(g["title"], g["modebar"]), (element, g)
+            else:
+                assert width < 700  # only a phone goes without the toolbar
+        legend = _plot(page, "angle-plot")["legend"]
+        assert "-40 degC, dynamic: cannot start" in legend
+        assert max(len(name) for name in legend) <= 45  # short entries
+        _shot(page, f"10-layout-{width}px")
+        _axe(page)
+    finally:
+        context.close()
+
+
+def test_a_placeholder_load_is_flagged_until_it_is_edited(
+    server: str, page: Any, tmp_path: Path
+) -> None:
+    """Issue 26 item 2 on the page: the fit's stand-in load shows a banner, dropped as
+    soon as the spring torque is edited."""
+    fitted = tmp_path / "fitted.toml"
+    result = runner.invoke(cli, ["fit", "drop-test", str(DROP_TEST), "-o", str(fitted)])
+    assert result.exit_code == 0, result.output
+    _open(page, server + "/")
+    assert page.is_hidden("#placeholder-banner")
+    before = _requests(page)
+    page.set_input_files("#upload", str(fitted))
+    _wait_requests(page, before + 1)
+    assert page.is_visible("#placeholder-banner")
+    assert "Placeholder load" in page.inner_text("#placeholder-banner")
+    _shot(page, "11-placeholder-load")
+    _axe(page)
+    page.fill("#field-load\\.start_torque", "4")
+    page.dispatch_event("#field-load\\.start_torque", "change")
+    _wait_requests(page, before + 2)
+    assert page.is_hidden("#placeholder-banner")
+    assert "placeholder" not in page.evaluate("window.ecdsim.sentConfig.load")

@@ -7,23 +7,31 @@
 // table: shown = SI * scale + offset), converted, never relabelled.
 "use strict";
 
+// Each control: its config path, its label and the kind of quantity it holds (the page
+// shows it in the display system's unit of that kind; angles in degrees, as the plots).
 const CONTROLS = [
-  { path: ["gearbox", "ratio"], label: "gear ratio N" },
-  { path: ["damper", "damping_rate"], label: "damper damping rate BD" },
-  { path: ["damper", "coulomb_friction"], label: "damper friction FD" },
-  { path: ["damper", "lubrication_friction", "at_0C"], label: "lubrication friction FL at 0 degC" },
-  { path: ["gearbox", "coulomb_friction"], label: "gearbox friction FG" },
-  { path: ["load", "system_friction", "at_0C"], label: "system friction FS at 0 degC" },
-  { path: ["load", "start_torque"], label: "spring torque at start" },
-  { path: ["load", "end_torque"], label: "spring torque at end" },
-  { path: ["load", "travel"], label: "travel" },
-  { path: ["load", "inertia"], label: "load inertia (dynamic method)" },
+  { path: ["gearbox", "ratio"], label: "gear ratio N", kind: "number" },
+  { path: ["damper", "damping_rate"], label: "damper damping rate BD", kind: "damping_rate" },
+  { path: ["damper", "coulomb_friction"], label: "damper friction FD", kind: "torque" },
+  { path: ["damper", "lubrication_friction", "at_0C"], label: "lubrication friction FL at 0 degC", kind: "torque" },
+  { path: ["gearbox", "coulomb_friction"], label: "gearbox friction FG", kind: "torque" },
+  { path: ["load", "system_friction", "at_0C"], label: "system friction FS at 0 degC", kind: "torque" },
+  { path: ["load", "start_torque"], label: "spring torque at start", kind: "torque", load: true },
+  { path: ["load", "end_torque"], label: "spring torque at end", kind: "torque", load: true },
+  { path: ["load", "travel"], label: "travel", kind: "angle", load: true },
+  { path: ["load", "inertia"], label: "load inertia (dynamic method)", kind: "inertia" },
 ];
 const STEPS = 1000;
 const DIGITS = 6; // significant digits of every number shown
-const COLORS = ["#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2"];
+// One colour per temperature on every plot of the page, by its value over the page's
+// temperatures: cold blue, dark green, hot red (the CLI's plots use the same three,
+// ecdsim/plotting.py), each readable as a thin line on white.
+const TEMPERATURE_ANCHORS = [[0x21, 0x66, 0xac], [0x1b, 0x78, 0x37], [0xb2, 0x18, 0x2b]];
 const DASH = { exact: "solid", paper: "dash", dynamic: "dot" };
-const METHOD_COLORS = { paper: "#1f77b4", exact: "#ff7f0e", dynamic: "#2ca02c" };
+// Methods where a plot's lines are methods (deployment time against temperature): no
+// temperature's hue, so that blue always means cold.
+const METHOD_COLORS = { paper: "#6b6b6b", exact: "#111111", dynamic: "#6a3d9a" };
+const NARROW = 700; // px: below this the page is a phone's (legends and toolbars adapt)
 const METHOD_NOTES = {
   paper: "paper: the paper's Eq. 8-11, quasi-static, with the arithmetic mean of the start and end speeds (no inertia).",
   exact: "exact: the exact solution of the same quasi-static equations (speed set by the torque balance at each angle; no inertia).",
@@ -107,52 +115,128 @@ function escapeHtml(text) {
   return String(text).replace(/[&<>"']/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" })[c]);
 }
 
+// ---------------------------------------------------------------- units typed in fields
+
+// SI value of each unit symbol a quantity may be written in (exact definitions, as
+// ecdsim/units_display.py). The server parses every field (pint); the page needs these
+// only to show a config's value in the display system.
+const LBM = 0.45359237, LBF = LBM * 9.80665, INCH = 0.0254;
+const UNIT_FACTORS = {
+  N: 1, mN: 1e-3, kN: 1e3, lbf: LBF, ozf: LBF / 16, kgf: 9.80665, gf: 9.80665e-3,
+  m: 1, mm: 1e-3, cm: 1e-2, km: 1e3, in: INCH, inch: INCH, ft: 12 * INCH,
+  s: 1, ms: 1e-3, min: 60, h: 3600, rad: 1, mrad: 1e-3, deg: Math.PI / 180, degree: Math.PI / 180,
+  kg: 1, g: 1e-3, lbm: LBM, lb: LBM, oz: LBM / 16, J: 1, kJ: 1e3, W: 1, K: 1,
+};
+
+// "N*m*s/rad" -> its SI factor; null for what the page does not know (the server does).
+function unitFactor(text) {
+  if (text === null || text === undefined) return null;
+  const unit = text.replace(/\s+/g, "").replace(/\*\*/g, "^").replace(/·/g, "*");
+  if (unit === "") return 1;
+  let factor = 1;
+  let sign = 1;
+  for (const token of unit.split(/(?=[*/])/)) {
+    const op = token[0] === "*" || token[0] === "/" ? token[0] : "*";
+    const body = token[0] === "*" || token[0] === "/" ? token.slice(1) : token;
+    const m = body.match(/^(?:([A-Za-z]+)(?:\^([-+]?\d+))?|1)$/);
+    if (!m) return null;
+    sign = op === "/" ? -1 : 1;
+    if (m[1] === undefined) continue; // "1/K"
+    const base = UNIT_FACTORS[m[1]];
+    if (base === undefined) return null;
+    factor *= base ** (sign * Number(m[2] || 1));
+  }
+  return factor;
+}
+
+// A temperature in degC from a number and its unit (degC, degF, K); null if unknown.
+function toCelsius(number, unit) {
+  const u = (unit || "degC").replace(/\s+/g, "");
+  if (u === "degC" || u === "°C" || u === "C") return number;
+  if (u === "degF" || u === "°F" || u === "F") return (number - 32) * 5 / 9;
+  if (u === "K" || u === "kelvin") return number - 273.15;
+  return null;
+}
+
+// The display unit of a control's kind: {unit, scale, offset} with shown = SI * scale +
+// offset. Angles are shown in degrees on every page (as the plots and stall angles).
+function displayUnit(kind) {
+  if (kind === "angle") return { unit: "deg", scale: 180 / Math.PI, offset: 0 };
+  if (kind === "number") return { unit: "", scale: 1, offset: 0 };
+  return unitOf(kind);
+}
+
 // ---------------------------------------------------------------- controls
 
+// Each control shows its quantity in the display system (SI or US customary: the same
+// system as the results), whatever unit the config wrote it in; a bare number typed in
+// a field is in that unit, and a number with a unit ("33 lbf*in") is sent as typed.
 function buildControls() {
   const box = document.getElementById("sliders");
   box.innerHTML = "";
   let hasInertia = false;
+  state.builtFor = state.displayUnits;
   for (const c of CONTROLS) {
     const q = splitQuantity(getPath(state.config, c.path));
     if (q === null) continue;
     if (c.path.join(".") === "load.inertia") hasInertia = true;
     const id = c.path.join(".");
-    const unitText = q.unit === null || q.unit === "" ? "-" : q.unit;
-    const span = Math.abs(q.number) || 1;
-    const lo = q.number - 0.95 * span;
-    const hi = q.number + 2 * span;
+    // The value in the display unit, or (a unit the page cannot convert) in its own.
+    const factor = c.kind === "number" ? 1 : unitFactor(q.unit);
+    const shown = factor === null ? null : displayUnit(c.kind);
+    const unitText = shown === null ? (q.unit || "-") : (shown.unit || "-");
+    const sendUnit = shown === null ? q.unit : (shown.unit || null);
+    const value = shown === null ? q.number : q.number * factor * shown.scale + shown.offset;
+    const span = Math.abs(value) || 1;
+    const lo = value - 0.95 * span;
+    const hi = value + 2 * span;
     const div = document.createElement("div");
     div.className = "control";
+    // 0 degC is 32 degF: the friction laws' at_0C values named in the page's unit.
+    const name = unitOf("temperature").unit === "degF" ? c.label.replace("at 0 degC", "at 32 degF") : c.label;
     div.innerHTML =
-      `<label for="slider-${id}">${escapeHtml(c.label)} <span class="unit">[${escapeHtml(unitText)}]</span></label>` +
+      `<label for="slider-${id}">${escapeHtml(name)} <span class="unit">[${escapeHtml(unitText)}]</span></label>` +
       `<input type="range" id="slider-${id}" data-path="${id}" min="0" max="${STEPS}" step="1">` +
-      ` <input type="text" id="field-${id}" data-path="${id}" inputmode="decimal">`;
+      ` <input type="text" id="field-${id}" data-path="${id}" inputmode="text">`;
     box.appendChild(div);
     const slider = div.querySelector("input[type=range]");
     const field = div.querySelector("input[type=text]");
-    field.setAttribute("aria-label", `${c.label} value [${unitText}]`);
-    const toValue = (s) => lo + ((hi - lo) * s) / STEPS;
+    field.setAttribute("aria-label", `${name} value [${unitText}] (a number, or a number with a unit)`);
+    const toValue = (position) => lo + ((hi - lo) * position) / STEPS;
+    const toPosition = (v) => String(Math.round(((v - lo) / (hi - lo)) * STEPS));
     const setText = (v) => {
       slider.setAttribute("aria-valuetext", `${sig(v)} ${unitText}`);
       field.value = sig(v);
     };
-    slider.value = String(Math.round(((q.number - lo) / (hi - lo)) * STEPS));
-    setText(q.number);
+    slider.value = toPosition(value);
+    setText(value);
+    const edited = () => { if (c.load) delete (state.config.load || {}).placeholder; };
     slider.addEventListener("input", () => {
       const v = toValue(Number(slider.value));
       setText(v);
-      setPath(state.config, c.path, joinQuantity(v, q.unit));
+      setPath(state.config, c.path, joinQuantity(v, sendUnit));
+      edited();
       requestDeploy();
     });
     field.addEventListener("change", () => {
-      const v = Number(field.value);
-      if (field.value.trim() === "" || !Number.isFinite(v)) {
-        failed([`${id}: '${field.value}' is not a number`]);
+      const text = field.value.trim();
+      const typed = splitQuantity(text);
+      if (text === "" || typed === null || (typed.unit !== "" && !/[A-Za-z]/.test(typed.unit))) {
+        failed([`${id}: '${field.value}' is not a number, or a number with a unit (e.g. '${sig(value)} ${unitText}')`]);
         return;
       }
-      slider.setAttribute("aria-valuetext", `${sig(v)} ${unitText}`);
-      setPath(state.config, c.path, joinQuantity(v, q.unit));
+      if (typed.unit) {
+        // A unit typed with the number: sent as typed (the server checks its dimension);
+        // the slider follows where the page can convert it.
+        setPath(state.config, c.path, c.kind === "number" ? text : `${typed.number} ${typed.unit}`);
+        const f = unitFactor(typed.unit);
+        if (f !== null && shown !== null) slider.value = toPosition(typed.number * f * shown.scale + shown.offset);
+      } else {
+        setPath(state.config, c.path, joinQuantity(typed.number, sendUnit));
+        slider.value = toPosition(typed.number);
+      }
+      slider.setAttribute("aria-valuetext", `${field.value} ${typed.unit ? "" : unitText}`.trim());
+      edited();
       requestDeploy();
     });
   }
@@ -160,32 +244,27 @@ function buildControls() {
     ? "The inertia acts in the dynamic method only; the quasi-static methods ignore it."
     : "No inertia slider: this config has no [load] inertia (the quasi-static methods do not use it; add it and method \"dynamic\" in the config for the dynamic method).";
   buildTemperatureField();
+  renderFitReference();
 }
 
-// The temperatures keep the config's own unit: "-40 degF" shows as -40 under [degF], and
-// a bare number typed there is sent back as degF.
-function temperatureUnit(temps) {
-  const units = new Set(temps.map((t) => { const q = splitQuantity(t); return q ? q.unit || "degC" : null; }));
-  return units.size === 1 && !units.has(null) ? [...units][0] : null;
-}
-
+// The temperatures are shown in the display system's unit too (degF in US units), each
+// converted from the unit the config wrote it in; a bare number typed there is in that
+// unit, and another unit may be typed with the number (25 degC).
 function buildTemperatureField() {
   const temps = getPath(state.config, ["analysis", "temperatures"]) || ["25 degC"];
-  const unit = temperatureUnit(temps);
+  const shown = unitOf("temperature");
   const field = document.getElementById("temperatures");
   const lab = document.getElementById("temperatures-label");
-  if (unit !== null) {
-    lab.textContent = `temperatures [${unit}], comma-separated`;
-    field.value = temps.map((t) => sig(splitQuantity(t).number)).join(", ");
-    field.dataset.unit = unit;
-    document.getElementById("temperatures-help").textContent =
-      `Bare numbers are ${unit}; another unit may be written with the number (e.g. 25 degC).`;
-  } else {
-    lab.textContent = "temperatures (each with its unit), comma-separated";
-    field.value = temps.map((t) => { const q = splitQuantity(t); return q ? `${sig(q.number)} ${q.unit}`.trim() : String(t); }).join(", ");
-    field.dataset.unit = "degC";
-    document.getElementById("temperatures-help").textContent = "Bare numbers are degC.";
-  }
+  const values = temps.map((t) => {
+    const q = splitQuantity(t);
+    const c = q === null ? null : toCelsius(q.number, q.unit);
+    return c === null ? String(t) : sig(c * shown.scale + shown.offset);
+  });
+  lab.textContent = `temperatures [${shown.unit}], comma-separated`;
+  field.value = values.join(", ");
+  field.dataset.unit = shown.unit;
+  document.getElementById("temperatures-help").textContent =
+    `Bare numbers are ${shown.unit}; another unit may be written with the number (e.g. ${shown.unit === "degF" ? "25 degC" : "77 degF"}).`;
 }
 
 function onTemperatures(e) {
@@ -194,6 +273,15 @@ function onTemperatures(e) {
   if (!state.config.analysis) state.config.analysis = {};
   state.config.analysis.temperatures = items.map((s) => (/[a-zA-Z]/.test(s) ? s : `${s} ${unit}`));
   requestDeploy();
+}
+
+// A config with no [output] units whose temperatures are all written in degF is shown in
+// US units by default ("default" in the selector), as its author thinks in them.
+function defaultSystem(config) {
+  if (getPath(config, ["output", "units"])) return null;
+  const temps = getPath(config, ["analysis", "temperatures"]) || [];
+  const degf = temps.length > 0 && temps.every((t) => { const q = splitQuantity(t); return q && /degF|°F/.test(q.unit || ""); });
+  return degf ? "us" : null;
 }
 
 // ---------------------------------------------------------------- requests and state
@@ -213,9 +301,14 @@ async function postJson(url, body) {
   return fetch(url, { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
 }
 
+function chosenSystem(config) {
+  return state.choice !== "config" ? state.choice : defaultSystem(config);
+}
+
 function deployBody(config) {
   const body = { config };
-  if (state.choice !== "config") body.units = state.choice;
+  const system = chosenSystem(config);
+  if (system) body.units = system;
   return body;
 }
 
@@ -235,6 +328,8 @@ async function requestDeploy() {
       state.stale = false;
       document.getElementById("results-section").dataset.stale = "false";
       showErrors([]);
+      // The inputs follow the results' unit system: rebuilt when it changed.
+      if (state.builtFor !== state.displayUnits) buildControls();
       render();
       if (state.fit) renderFit(); // the display units may have changed
       saveToUrl();
@@ -274,19 +369,68 @@ function saveToUrl() {
 
 // ---------------------------------------------------------------- rendering
 
-function layout(title, xlabel, ylabel, extra = {}) {
+function narrow() { return window.innerWidth < NARROW; }
+
+// A plot's layout: the title left-aligned above the plot and the legend below it, so that
+// neither the toolbar (drawn down the right edge, and none on a phone) covers a title nor
+// a legend takes the plot's width: the plot keeps at least 80 % of a phone's 390 px.
+// The height grows with the legend's rows (estimated from its longest entry).
+function layout(elementId, title, xlabel, ylabel, names, extra = {}) {
+  const width = document.getElementById(elementId).clientWidth || 600;
+  const small = narrow();
+  const longest = Math.max(8, ...names.map((n) => n.length));
+  const perRow = Math.max(1, Math.floor((width - 20) / (40 + 6.4 * longest)));
+  const rows = names.length ? Math.ceil(names.length / perRow) : 0;
+  const base = small ? 300 : 340;
+  // On a phone a long title breaks at its parenthesis, onto a second line.
+  const text = small ? title.replace(" (", "<br>(") : title;
+  const lines = text.split("<br>").length;
+  const top = 18 + 22 * lines;
+  const bottom = 52 + 20 * rows;
   return {
-    title: { text: title }, margin: { t: 50, r: 10 },
+    title: { text, x: 0, xref: "paper", xanchor: "left", y: 1, yref: "container", yanchor: "top", pad: { t: 10 },
+      font: { size: small ? 15 : 17 } },
+    height: base + top + bottom,
+    margin: { t: top, r: small ? 8 : 44, b: bottom, l: small ? 48 : 64 },
     xaxis: { title: { text: xlabel } }, yaxis: { title: { text: ylabel } },
-    legend: { font: { size: 11 } }, ...extra,
+    legend: { orientation: "h", x: 0, xanchor: "left", y: 0, yref: "container", yanchor: "bottom", font: { size: 11 } },
+    ...extra,
   };
 }
 // No "share" button: it would upload the chart to Plotly's cloud (the explorer makes no
-// network requests); the selection tools have nothing to select here.
-const PLOT_CONFIG = {
-  responsive: true, displaylogo: false,
-  modeBarButtonsToRemove: ["sendChartToCloud", "sendDataToCloud", "lasso2d", "select2d"],
-};
+// network requests); the selection tools have nothing to select here. The toolbar runs
+// down the right edge (never over a title); a phone gets none (pinch and drag zoom).
+function plotConfig() {
+  return {
+    responsive: true, displaylogo: false, displayModeBar: narrow() ? false : "hover",
+    modeBarButtonsToRemove: ["sendChartToCloud", "sendDataToCloud", "lasso2d", "select2d"],
+  };
+}
+function draw(elementId, traces, title, xlabel, ylabel, extra = {}) {
+  const names = traces.filter((t) => t.showlegend !== false && t.name).map((t) => t.name);
+  const config = plotConfig();
+  const lay = layout(elementId, title, xlabel, ylabel, names, extra);
+  lay.modebar = { orientation: "v" };
+  Plotly.react(elementId, traces, lay, config);
+}
+
+// A temperature's colour (degC), by its value over the page's range [lo, hi].
+function temperatureColor(t, lo, hi) {
+  const x = hi > lo ? Math.min(1, Math.max(0, (t - lo) / (hi - lo))) : 0;
+  const scaled = x * (TEMPERATURE_ANCHORS.length - 1);
+  const i = Math.min(Math.floor(scaled), TEMPERATURE_ANCHORS.length - 2);
+  const f = scaled - i;
+  const rgb = TEMPERATURE_ANCHORS[i].map((a, k) => Math.round(a + f * (TEMPERATURE_ANCHORS[i + 1][k] - a)));
+  return `rgb(${rgb.join(",")})`;
+}
+// The range of the temperatures on the page (the current case and the pinned A).
+function pageRange() {
+  const temps = [];
+  for (const body of [state.response, state.pinned && state.pinned.response]) {
+    if (body) temps.push(...body.prediction.cases.map((c) => c.temperature_C));
+  }
+  return temps.length ? [Math.min(...temps), Math.max(...temps)] : [0, 0];
+}
 
 function caseTemperature(c) { return `${sig(show("temperature", c.temperature_C))} ${label("temperature")}`; }
 
@@ -309,31 +453,69 @@ function stallText(r) {
   if (r.stuck) return `stuck${at}`;
   return `not deployed (${r.status || "no solution"})${at}`;
 }
+// The short form for a legend entry: "stalls 82.3 deg", "cannot start".
+function stallShort(r) {
+  const angle = stopAngle(r);
+  if (angle === 0 && (r.stalled || r.stuck)) return "cannot start";
+  const at = angle === null ? "" : ` ${sig((angle * 180) / Math.PI, 3)} deg`;
+  if (r.stalled) return `stalls${at}`;
+  if (r.stuck) return `stuck${at}`;
+  return "not deployed";
+}
 
-function angleTraces(body, prefix, faded) {
+// Where and when a case stops: (time, angle [deg]). "cannot start" at t = 0; a dynamic
+// run stuck at a finite time at that time; a quasi-static stall is approached
+// asymptotically (the speed falls to zero at the stall angle): the first time the curve
+// comes within 0.5 % of the stall angle, else the end of the time axis.
+function stopPoint(r, time, angles) {
+  const angle = stopAngle(r);
+  if (angle === null) return null;
+  const deg = (angle * 180) / Math.PI;
+  if (angle === 0) return [0, 0];
+  if (r.stuck && r.stuck_time_s !== null && r.stuck_time_s !== undefined && Number.isFinite(r.stuck_time_s)) {
+    return [r.stuck_time_s, deg];
+  }
+  const i = angles.findIndex((a) => a !== null && a >= 0.995 * deg);
+  return [time[i >= 0 ? i : time.length - 1], deg];
+}
+
+function angleTraces(body, prefix, faded, range) {
   const doc = body.prediction;
   const time = body.trajectories.time_s;
   const traces = [];
+  let marked = false;
   doc.methods.forEach((m) => {
     doc.cases.forEach((c, j) => {
       const r = c[m] || {};
       const stalled = notDeployed(r);
+      const color = temperatureColor(c.temperature_C, range[0], range[1]);
+      const angles = body.trajectories.methods[m].angle_rad[j].map((a) => (a === null ? null : (a * 180) / Math.PI));
       traces.push({
-        x: time, y: body.trajectories.methods[m].angle_rad[j].map((a) => (a === null ? null : (a * 180) / Math.PI)),
-        name: `${prefix}${caseTemperature(c)}, ${m}${stalled ? ": " + stallText(r).toUpperCase() : ""}`,
-        mode: "lines", legendgroup: prefix,
+        x: time, y: angles,
+        name: `${prefix}${caseTemperature(c)}, ${m}${stalled ? ": " + stallShort(r) : ""}`,
+        mode: "lines",
         opacity: faded ? 0.45 : 1,
-        line: { color: COLORS[j % COLORS.length], dash: DASH[m] || "dashdot", width: faded ? 1.5 : 2.2 },
+        line: { color, dash: DASH[m] || "dashdot", width: faded ? 1.5 : 2.2 },
       });
-      if (stalled && stopAngle(r) !== null) {
+      const point = stalled ? stopPoint(r, time, angles) : null;
+      if (point !== null) {
+        // Where it stops, in its temperature's colour; the line's legend entry names it.
         traces.push({
-          x: [time[time.length - 1]], y: [(stopAngle(r) * 180) / Math.PI], mode: "markers",
-          name: `${prefix}${caseTemperature(c)}, ${m}: ${stallText(r)}`, legendgroup: prefix,
-          marker: { symbol: "x", size: 12, color: "#b00020" }, opacity: faded ? 0.45 : 1,
+          x: [point[0]], y: [point[1]], mode: "markers", showlegend: false,
+          name: `${prefix}${caseTemperature(c)}, ${m}: ${stallText(r)}`,
+          marker: { symbol: "x-thin-open", size: 14, color, line: { width: 3, color } }, opacity: faded ? 0.45 : 1,
+          cliponaxis: false, // a cross at t = 0 ("cannot start") shows whole on the axis
+          hovertemplate: `${escapeHtml(stallText(r))}<extra>${escapeHtml(caseTemperature(c))}, ${m}</extra>`,
         });
+        marked = true;
       }
     });
   });
+  if (marked && !prefix.startsWith("A")) {
+    // One legend entry says what a cross is (the lines' entries say where).
+    traces.push({ x: [null], y: [null], mode: "markers", name: "x: where it stops (cannot start: at t = 0)",
+      marker: { symbol: "x-thin-open", size: 12, color: "#333", line: { width: 2.5, color: "#333" } } });
+  }
   return traces;
 }
 
@@ -347,9 +529,9 @@ function sweepTraces(body, prefix, faded) {
   doc.methods.forEach((m, k) => {
     const y = sweep.methods[m].deployment_time_s;
     traces.push({
-      x, y, name: `${prefix}${m}`, mode: "lines+markers", legendgroup: prefix, opacity: faded ? 0.45 : 1,
+      x, y, name: `${prefix}${m}`, mode: "lines+markers", opacity: faded ? 0.45 : 1,
       line: { dash: DASH[m] || "dashdot", color: METHOD_COLORS[m] || "#555" },
-      marker: { color: METHOD_COLORS[m] || "#555" },
+      marker: { color: METHOD_COLORS[m] || "#555", size: 5 },
     });
     const stallX = x.filter((_, i) => y[i] === null);
     if (stallX.length) {
@@ -357,7 +539,7 @@ function sweepTraces(body, prefix, faded) {
       traces.push({
         // One row per method above the curves, in the method's colour.
         x: stallX, y: stallX.map(() => top * (1 + 0.05 * k)), mode: "markers", name: `${prefix}${m}: stalls (no deployment)`,
-        legendgroup: prefix, marker: { symbol: "x", size: 11, color: METHOD_COLORS[m] || "#b00020" }, opacity: faded ? 0.45 : 1,
+        marker: { symbol: "x", size: 10, color: METHOD_COLORS[m] || "#b00020" }, opacity: faded ? 0.45 : 1,
         hovertemplate: `stalls at %{x} ${label("temperature")}<extra>${m}</extra>`,
       });
     }
@@ -370,16 +552,20 @@ function render() {
   const doc = body.prediction;
   const pinned = state.pinned;
   const pb = pinned ? "B: " : "";
-  const angle = angleTraces(body, pb, false);
+  const range = pageRange();
+  const angle = angleTraces(body, pb, false, range);
   const sweep = sweepTraces(body, pb, false);
   if (pinned) {
-    angle.push(...angleTraces(pinned.response, "A: ", true));
+    angle.push(...angleTraces(pinned.response, "A: ", true, range));
     sweep.push(...sweepTraces(pinned.response, "A: ", true));
   }
   const suffix = pinned ? " (B solid, pinned A faded)" : "";
-  Plotly.react("angle-plot", angle, layout(`Deployed angle against time${suffix}`, "time since release [s]", "angle [deg]"), PLOT_CONFIG);
-  Plotly.react("sweep-plot", sweep,
-    layout(`Deployment time against temperature${suffix}`, `temperature [${label("temperature")}]`, "deployment time [s]"), PLOT_CONFIG);
+  const ends = [body, pinned && pinned.response].filter(Boolean).map((b) => b.trajectories.time_s[b.trajectories.time_s.length - 1]);
+  draw("angle-plot", angle, `Deployed angle against time${suffix}`, "time since release [s]", "angle [deg]",
+    { xaxis: { title: { text: "time since release [s]" }, range: [0, Math.max(...ends)], zeroline: false } });
+  draw("sweep-plot", sweep, `Deployment time against temperature${suffix}`, `temperature [${label("temperature")}]`, "deployment time [s]",
+    { xaxis: { title: { text: `temperature [${label("temperature")}]` }, zeroline: false } });
+  renderPlaceholder();
   renderTable(doc, pinned ? pinned.response.prediction : null);
   renderGroundTest(doc);
   renderMethodsNote(doc.methods);
@@ -394,6 +580,13 @@ function render() {
   renderCompareSummary();
 }
 
+// A [load] marked placeholder = true (a fit's stand-in): a banner until the spring
+// torques or the travel are edited here (which drops the mark), or the file is fixed.
+function renderPlaceholder() {
+  const banner = document.getElementById("placeholder-banner");
+  banner.hidden = !(state.sentConfig && getPath(state.sentConfig, ["load", "placeholder"]) === true);
+}
+
 // With [load.gravity]: flight (0 g) against the ground test as configured (docs/model.md).
 function renderGroundTest(doc) {
   const box = document.getElementById("ground-test");
@@ -404,10 +597,11 @@ function renderGroundTest(doc) {
   document.getElementById("ground-test-heading").textContent =
     `Flight (0 g) against ground test (1 g, ${offload} % offloaded)`;
   document.getElementById("ground-test-note").textContent =
-    `The results above are the ground test as configured: ${sig(ground.mass_kg)} kg at ` +
-    `${sig(ground.cg_radius_m)} m from the hinge, ${offload} % of the weight offloaded. ` +
+    `The results above are the ground test as configured: ${sig(show("mass", ground.mass_kg))} ${label("mass")} at ` +
+    `${sig(show("length", ground.cg_radius_m))} ${label("length")} from the hinge, ${offload} % of the weight offloaded. ` +
     `Gravity torque m g r (1 - offload) sin(theta_0 + phi), positive opposing deployment: ` +
-    `${sig(ground.torque_at_release_Nm, 4)} N*m at release, ${sig(ground.torque_at_latch_Nm, 4)} N*m at the latch.`;
+    `${sig(show("torque", ground.torque_at_release_Nm), 4)} ${label("torque")} at release, ` +
+    `${sig(show("torque", ground.torque_at_latch_Nm), 4)} ${label("torque")} at the latch.`;
   const tl = label("temperature");
   document.querySelector("#ground-table thead").innerHTML =
     `<tr><th scope="col">T [${tl}]</th><th scope="col">method</th><th scope="col">flight t [s]</th>` +
@@ -545,12 +739,15 @@ async function pinConfig(config) {
 async function loadExample(which, note = "") {
   const r = await fetch(`/api/example?which=${which}`);
   const body = await r.json();
-  useConfig(body.config, body.source + note, body.units);
+  useConfig(body.config, body.source + note, body.units, body.display_units);
 }
 
-function useConfig(config, source, units) {
+function useConfig(config, source, units, system) {
   state.config = config;
-  if (units && state.choice === "config") state.units = units;
+  if (units && state.choice === "config" && !defaultSystem(config)) {
+    state.units = units;
+    if (system) state.displayUnits = system;
+  }
   document.getElementById("source").textContent = source;
   buildControls();
   requestDeploy();
@@ -581,10 +778,8 @@ async function copyLink() {
 
 // ---------------------------------------------------------------- fit from the bench
 
-function fitLayout(title, xlabel, ylabel, yrange = null) {
-  const out = layout(title, xlabel, ylabel, { margin: { t: 45, r: 10, b: 45 }, legend: { font: { size: 10 } } });
-  if (yrange) out.yaxis.range = yrange;
-  return out;
+function drawFit(elementId, traces, title, xlabel, ylabel, yrange = null) {
+  draw(elementId, traces, title, xlabel, ylabel, yrange ? { yaxis: { title: { text: ylabel }, range: yrange } } : {});
 }
 
 function band(x, curve, name, color) {
@@ -600,8 +795,10 @@ function renderFit() {
   const curves = body.curves;
   const tk = (v) => show("torque", v);
   const torque = [];
-  curves.torque_speed.forEach((line, j) => {
-    const color = COLORS[j % COLORS.length];
+  const fitTemps = curves.torque_speed.map((l) => l.temperature_C);
+  const [lo, hi] = [Math.min(...fitTemps), Math.max(...fitTemps)];
+  curves.torque_speed.forEach((line) => {
+    const color = temperatureColor(line.temperature_C, lo, hi);
     const t = `${sig(show("temperature", line.temperature_C))} ${label("temperature")}`;
     torque.push({ x: line.speed_rad_s, y: line.torque_Nm.map(tk), mode: "markers", name: `${t} tests`, marker: { color, size: 7 } });
     torque.push({
@@ -614,8 +811,7 @@ function renderFit() {
         name: `outlier (${t})`, marker: { size: 15, color: "rgba(0,0,0,0)", line: { color: "black", width: 1.5 } } });
     }
   });
-  Plotly.react("fit-torque-plot", torque,
-    fitLayout("Drop test: drive torque against speed (Fig. 8)", "speed [rad/s]", `drive torque [${label("torque")}]`), PLOT_CONFIG);
+  drawFit("fit-torque-plot", torque, "Drop test: drive torque against speed (Fig. 8)", "speed [rad/s]", `drive torque [${label("torque")}]`);
 
   const temps = curves.torque_speed.map((l) => show("temperature", l.temperature_C));
   const grid = curves.laws.temperature_C.map((t) => show("temperature", t));
@@ -623,7 +819,7 @@ function renderFit() {
     const est = curves.torque_speed.map((l) => l[key]);
     return {
       x: temps, y: est.map((e) => show(kind, e.value)), mode: "markers", name: "per temperature (95 %)",
-      marker: { color: "black", size: 7 },
+      marker: { color: fitTemps.map((t) => temperatureColor(t, lo, hi)), size: 8 },
       error_y: {
         type: "data", symmetric: false,
         array: est.map((e) => (e.ci95 ? showDiff(kind, e.ci95[1] - e.value) : 0)),
@@ -631,7 +827,8 @@ function renderFit() {
       },
     };
   };
-  const lawColors = { linear: "#1f77b4", resistivity: "#ff7f0e" };
+  // Laws in black and grey: none of the temperatures' colours.
+  const lawColors = { linear: "#111111", resistivity: "#6b6b6b" };
   const damping = [perTemp("damping_rate_Nms_per_rad", "damping_rate")];
   for (const [name, curve] of Object.entries(curves.laws.damping_rate)) {
     const conv = { value: curve.value.map((v) => show("damping_rate", v)),
@@ -647,18 +844,17 @@ function renderFit() {
     const lo = Math.min(...ys); const hi = Math.max(...ys); const pad = 0.15 * (hi - lo || Math.abs(hi) || 1);
     return [lo - pad, hi + pad];
   };
-  Plotly.react("fit-damping-plot", damping,
-    fitLayout("Damping rate BECD against temperature", `temperature [${label("temperature")}]`, `BECD [${label("damping_rate")}]`,
-      span(damping)), PLOT_CONFIG);
+  drawFit("fit-damping-plot", damping, "Damping rate BECD against temperature", `temperature [${label("temperature")}]`,
+    `BECD [${label("damping_rate")}]`, span(damping));
   const friction = [perTemp("friction_Nm", "torque")];
   if (curves.laws.friction) {
     const f = curves.laws.friction;
     const conv = { value: f.value.map(tk), low: f.low && f.low.map(tk), high: f.high && f.high.map(tk) };
-    friction.push(...band(grid, conv, "line", "#2ca02c"));
-    friction.push({ x: grid, y: conv.value, mode: "lines", name: "line FECD(T)", line: { color: "#2ca02c" } });
+    friction.push(...band(grid, conv, "line", "#111111"));
+    friction.push({ x: grid, y: conv.value, mode: "lines", name: "line FECD(T)", line: { color: "#111111" } });
   }
-  Plotly.react("fit-friction-plot", friction,
-    fitLayout("Friction FECD against temperature", `temperature [${label("temperature")}]`, `FECD [${label("torque")}]`), PLOT_CONFIG);
+  drawFit("fit-friction-plot", friction, "Friction FECD against temperature", `temperature [${label("temperature")}]`,
+    `FECD [${label("torque")}]`);
 
   const ci = (e, kind) => (e.ci95 ? `[${sig(show(kind, e.ci95[0]), 4)}, ${sig(show(kind, e.ci95[1]), 4)}]` : "-");
   document.querySelector("#fit-table thead").innerHTML =
@@ -700,18 +896,46 @@ function renderFit() {
   use.title = body.export_error ? `cannot use: ${body.export_error}` : "replace [damper] and [gearbox] by the fitted ECD (N = 1), keeping [load]";
 }
 
+// The fit's reference temperature in the display system's unit (degF in US units): the
+// field converts when the system changes, and a unit may be typed with the number.
+function renderFitReference() {
+  const field = document.getElementById("fit-reference");
+  const unit = unitOf("temperature").unit;
+  const previous = field.dataset.unit || "degC";
+  if (previous !== unit) {
+    const q = splitQuantity(field.value.trim());
+    const c = q === null ? null : toCelsius(q.number, q.unit || previous);
+    if (c !== null) field.value = sig(show("temperature", c));
+    field.dataset.unit = unit;
+  }
+  document.getElementById("fit-reference-label").textContent = `reference temperature [${unit}]`;
+}
+
+// The reference temperature in degC (the API's unit), or null if it is not one.
+function fitReference() {
+  const field = document.getElementById("fit-reference");
+  const q = splitQuantity(field.value.trim());
+  if (q === null || (q.unit !== "" && !/[A-Za-z]/.test(q.unit))) return null;
+  const c = toCelsius(q.number, q.unit || field.dataset.unit || "degC");
+  return c === null || !Number.isFinite(c) ? null : c;
+}
+
 async function runFit(file) {
   const errors = document.getElementById("fit-errors");
   errors.textContent = "";
-  const reference = Number(document.getElementById("fit-reference").value);
-  if (!Number.isFinite(reference)) { errors.textContent = "error: reference temperature: not a number"; return; }
+  const reference = fitReference();
+  if (reference === null) {
+    errors.textContent = `error: reference temperature: '${document.getElementById("fit-reference").value}' is not a temperature (a number in ${unitOf("temperature").unit}, or with its unit, e.g. 25 degC)`;
+    return;
+  }
   try {
     const body = {
       csv: await file.text(), filename: file.name || "drop_test.csv",
       noise: document.getElementById("fit-noise").value, reference_temperature: reference,
     };
     if (state.config) body.config = state.config;
-    if (state.choice !== "config") body.units = state.choice;
+    const system = state.config ? chosenSystem(state.config) : (state.choice !== "config" ? state.choice : null);
+    if (system) body.units = system;
     const r = await postJson("/api/fit/drop-test", body);
     const answer = await r.json();
     if (r.ok) {
@@ -756,7 +980,7 @@ document.getElementById("upload").addEventListener("change", async (e) => {
   if (!file) return;
   const r = await postJson("/api/config/parse", { toml: await file.text() });
   const body = await r.json();
-  if (r.ok) useConfig(body.config, file.name, body.units); else failed(body.errors || [`HTTP ${r.status}`]);
+  if (r.ok) useConfig(body.config, file.name, body.units, body.display_units); else failed(body.errors || [`HTTP ${r.status}`]);
 });
 document.getElementById("fit-file").addEventListener("change", (e) => { if (e.target.files[0]) runFit(e.target.files[0]); });
 document.getElementById("fit-use").addEventListener("click", useFit);
@@ -787,5 +1011,12 @@ async function start() {
   }
   loadExample("start");
 }
+
+// The plots' layout follows the width (legend rows, a phone's margins and toolbar).
+let resizeTimer = null;
+window.addEventListener("resize", () => {
+  clearTimeout(resizeTimer);
+  resizeTimer = setTimeout(() => { if (state.response) render(); if (state.fit) renderFit(); }, 150);
+});
 
 start();
