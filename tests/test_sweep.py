@@ -267,7 +267,9 @@ def test_plot_of_a_latin_hypercube_is_points_against_each_key() -> None:
     dots = [ln for ln in panels[0].get_lines() if ln.get_marker() == "o"]
     assert len(dots) == 3  # one colour per temperature
     drawn = sum(int(np.isfinite(np.asarray(ln.get_ydata(), dtype=float)).sum()) for ln in dots)
-    crosses = sum(len(ln.get_xdata()) for ln in panels[0].get_lines() if ln.get_marker() == "x")
+    crosses = sum(
+        np.asarray(ln.get_xdata()).size for ln in panels[0].get_lines() if ln.get_marker() == "x"
+    )
     assert drawn + crosses == 30 * 3  # every point is drawn or marked as a stall
 
 

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Literal, cast
 
 import numpy as np
 
+from ecdsim._types import FloatArray
 from ecdsim.atomic import write_with
 from ecdsim.deployment import Prediction
 from ecdsim.methods import SOLVERS
@@ -227,7 +228,7 @@ TEMPERATURE_ANCHORS = ("#2166ac", "#1b7837", "#b2182b")
 
 
 def temperature_colors(
-    temperatures: int | Sequence[float],
+    temperatures: int | Sequence[float] | FloatArray,
 ) -> list[tuple[float, float, float, float]]:
     """One RGBA colour per temperature, cold blue through green to hot red.
 

@@ -398,7 +398,7 @@ class SweepResult:
         n = len(panels)
         cols = min(n, 3)
         fig = _figure(width=max(6.0, 4.3 * cols), height=4.8 if n <= 3 else 8.4)
-        axes = []
+        axes: list[Any] = []
         stalls_drawn = False
         for k, panel in enumerate(panels):
             ax = fig.add_subplot(
@@ -446,7 +446,7 @@ class SweepResult:
         n = len(self.varies)
         cols = min(n, 3)
         fig = _figure(width=max(5.5, 4.3 * cols), height=4.6 if n <= 3 else 8.4)
-        axes = []
+        axes: list[Any] = []
         stalls_drawn = False
         for k, vary in enumerate(self.varies):
             ax = fig.add_subplot(

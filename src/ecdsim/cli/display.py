@@ -222,7 +222,7 @@ def _align_numbers(table: Table) -> None:
     for column in table.columns:
         cells = column._cells
         if cells and all(isinstance(cell, str) for cell in cells):
-            column._cells = align_decimals([str(cell) for cell in cells])
+            column._cells = list[Any](align_decimals([str(cell) for cell in cells]))
 
 
 def _parse_once(console: Console, table: Table) -> None:
