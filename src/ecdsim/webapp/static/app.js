@@ -779,7 +779,9 @@ async function copyLink() {
 // ---------------------------------------------------------------- fit from the bench
 
 function drawFit(elementId, traces, title, xlabel, ylabel, yrange = null) {
-  draw(elementId, traces, title, xlabel, ylabel, yrange ? { yaxis: { title: { text: ylabel }, range: yrange } } : {});
+  const extra = { xaxis: { title: { text: xlabel }, zeroline: false } };
+  if (yrange) extra.yaxis = { title: { text: ylabel }, range: yrange };
+  draw(elementId, traces, title, xlabel, ylabel, extra);
 }
 
 function band(x, curve, name, color) {
@@ -828,7 +830,7 @@ function renderFit() {
     };
   };
   // Laws in black and grey: none of the temperatures' colours.
-  const lawColors = { linear: "#111111", resistivity: "#6b6b6b" };
+  const lawColors = { linear: "#111111", resistivity: "#7b5ea7" };
   const damping = [perTemp("damping_rate_Nms_per_rad", "damping_rate")];
   for (const [name, curve] of Object.entries(curves.laws.damping_rate)) {
     const conv = { value: curve.value.map((v) => show("damping_rate", v)),
@@ -875,7 +877,7 @@ function renderFit() {
     }
     if (laws.friction) {
       lawRows.push(["FECD slope", sig(show("torque_per_kelvin", laws.friction.slope_Nm_per_K)), ci({ value: 0, ci95: laws.friction.slope_Nm_per_K_ci95 }, "torque_per_kelvin"), label("torque_per_kelvin"), "slope"]);
-      lawRows.push(["FECD at 0 degC", sig(show("torque", laws.friction.at_0C_Nm)), ci({ value: 0, ci95: laws.friction.at_0C_Nm_ci95 }, "torque"), label("torque"), "at_0C"]);
+      lawRows.push([label("temperature") === "degF" ? "FECD at 32 degF (0 degC)" : "FECD at 0 degC", sig(show("torque", laws.friction.at_0C_Nm)), ci({ value: 0, ci95: laws.friction.at_0C_Nm_ci95 }, "torque"), label("torque"), "at_0C"]);
     }
   }
   document.querySelector("#fit-laws thead").innerHTML = '<tr><th scope="col">parameter</th><th scope="col">value</th><th scope="col">95 % interval</th><th scope="col">unit</th></tr>';
