@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal, cast
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 
@@ -103,9 +103,13 @@ def _plot_against_time(
     times = np.linspace(0.0, time_span(prediction), n_points)
     temps = np.ravel(prediction.temperatures)
     colors = temperature_colors(temps)
+    marked = False
     for name, solution in prediction.solutions.items():
         trajectory = prediction.trajectory(name, times)
-        solved = np.ravel(np.broadcast_to(solution.solved_mask, prediction.temperatures.shape))
+        shape = prediction.temperatures.shape
+        solved = np.ravel(np.broadcast_to(solution.solved_mask, shape))
+        stalled = np.ravel(np.broadcast_to(solution.stalled, shape))
+        stall_angle = np.ravel(np.broadcast_to(solution.stall_angle, shape))
         if quantity == "angle":
             values = np.degrees(trajectory.angle.reshape(len(times), -1))
         else:
@@ -129,12 +133,29 @@ def _plot_against_time(
                 color=colors[j],
                 label=f"{u.text(temp, 'temperature')}, {SOLVERS[name].label}",
             )
+            if quantity == "angle" and stalled[j]:
+                marked = True
+                _mark_stop(ax, times, values[:, j], float(np.degrees(stall_angle[j])), colors[j])
+    if marked:
+        ax.plot([], [], "x", color="0.2", ms=9, mew=2.2, label="stalls here (cannot start: t = 0)")
     ax.set_xlabel("time since release [s]")
     ax.set_ylabel(ylabel)
     ax.set_title(plot_title(prediction.system.name, title))
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
     return fig
+
+
+def _mark_stop(ax: Axes, times: FloatArray, degrees: FloatArray, stall: float, color: Any) -> None:
+    """A cross where a stalled curve stops, in its colour: at (0, 0) when it cannot start;
+    else at the stall angle, at the first time the curve comes within 0.5 % of it (the
+    speed falls to zero there, so the exact curve only approaches it), or at the end."""
+    if stall == 0.0:
+        at = 0.0
+    else:
+        reached = np.flatnonzero(degrees >= 0.995 * stall)
+        at = float(times[reached[0]]) if reached.size else float(times[-1])
+    ax.plot([at], [stall], "x", color=color, ms=10, mew=2.4, clip_on=False)
 
 
 def plot_deployment(
