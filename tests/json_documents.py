@@ -123,6 +123,14 @@ def _repeat(config: str | Callable[[Path], str]) -> Callable[[Path], list[str]]:
     return argv
 
 
+def _placeholder(folder: Path) -> list[str]:
+    """deploy on the file fit drop-test -o writes without --config: a placeholder load."""
+    fitted = folder / "fitted.toml"
+    result = CliRunner().invoke(app, ["fit", "drop-test", DROP, "-o", str(fitted)])
+    assert result.exit_code == 0, result.output
+    return ["deploy", str(fitted), "--json"]
+
+
 PAPER = str(EXAMPLES / "paper_cc16.toml")
 DYNAMIC = str(EXAMPLES / "paper_cc16_dynamic.toml")
 DROP = str(EXAMPLES / "drop_test.csv")
@@ -149,6 +157,7 @@ CASES: tuple[Case, ...] = (
         lambda f: ["deploy", _two_node(f), "-T", "25", "-m", "dynamic", "--json"],
     ),  # noqa: E501
     Case("deploy compliant mesh", "deploy", _compliant),
+    Case("deploy placeholder load", "deploy", _placeholder),
     Case("fit drop-test", "fit_drop_test", lambda _: ["fit", "drop-test", DROP, "--json"]),
     Case(
         "fit drop-test timing noise",
