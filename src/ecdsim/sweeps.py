@@ -612,13 +612,12 @@ def _label(column: str, units: UnitSystem = "si") -> str:
     if unit is None:
         # A config key (dotted: load.end_torque_Nm) keeps its underscores; a result
         # column reads as words (deployment_time_s -> deployment time).
-        words = (lambda text: text) if "." in name else (lambda text: text.replace("_", " "))
         for suffix, _ in KEY_SUFFIXES:
             if kind is not None and name.endswith(suffix):
-                name = words(name[: -len(suffix)])
+                name = name[: -len(suffix)]
                 break
-        else:
-            name = words(name)
+        if "." not in name:
+            name = name.replace("_", " ")
     if kind is None:
         return f"{name} [{unit}]" if unit else name
     return header(name, kind, units)
