@@ -213,6 +213,8 @@ def test_help_and_version(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> No
         "report",
         "app",
         "fit",
+        "margin",
+        "reliability",
     }
     assert_options(top, {"--version": None, "--help": None})
     run_example(runner, app, top, tmp_path / "top", monkeypatch)

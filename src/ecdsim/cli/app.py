@@ -36,8 +36,11 @@ from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, QuickCommand, W
 from ecdsim.cli.fit import fit_app
 from ecdsim.cli.fmu import EPILOG as FMU_EPILOG
 from ecdsim.cli.fmu import export_fmu
+from ecdsim.cli.margin import EPILOG as MARGIN_EPILOG
+from ecdsim.cli.margin import margin
 from ecdsim.cli.montecarlo import EPILOG as MONTECARLO_EPILOG
 from ecdsim.cli.montecarlo import montecarlo
+from ecdsim.cli.reliability import reliability_app
 from ecdsim.cli.repeat import EPILOG as REPEAT_EPILOG
 from ecdsim.cli.repeat import repeat
 from ecdsim.cli.report import APP_EPILOG, REPORT_EPILOG, explore, report
@@ -238,6 +241,8 @@ def demo(
 app.add_typer(fit_app, name="fit", help="Fit BECD(T) and FECD(T) to bench data (paper section 7).")
 app.command(cls=HelpCommand, epilog=SIZE_EPILOG)(size)
 app.command(cls=HelpCommand, name="compare-fluid", epilog=FLUID_EPILOG)(compare_fluid)
+app.command(cls=HelpCommand, epilog=MARGIN_EPILOG)(margin)
+app.add_typer(reliability_app, name="reliability")
 app.command(cls=HelpCommand, epilog=MONTECARLO_EPILOG)(montecarlo)
 app.command(cls=HelpCommand, epilog=SWEEP_EPILOG)(sweep)
 app.command(cls=HelpCommand, epilog=REPEAT_EPILOG)(repeat)

@@ -471,6 +471,11 @@ def _print_tables(summary: dict[str, Any], u: Shown) -> None:
             )
         display.show(console, margins, drop=("P5", "mean"))
 
+    # With [requirements]: how often each is missed (docs/qualification.md).
+    from ecdsim.cli.reliability import print_requirement_misses
+
+    print_requirement_misses(console, cases, u)
+
     sensitivity = Table(
         title="Sensitivity of deployment time: SRC / first-order index (docs/montecarlo.md)",
         title_justify="left",

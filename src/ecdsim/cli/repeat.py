@@ -248,14 +248,20 @@ def repeat(
     state = loaded.system.ecd.at(list(temps))
     heat = stow_heat(state.damper_damping_rate * state.gear_ratio**2, loaded.system.load.travel,
                      stow)  # fmt: skip
+    # The life test's reliability and drift (docs/qualification.md).
+    from ecdsim.cli.reliability import print_life_test, repeat_reliability
+
+    life = repeat_reliability(result.deployment_time, loaded)
     if as_json:
         document = result.to_dict()
         document["stow_heat_not_modelled_J"] = [
             float(e) if math.isfinite(e) else None for e in heat.ravel()
         ]
+        document["reliability"] = life
         typer.echo(json.dumps(document, indent=2))
     else:
         _print(result, [float(e) for e in heat.ravel()], params.thermal is not None, system)
+        print_life_test(life, system)
     if plot is not None:
         from ecdsim.plotting import save_figure
         from ecdsim.plotting_dynamic import plot_sequence

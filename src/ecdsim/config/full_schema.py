@@ -1,10 +1,11 @@
 """The whole configuration file's schema, with its study sections (docs/config.md).
 
 :class:`ConfigSpec` is :class:`ecdsim.config.schema.CoreConfigSpec` with the sections of
-the studies: ``[requirements]`` and ``[fluid_damper]`` (sizing) and ``[tolerances]``
-(Monte Carlo). It lives in its own module so that a file without those sections is
-validated without importing their schemas (start-up, docs/architecture.md); the loader
-picks the spec by the file's top-level keys.
+the studies: ``[requirements]`` and ``[fluid_damper]`` (sizing), ``[tolerances]``
+(Monte Carlo) and ``[budget]`` (the torque budget, docs/qualification.md). It lives in
+its own module so that a file without those sections is validated without importing
+their schemas (start-up, docs/architecture.md); the loader picks the spec by the file's
+top-level keys.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from typing import Any
 
 from pydantic import BaseModel, Field
 
+from ecdsim.config.budget_schema import BudgetSpec
 from ecdsim.config.schema import (
     AnalysisSpec,
     DamperSpec,
@@ -40,6 +42,7 @@ class ConfigSpec(SpecBase):
     requirements: RequirementsSpec | None = None
     fluid_damper: FluidDamperSpec | None = None
     tolerances: TolerancesSpec | None = None
+    budget: BudgetSpec | None = None
     initial: InitialSpec = Field(default_factory=InitialSpec)
     output: OutputSpec = Field(default_factory=OutputSpec)
 

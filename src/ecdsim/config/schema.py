@@ -563,7 +563,7 @@ class SpecBase(_Section):
 
 
 # The top-level sections only ConfigSpec declares (their schemas are imported with it).
-STUDY_SECTIONS = ("requirements", "fluid_damper", "tolerances")
+STUDY_SECTIONS = ("requirements", "fluid_damper", "tolerances", "budget")
 
 
 class CoreConfigSpec(SpecBase):
@@ -593,4 +593,9 @@ class CoreConfigSpec(SpecBase):
     @property
     def tolerances(self) -> None:
         """No ``[tolerances]`` in this file."""
+        return None
+
+    @property
+    def budget(self) -> None:
+        """No ``[budget]`` in this file (docs/qualification.md)."""
         return None

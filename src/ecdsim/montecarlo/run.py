@@ -43,6 +43,7 @@ if TYPE_CHECKING:
     from ecdsim.dynamics.params import DynamicParameters
     from ecdsim.model import DeploymentSystem
     from ecdsim.sizing.margin import MarginSettings
+    from ecdsim.sizing.requirements import Requirements
 
 # From this many samples, on a machine with at least LARGE_RUN_CPUS CPUs, a run with
 # neither --workers nor --scheduler uses an embedded LocalCluster with one worker per CPU
@@ -126,6 +127,8 @@ class Plan:
     margin : how to compute the torque margin ([requirements.torque_margin]); None if the
         config has no [requirements] (no margin is computed then)
     required_margin : the smallest allowed torque margin [-] ([requirements]), if given
+    requirements : the config's [requirements] (SI), for the probability of missing each
+        (docs/qualification.md); None without that section
     """
 
     system: DeploymentSystem
@@ -143,6 +146,7 @@ class Plan:
     dynamics: DynamicParameters | None = None
     margin: MarginSettings | None = None
     required_margin: float | None = None
+    requirements: Requirements | None = None
 
     @property
     def outputs(self) -> tuple[str, ...]:
@@ -288,7 +292,11 @@ def _margin_settings(config: Config) -> dict[str, Any]:
     from ecdsim.sizing.requirements import Requirements
 
     resolved = Requirements.from_spec(requirements)
-    return {"margin": resolved.margin, "required_margin": resolved.min_torque_margin}
+    return {
+        "margin": resolved.margin,
+        "required_margin": resolved.min_torque_margin,
+        "requirements": resolved,
+    }
 
 
 @dataclass(frozen=True)

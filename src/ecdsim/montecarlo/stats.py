@@ -392,6 +392,22 @@ def margin(plan: Plan, margins: FloatArray) -> dict[str, Any]:
     return found
 
 
+def _misses(
+    plan: Plan,
+    times: FloatArray,
+    stalled: BoolArray,
+    speeds: FloatArray,
+    margins: FloatArray | None,
+) -> dict[str, Any] | None:
+    """The probability of missing each requirement (ecdsim.montecarlo.misses), or None
+    without [requirements]."""
+    if plan.requirements is None:
+        return None
+    from ecdsim.montecarlo.misses import requirement_misses
+
+    return requirement_misses(plan.requirements, times, stalled, speeds, margins)
+
+
 def _notes(plan: Plan) -> list[str]:
     return _dynamic_only_note(plan) + _margin_note(plan)
 
@@ -539,6 +555,13 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
         # then the repeatability turns them into deviations in place (its first campaign
         # taken in sample order before), so no column-sized temporary is allocated.
         first = times[: plan.repeat_runs].copy()
+        # Before the percentiles reorder the times: how often each requirement is missed.
+        margins = (
+            np.asarray(data[output_column("min_torque_margin", temperature)], float)
+            if plan.margin is not None
+            else None
+        )
+        misses = _misses(plan, times, stalled, speeds, margins)
         times_described = describe(times, overwrite=True, known=moments[temperature][0])
         repeat = repeatability.study(
             times,
@@ -561,9 +584,10 @@ def summarize(plan: Plan, out: Path) -> dict[str, Any]:
             "sensitivity": sensitivity_from_sums(keys, sums, bins),
             "repeatability": repeat,
         }
-        if plan.margin is not None:
-            margins = np.asarray(data[output_column("min_torque_margin", temperature)], float)
+        if margins is not None:
             case["min_torque_margin"] = margin(plan, margins)
+        if misses is not None:
+            case["requirements"] = misses
         return case
 
     # The temperatures are independent, and their order statistics (np.partition) and

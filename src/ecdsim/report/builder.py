@@ -600,6 +600,10 @@ def build_context(
     }
     margins = margin_section(config, u)
     montecarlo = montecarlo_section(config)
+    # The qualification block (its own module and template, docs/qualification.md).
+    from ecdsim.report.qualification import qualification_section
+
+    qualification = qualification_section(config, montecarlo, u)
     data = {
         "prediction": document,
         "provenance": provenance,
@@ -644,6 +648,7 @@ def build_context(
         ],
         "margins": margins,
         "montecarlo": montecarlo,
+        "qualification": qualification,
         "percentile_keys": PERCENTILE_KEYS,
         "data_id": DATA_ELEMENT_ID,
         # "</" must not appear inside <script>; JSON allows "<\/".

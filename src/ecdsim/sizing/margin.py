@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim.physics.assembly import input_speed
 from ecdsim.physics.gravity import gravity_torque
+from ecdsim.sizing.factored import factored_sum, margin_over
 
 RESISTIVE_TYPES = (
     "ecd_friction",
@@ -59,11 +60,6 @@ RESISTIVE_TYPES = (
 # kinds unless ``ecd_friction`` or ``system_friction`` is given on its own.
 FRICTION_TYPES = ("ecd_friction", "system_friction")
 FACTOR_KEYS = ("friction", *RESISTIVE_TYPES)
-
-# Below this relative size a margin is float rounding of an exact zero: with damping at the
-# deployment's own speed and unit factors, drive and resistance are equal by quasi-static
-# equilibrium, and their quotient differs from 1 only in the last bits.
-_ROUNDING = 1e-12
 
 
 def factor_of(kind: str, factors: Mapping[str, float]) -> float:
@@ -103,10 +99,8 @@ def factored_resistance(
     unknown = set(resistive) - set(RESISTIVE_TYPES)
     if unknown:
         raise KeyError(f"unknown resistive torque type(s) {sorted(unknown)}")
-    total = as_float(0.0)
-    for kind, torque in resistive.items():
-        total = as_float(total + factor_of(kind, factors) * as_float(torque))
-    return total
+    # The same arithmetic as a torque budget's (ecdsim.sizing.factored).
+    return factored_sum((factor_of(kind, factors), torque) for kind, torque in resistive.items())
 
 
 def torque_margin(
@@ -130,13 +124,7 @@ def torque_margin(
     >>> round(float(torque_margin(3.0, torque, {"friction": 2.0})), 12)
     0.2
     """
-    total = factored_resistance(resistive, factors)
-    t = as_float(drive)
-    total, t = np.broadcast_arrays(total, t)
-    positive = total > 0.0
-    ratio = t / np.where(positive, total, 1.0)
-    margin = np.where(positive, ratio - 1.0, np.where(t > 0.0, np.inf, -1.0))
-    return as_float(np.where(np.abs(margin) < _ROUNDING, 0.0, margin))
+    return margin_over(drive, factored_resistance(resistive, factors))
 
 
 @dataclass(frozen=True)
