@@ -7,6 +7,12 @@ exactly what the generators write. Regenerate them with::
 * ``examples/life_test.csv``: 12 units whose lives are drawn from a Weibull distribution
   of shape 2.5 and scale 2000 cycles (numpy seed 20261128); the test stopped at 1800
   cycles, so the units still working then are suspensions; lives to whole cycles.
+* ``examples/drive_test.csv``: a hinge driven open from 0 to 90 deg and closed again in
+  2 deg steps at -40, 25 and 100 degC. The spring is the paper's (3.73 N*m falling
+  linearly to 1.58 N*m over 90 deg), the friction the paper's FS_T = 0.58 - 0.0044 T N*m
+  times (1 + 0.1 sin(4 pi phi / 180 deg)) (its mean over the travel is FS_T); the bench
+  reads spring - friction opening, spring + friction closing, with a 0.005 N*m normal
+  reading error (numpy seed 20261130); torques to 0.1 mN*m.
 """
 
 from __future__ import annotations
@@ -17,6 +23,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 LIFE_TEST = ROOT / "examples" / "life_test.csv"
+DRIVE_TEST = ROOT / "examples" / "drive_test.csv"
 
 LIFE_SHAPE, LIFE_SCALE, LIFE_STOP, LIFE_UNITS = 2.5, 2000.0, 1800, 12
 
@@ -33,10 +40,40 @@ def life_test_text() -> str:
     return "\n".join(rows) + "\n"
 
 
+DRIVE_TEMPERATURES = (-40.0, 25.0, 100.0)
+DRIVE_NOISE = 0.005  # N*m
+
+
+def drive_spring(phi_deg: float) -> float:
+    """The paper's spring (Eq. 7): 3.73 N*m at 0 falling linearly to 1.58 N*m at 90 deg."""
+    return 3.73 - (3.73 - 1.58) * phi_deg / 90.0
+
+
+def drive_friction(phi_deg: float, t: float) -> float:
+    """The paper's FS_T, varying +-10 % along the travel with mean FS_T over it."""
+    return (0.58 - 0.0044 * t) * (1.0 + 0.1 * float(np.sin(4.0 * np.pi * phi_deg / 180.0)))
+
+
+def drive_test_text() -> str:
+    """The drive test: opening then closing at each temperature, rows as recorded."""
+    rng = np.random.default_rng(20261130)
+    rows = ["temperature [degC],angle [deg],torque [N*m]"]
+    for t in DRIVE_TEMPERATURES:
+        opening = [float(a) for a in range(0, 91, 2)]
+        closing = [float(a) for a in range(90, -1, -2)]  # the turnaround read again
+        for phi, sign in [(a, -1.0) for a in opening] + [(a, 1.0) for a in closing]:
+            torque = drive_spring(phi) + sign * drive_friction(phi, t)
+            torque += float(rng.normal(0.0, DRIVE_NOISE))
+            rows.append(f"{t:g},{phi:g},{torque:.4f}")
+    return "\n".join(rows) + "\n"
+
+
 def test_example_files_are_what_the_generators_write() -> None:
     assert LIFE_TEST.read_text(encoding="utf-8") == life_test_text()
+    assert DRIVE_TEST.read_text(encoding="utf-8") == drive_test_text()
 
 
 if __name__ == "__main__":
     LIFE_TEST.write_text(life_test_text(), encoding="utf-8")
-    print(f"wrote {LIFE_TEST}")
+    DRIVE_TEST.write_text(drive_test_text(), encoding="utf-8")
+    print(f"wrote {LIFE_TEST} and {DRIVE_TEST}")

@@ -69,6 +69,9 @@ class BudgetSpec(_Section):
     torque: list[BudgetTorqueSpec] = Field(default_factory=list)
     # In a config: the kind of each torque the model fills in (default: its own name).
     model_kinds: dict[str, str] = Field(default_factory=dict)
+    # In a config: model torques already inside `available` (a drive test's available
+    # torque is net of the hinge friction: exclude = ["system_friction"]).
+    exclude: list[str] = Field(default_factory=list)
     # In a config: the speed of the damping torque; "deployment" (None) takes the
     # deployment's own speed. Left out: [requirements.torque_margin]'s, else 0 (none).
     damping_speed: DampingSpeed = None
@@ -81,10 +84,12 @@ class BudgetSpec(_Section):
     @model_validator(mode="after")
     def _kinds_have_factors(self) -> BudgetSpec:
         unknown = [term for term in self.model_kinds if term not in MODEL_TERMS]
+        unknown += [term for term in self.exclude if term not in MODEL_TERMS]
         if unknown:
+            where = "model_kinds" if unknown[0] in self.model_kinds else "exclude"
             raise ValueError(
-                f"model_kinds.{unknown[0]}: {unknown[0]!r} is not a torque of the model; "
-                f"expected one of {', '.join(MODEL_TERMS)}"
+                f"{where}: {unknown[0]!r} is not a torque of the model; expected one of "
+                f"{', '.join(MODEL_TERMS)}"
             )
         if not self.factors and not self.phases:
             return self  # no factors at all: every factor 1 ("no factors applied")

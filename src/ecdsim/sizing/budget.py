@@ -309,6 +309,7 @@ class _Settings:
     entries: tuple[tuple[str, str, float], ...]  # (name, kind, value [N*m])
     available: float | None
     origin: str
+    exclude: tuple[str, ...] = ()
 
 
 def _settings(config: Config) -> _Settings:
@@ -335,6 +336,7 @@ def _settings(config: Config) -> _Settings:
             entries=tuple((e.name, e.kind, e.value) for e in spec.torque),
             available=spec.available,
             origin="[budget]",
+            exclude=tuple(spec.exclude),
         )
     if margin is not None:
         factors = {kind: factor_of(kind, margin.factors) for kind in MODEL_NAMES}
@@ -398,6 +400,12 @@ def budget_from_config(config: Config, temperatures: Sequence[float]) -> TorqueB
     points = margin_points(prediction, base)
     notes: list[str] = []
     resistive = dict(points.resistive)
+    for term in settings.exclude:
+        if resistive.pop(term, None) is not None:
+            notes.append(
+                f"{MODEL_NAMES[term]}: excluded ([budget] exclude), already inside the "
+                "available torque"
+            )
     if settings.damping_speed == 0.0:
         resistive.pop("damping", None)
         notes.append(
