@@ -13,6 +13,12 @@ exactly what the generators write. Regenerate them with::
   times (1 + 0.1 sin(4 pi phi / 180 deg)) (its mean over the travel is FS_T); the bench
   reads spring - friction opening, spring + friction closing, with a 0.005 N*m normal
   reading error (numpy seed 20261130); torques to 0.1 mN*m.
+* ``examples/fluid_bench.csv``: a shear-thinning rotary damper on a torque-speed bench at
+  -15, 10 and 40 degC, 7 speeds from 0.01 to 1 rad/s (equal steps in log), the power law
+  T = 1.8 N*m (w / 0.1 rad/s)^n(T) exp(2040 K (1/T_K - 1/298.15 K)) with
+  n(T) = 0.45 - 0.0006 (T - 25 degC) (n = 0.474 to 0.441; 4.0 times the torque at
+  -15 degC of that at 40 degC), times a lognormal reading error of 2 % (numpy seed
+  20261201); torques to 5 significant digits.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 LIFE_TEST = ROOT / "examples" / "life_test.csv"
 DRIVE_TEST = ROOT / "examples" / "drive_test.csv"
+FLUID_BENCH = ROOT / "examples" / "fluid_bench.csv"
 
 LIFE_SHAPE, LIFE_SCALE, LIFE_STOP, LIFE_UNITS = 2.5, 2000.0, 1800, 12
 
@@ -68,12 +75,42 @@ def drive_test_text() -> str:
     return "\n".join(rows) + "\n"
 
 
+FLUID_TEMPERATURES = (-15.0, 10.0, 40.0)
+FLUID_SPEEDS = tuple(float(w) for w in np.logspace(-2.0, 0.0, 7))
+FLUID_TORQUE, FLUID_SPEED, FLUID_ACTIVATION = 1.8, 0.1, 2040.0  # N*m, rad/s, K
+FLUID_NOISE = 0.02  # relative
+
+
+def fluid_exponent(t: float) -> float:
+    """n(T) of the example damper."""
+    return 0.45 - 0.0006 * (t - 25.0)
+
+
+def fluid_torque(w: float, t: float) -> float:
+    """The example damper's torque, typed from its definition [N*m]."""
+    factor = float(np.exp(FLUID_ACTIVATION * (1.0 / (t + 273.15) - 1.0 / 298.15)))
+    return float(FLUID_TORQUE * factor * (w / FLUID_SPEED) ** fluid_exponent(t))
+
+
+def fluid_bench_text() -> str:
+    """The bench points, with the reading error."""
+    rng = np.random.default_rng(20261201)
+    rows = ["temperature [degC],speed [rad/s],torque [N*m]"]
+    for t in FLUID_TEMPERATURES:
+        for w in FLUID_SPEEDS:
+            torque = fluid_torque(w, t) * float(np.exp(rng.normal(0.0, FLUID_NOISE)))
+            rows.append(f"{t:g},{w:.5g},{torque:.5g}")
+    return "\n".join(rows) + "\n"
+
+
 def test_example_files_are_what_the_generators_write() -> None:
     assert LIFE_TEST.read_text(encoding="utf-8") == life_test_text()
     assert DRIVE_TEST.read_text(encoding="utf-8") == drive_test_text()
+    assert FLUID_BENCH.read_text(encoding="utf-8") == fluid_bench_text()
 
 
 if __name__ == "__main__":
     LIFE_TEST.write_text(life_test_text(), encoding="utf-8")
     DRIVE_TEST.write_text(drive_test_text(), encoding="utf-8")
-    print(f"wrote {LIFE_TEST} and {DRIVE_TEST}")
+    FLUID_BENCH.write_text(fluid_bench_text(), encoding="utf-8")
+    print(f"wrote {LIFE_TEST}, {DRIVE_TEST} and {FLUID_BENCH}")

@@ -148,8 +148,11 @@ def test_compare_fluid_json_and_plot(tmp_path: Path, saved_figures: SavedFigures
     assert set(case["ecd"]) == set(case["fluid"]) == {
         "deadband_rad", "damped_time_s", "free_time_s", "engage_speed_rad_s",
         "total_time_s", "end_speed_rad_s", "stalled", "engagement_torque_Nm",
+        "damped_time_paper_s",
     }  # fmt: skip
     assert case["ecd"]["damped_time_s"] == pytest.approx(hand.exact_time(-40.0), rel=1e-12)
+    # The paper's method too (issue 28: the fluid model in every quasi-static method).
+    assert case["ecd"]["damped_time_paper_s"] == pytest.approx(hand.paper_time(-40.0), rel=1e-12)
     assert (out / "ecd_vs_fluid.png").read_bytes().startswith(b"\x89PNG")
     assert "wrote" in result.stderr
     top, bottom = saved_figures.axes("ecd_vs_fluid.png")

@@ -197,6 +197,7 @@ def test_compare_fluid_on_the_example_by_hand() -> None:
     # Matched at 25 degC: c(25) = BECD(25) by hand (Eq. 1 and 3).
     assert result.matched_coefficient == pytest.approx(hand.becd(25.0), rel=1e-12)
     assert float(result.fluid_coefficient[1]) == pytest.approx(hand.becd(25.0), rel=1e-12)
+    assert result.viscosity is not None  # a viscosity law (not a measured power law)
     for i, t in enumerate((-40.0, 25.0, 100.0)):
         # The ECD has no lost motion in the paper config: its time is the exact one.
         assert float(result.ecd.damped_time[i]) == pytest.approx(hand.exact_time(t), rel=1e-12)

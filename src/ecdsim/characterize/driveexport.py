@@ -164,8 +164,9 @@ def drive_test_config_text(
     header = [
         *provenance,
         "",
-        f"drive test (docs/qualification.md): [load] spring from the test at "
-        f"{ref.temperature:g} degC as {'its line' if chosen == 'linear' else 'a table'}, "
+        "drive test (docs/qualification.md):",
+        f"[load] spring from the test at {ref.temperature:g} degC as "
+        f"{'its line' if chosen == 'linear' else 'a table'}, "
         f"travel {math.degrees(ref.travel):.4g} deg;",
         f"system_friction {friction}; [budget] available = {available:.6g} N*m",
         *(

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ecdsim.characterize.drivetest import DriveTestResult
+from ecdsim.characterize.fluidfit import FluidFitResult
 from ecdsim.plotting import save_figure, temperature_colors
 from ecdsim.units_display import Shown, UnitSystem
 
@@ -58,3 +59,65 @@ def write_drive_test_plots(
 ) -> list[Path]:
     """Write the drive-test figure into ``folder``; its path."""
     return [save_figure(plot_drive_test(result, units), Path(folder) / "drive_test.png")]
+
+
+def plot_fluid_fit(result: FluidFitResult, units: UnitSystem = "si") -> Figure:
+    """The bench points and each temperature's power law on log-log axes; below, the
+    torque at the reference speed and the exponent against temperature with their 95 %
+    intervals and the fitted laws."""
+    from matplotlib.figure import Figure
+
+    u = Shown(units)
+    fig = Figure(figsize=(7.5, 8.0), layout="constrained")
+    grid = fig.add_gridspec(2, 2, height_ratios=(3, 2))
+    top = fig.add_subplot(grid[0, :])
+    left = fig.add_subplot(grid[1, 0])
+    right = fig.add_subplot(grid[1, 1])
+    colors = temperature_colors(len(result.fits))
+    for fit, color in zip(result.fits, colors, strict=True):
+        label = u.text(fit.temperature, "temperature")
+        top.loglog(fit.speed, u.values(fit.torque, "torque"), "o", color=color, markersize=4)
+        w = np.geomspace(float(fit.speed.min()), float(fit.speed.max()), 50)
+        line = fit.reference_torque.value * (w / fit.reference_speed) ** fit.exponent.value
+        top.loglog(w, u.values(line, "torque"), "-", color=color,
+                   label=f"{label}: n = {fit.exponent.value:.3f}")  # fmt: skip
+    top.set_title("Fluid damper bench: torque against speed, power law per temperature")
+    top.set_xlabel("speed [rad/s]")
+    top.set_ylabel(u.head("torque", "torque"))
+    top.grid(True, which="both", alpha=0.3)
+    top.legend(fontsize="small")
+    temps = np.array([f.temperature for f in result.fits])
+    shown_t = u.values(temps, "temperature")
+    span = np.linspace(float(temps.min()), float(temps.max()), 60)
+    for ax, estimates, law, title, ylabel, transform in (
+        (left, [f.reference_torque for f in result.fits], result.torque_law,
+         f"torque at {result.reference_speed:g} rad/s", u.head("torque", "torque"), np.exp),
+        (right, [f.exponent for f in result.fits], result.exponent_law,
+         "exponent n", "n [-]", None),
+    ):  # fmt: skip
+        values = np.array([e.value for e in estimates])
+        low = np.array([e.ci95[0] if e.ci95 else e.value for e in estimates])
+        high = np.array([e.ci95[1] if e.ci95 else e.value for e in estimates])
+        scale = (lambda v: u.values(v, "torque")) if transform is not None else (lambda v: v)
+        shown_values = scale(values)
+        errors = [shown_values - scale(low), scale(high) - shown_values]
+        ax.errorbar(shown_t, shown_values, yerr=errors, fmt="o", capsize=3,
+                    label="per temperature")  # fmt: skip
+        if law is not None:
+            curve = law(span)
+            ax.plot(u.values(span, "temperature"),
+                    scale(transform(curve) if transform is not None else curve),
+                    "-", label=f"law ({law.law.name})")  # fmt: skip
+        ax.set_title(title, fontsize="medium")
+        ax.set_xlabel(u.head("T", "temperature"))
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize="small")
+    return fig
+
+
+def write_fluid_fit_plots(
+    result: FluidFitResult, folder: str | Path, units: UnitSystem = "si"
+) -> list[Path]:
+    """Write the fluid-damper fit figure into ``folder``; its path."""
+    return [save_figure(plot_fluid_fit(result, units), Path(folder) / "fluid_damper_fit.png")]

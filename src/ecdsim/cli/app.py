@@ -36,6 +36,8 @@ from ecdsim.cli.display import HelpCommand, HelpGroup, PlainOpt, QuickCommand, W
 from ecdsim.cli.drivetest import EPILOG as DRIVE_EPILOG
 from ecdsim.cli.drivetest import drive_test
 from ecdsim.cli.fit import fit_app
+from ecdsim.cli.fluidfit import EPILOG as FLUID_FIT_EPILOG
+from ecdsim.cli.fluidfit import fluid_damper
 from ecdsim.cli.fmu import EPILOG as FMU_EPILOG
 from ecdsim.cli.fmu import export_fmu
 from ecdsim.cli.margin import EPILOG as MARGIN_EPILOG
@@ -241,6 +243,7 @@ def demo(
 # Registered after deploy and demo so that --help lists the commands in the order users
 # ask their questions: deploy, characterise, size, tolerances, report.
 fit_app.command("drive-test", cls=HelpCommand, epilog=DRIVE_EPILOG)(drive_test)
+fit_app.command("fluid-damper", cls=HelpCommand, epilog=FLUID_FIT_EPILOG)(fluid_damper)
 app.add_typer(fit_app, name="fit", help="Fit BECD(T) and FECD(T) to bench data (paper section 7).")
 app.command(cls=HelpCommand, epilog=SIZE_EPILOG)(size)
 app.command(cls=HelpCommand, name="compare-fluid", epilog=FLUID_EPILOG)(compare_fluid)

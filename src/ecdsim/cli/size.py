@@ -80,7 +80,10 @@ def _config(path: Path, section: str) -> Config:
 # Secondary columns of the sizing tables, hidden in this order when a table is wider than
 # the terminal (--wide shows them), and the text columns that may wrap at spaces.
 _DROP = ("at [deg", "torque margin", "spread", "mass", "at T", "value (worst)")
-_FLUID_DROP = ("fluid deadband", "engage speed", "fluid t (damped)", "fluid c", "BECD")
+_FLUID_DROP = (
+    "fluid t (paper)", "fluid deadband", "engage speed", "fluid t (damped)", "fluid c", "BECD",
+    "fluid n",
+)  # fmt: skip
 _WRAP = ("damper + gearbox", "requirement", "limit", "check", "gear ratios", "recommended")
 
 
@@ -313,8 +316,9 @@ def compare_fluid(
         from ecdsim.sizing.plots import write_fluid_plots
 
         written = _write_plots(plot, lambda: write_fluid_plots(plot, dense, units=u.system))
+    what = "the torque-speed law" if spec.power_law is not None else "viscosity"
     warnings = [
-        f"warning: viscosity at {u.text(t, 'temperature')} is extrapolated beyond the fitted points"
+        f"warning: {what} at {u.text(t, 'temperature')} is extrapolated beyond the fitted points"
         for t, out in zip(comparison.temperatures, comparison.extrapolated, strict=True)
         if out
     ]
@@ -331,10 +335,12 @@ def compare_fluid(
         typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
     else:
         notes = [
-            f"viscosity data: {spec.source}",
+            f"{'torque-speed' if spec.power_law is not None else 'viscosity'} data: {spec.source}",
             "the fluid time is the damped phase after the deadband; during the deadband the "
             "load is undamped (docs/sizing.md)",
         ]
+        if spec.power_law is not None and bool(comparison.extrapolated.any()):
+            notes.append("*: outside the bench data's temperatures (the law is extrapolated there)")
         if comparison.fluid.free_time is None:
             notes.append(
                 "no load inertia given ([fluid_damper] load_inertia or [load] inertia): the "

@@ -21,6 +21,7 @@ from ecdsim.config.fields import (
     PositiveTime,
     PositiveTorque,
     Temperature,
+    non_negative,
     positive,
     quantity,
 )
@@ -31,6 +32,7 @@ from ecdsim.config.units import (
     MASS,
     NUMBER,
     SPEED,
+    Kind,
     QuantityError,
 )
 
@@ -192,12 +194,45 @@ class RequirementsSpec(_Section):
         return tuple(sorted(points))
 
 
+# The power-law fluid damper's own quantities (docs/qualification.md, section 3).
+ACTIVATION = Kind("activation temperature (B of exp(B / T_K))", "K", "2040 K")
+EXPONENT_SLOPE = Kind("change of the exponent per kelvin", "1/K", "-0.0006 / K")
+Activation = Annotated[float, quantity(ACTIVATION, non_negative), ACTIVATION]
+ExponentSlope = Annotated[float, quantity(EXPONENT_SLOPE), EXPONENT_SLOPE]
+
+
+class FluidPowerLawSpec(_Section):
+    """``[fluid_damper.power_law]``: a shear-thinning damper's torque-speed law over
+    temperature, ``T = torque * (omega / reference_speed)**n(T) * exp(B (1/T_K -
+    1/T_ref,K))`` with ``n(T) = exponent + exponent_slope * (T - T_ref)`` (e.g. from
+    ``ecdsim fit fluid-damper``)."""
+
+    reference_temperature: Temperature = 25.0
+    reference_speed: PositiveSpeed
+    torque: PositiveTorque
+    exponent: FlowExponent
+    exponent_slope: ExponentSlope = 0.0
+    activation: Activation = 0.0
+    # The bench data's temperatures: a temperature outside them is extrapolation.
+    temperatures: list[Temperature] = Field(default_factory=list)
+
+
+# [fluid_damper] keys of the viscosity model that a power law replaces.
+VISCOSITY_KEYS = (
+    "law", "dynamic_viscosity", "kinematic_viscosity", "exponent", "match_temperature",
+    "match_speed",
+)  # fmt: skip
+
+
 class FluidDamperSpec(_Section):
-    """``[fluid_damper]``: a viscous silicone-fluid rotary damper to compare with the ECD."""
+    """``[fluid_damper]``: a silicone-fluid rotary damper to compare with the ECD, by a
+    viscosity law matched to the ECD (``law`` and a viscosity table) or by its measured
+    torque-speed law (``[fluid_damper.power_law]``)."""
 
     name: str = "fluid damper"
     source: str
-    law: Literal["andrade", "walther"]
+    law: Literal["andrade", "walther"] | None = None
+    power_law: FluidPowerLawSpec | None = None
     dynamic_viscosity: list[tuple[Temperature, PositiveDynamicViscosity]] | None = None
     kinematic_viscosity: list[tuple[Temperature, PositiveKinematicViscosity]] | None = None
     deadband: NonNegativeAngle = math.radians(15.0)
@@ -209,6 +244,19 @@ class FluidDamperSpec(_Section):
 
     @model_validator(mode="after")
     def _one_table(self) -> FluidDamperSpec:
+        if self.power_law is not None:
+            clash = [key for key in VISCOSITY_KEYS if key in self.model_fields_set]
+            if clash:
+                raise ValueError(
+                    f"power_law replaces {', '.join(clash)}: give either the measured "
+                    "[fluid_damper.power_law] or a viscosity law matched to the ECD"
+                )
+            return self
+        if self.law is None:
+            raise ValueError(
+                'give law = "andrade" or "walther" with a viscosity table, or the measured '
+                "torque-speed law [fluid_damper.power_law] (docs/qualification.md)"
+            )
         given = [
             name
             for name in ("dynamic_viscosity", "kinematic_viscosity")

@@ -37,8 +37,18 @@ from ecdsim._version import __version__
 from ecdsim.config.sizing_schema import FluidDamperSpec
 from ecdsim.deployment import predict
 from ecdsim.model import DeploymentSystem
+from ecdsim.physics.fluid import (
+    arrhenius_factor,
+    power_law_coefficient,
+    power_law_exponent,
+    power_law_mean_speed_time,
+    power_law_torque,
+)
+
+# The power-law time is a physics function; its name is kept here too (re-exported).
+from ecdsim.physics.fluid import power_law_segment_duration as power_law_segment_duration
 from ecdsim.physics.quasistatic import locate_stall
-from ecdsim.solvers import EXACT, QuasiStaticProblem
+from ecdsim.solvers import EXACT, PAPER, QuasiStaticProblem
 
 KELVIN_OFFSET = 273.15
 _M2S_PER_CST = 1e-6  # 1 mm^2/s (centistokes) = 1e-6 m^2/s
@@ -255,47 +265,6 @@ def matched_coefficient(
     return as_float(as_float(ecd_damping_rate) * np.power(as_float(speed), 1.0 - exponent))
 
 
-def power_law_segment_duration(
-    length: ArrayLike,
-    coefficient: ArrayLike,
-    exponent: float,
-    net_start: ArrayLike,
-    net_end: ArrayLike,
-) -> FloatArray:
-    """Time across a segment for ``c * omega**n = a - k phi`` (quasi-static, Eq. 5 analogue).
-
-    ``t = c**p * integral_0^L (a - k phi)**(-p) dphi`` with p = 1/n, which is
-    ``L * c**p * a**(-p) * expm1(q r) / (q expm1(r))`` with q = 1 - p and r = ln(b/a)
-    (the limit 1 where b = a). For n = 1 use the exact solver (logarithmic mean).
-    +inf where the net torque reaches zero in the segment (a stall).
-
-    Parameters
-    ----------
-    length : segment length L [rad]
-    coefficient : c [N*m*(s/rad)**n]
-    exponent : n, speed exponent, != 1 [-]
-    net_start : a, net torque at the segment start [N*m]
-    net_end : b, net torque at the segment end [N*m]
-    """
-    if exponent == 1.0:
-        raise ValueError("for n = 1 use the exact solver (segment time B*L/logmean)")
-    p = 1.0 / exponent
-    q = 1.0 - p
-    length_arr = as_float(length)
-    a = as_float(net_start)
-    b = as_float(net_end)
-    valid = (a > 0.0) & (b > 0.0)
-    a_safe = np.where(valid, a, 1.0)
-    b_safe = np.where(valid, b, 1.0)
-    r = np.log(b_safe / a_safe)
-    flat = r == 0.0
-    r_safe = np.where(flat, 1.0, r)
-    shape_factor = np.where(flat, 1.0, np.expm1(q * r_safe) / (q * np.expm1(r_safe)))
-    duration = length_arr * np.power(as_float(coefficient), p) * a_safe ** (-p) * shape_factor
-    blocked = ~valid & (length_arr > 0.0)
-    return as_float(np.where(blocked, np.inf, np.where(length_arr > 0.0, duration, 0.0)))
-
-
 def torque_at(angles: ArrayLike, torques: ArrayLike, angle: float) -> FloatArray:
     """Spring torque at one deployed angle, interpolated between breakpoints (axis 0).
 
@@ -420,6 +389,8 @@ class DeadbandDeployment:
     total_time : free_time + damped_time [s]; None without a load inertia
     end_speed : quasi-static speed at the latch [rad/s]
     stalled : True if it stalls (in the deadband or after)
+    paper_time : the damped phase by the paper's mean-speed method (Eq. 8-11; with a
+        power law its start and end speeds are ``(net / c)**(1/n)``) [s]; inf if stalled
     """
 
     deadband: float
@@ -429,28 +400,30 @@ class DeadbandDeployment:
     total_time: FloatArray | None
     end_speed: FloatArray
     stalled: BoolArray
+    paper_time: FloatArray | None = None
 
 
 def deploy_with_deadband(
     problem: QuasiStaticProblem,
     system_friction: ArrayLike,
     deadband: float,
-    exponent: float = 1.0,
+    exponent: ArrayLike = 1.0,
     inertia: float | None = None,
 ) -> DeadbandDeployment:
     """Deadband (free) then damped deployment, temperatures along the batch axis (1-D).
 
     ``problem`` holds the whole travel's spring breakpoints, the damped phase's total
     friction and the damping coefficient; the damped phase uses the exact solver for
-    n = 1 and :func:`power_law_segment_duration` otherwise. During the deadband only the
-    system friction acts (the damper is disengaged).
+    n = 1 and :func:`~ecdsim.physics.fluid.power_law_segment_duration` otherwise (the
+    exponent may differ per temperature). During the deadband only the system friction
+    acts (the damper is disengaged). The paper's mean-speed method gives ``paper_time``.
 
     Parameters
     ----------
     problem : spring, damped-phase friction [N*m] and damping coefficient c
     system_friction : FS_T, the friction during the deadband [N*m]
     deadband : free angle at the start [rad]
-    exponent : n of ``torque = c * omega**n`` [-]
+    exponent : n of ``torque = c * omega**n`` [-], a number or one per temperature
     inertia : load inertia J at the input shaft [kg*m^2], None if unknown
     """
     travel = problem.travel
@@ -459,12 +432,14 @@ def deploy_with_deadband(
     angles, torques = after_deadband(problem.angles, problem.torques, deadband)
     damped = QuasiStaticProblem(angles, torques, problem.friction, problem.damping_rate)
     fs = as_float(np.broadcast_to(as_float(system_friction), problem.batch_shape))
+    n = as_float(np.broadcast_to(as_float(exponent), problem.batch_shape))
     # Quasi-static stall inside the deadband: spring torque at or below FS there.
-    if exponent == 1.0:
+    if bool(np.all(n == 1.0)):
         solution = EXACT.solve(damped)
         time = solution.deployment_time
         stalled = solution.stalled
         end_speed = solution.end_speed
+        paper = as_float(PAPER.solve(damped).deployment_time)
     else:
         stalled, _ = locate_stall(damped.angles, damped.net_torques)
         net = damped.net_torques
@@ -472,7 +447,7 @@ def deploy_with_deadband(
             power_law_segment_duration(
                 damped.angles[i + 1] - damped.angles[i],
                 damped.damping_rate,
-                exponent,
+                n,
                 net[i],
                 net[i + 1],
             )
@@ -480,7 +455,8 @@ def deploy_with_deadband(
         ]
         time = as_float(np.where(stalled, np.inf, np.sum(np.stack(pieces), axis=0)))
         end_net = np.maximum(net[-1], 0.0)
-        end_speed = as_float(np.power(end_net / damped.damping_rate, 1.0 / exponent))
+        end_speed = as_float(np.power(end_net / damped.damping_rate, 1.0 / n))
+        paper = power_law_mean_speed_time(damped.travel, damped.damping_rate, n, net[0], net[-1])
     free_time = engage = total = None
     if inertia is None:
         # Quasi-static: the load cannot cross a point of the deadband where the spring
@@ -510,47 +486,161 @@ def deploy_with_deadband(
         total_time=total,
         end_speed=end_speed,
         stalled=stalled,
+        paper_time=as_float(np.where(stalled, np.inf, paper)),
+    )
+
+
+@dataclass(frozen=True)
+class PowerLawFluid:
+    """A shear-thinning damper's measured torque-speed law over temperature
+    (:mod:`ecdsim.physics.fluid`; ``[fluid_damper.power_law]``).
+
+    Attributes
+    ----------
+    reference_temperature : T_ref [degC]
+    reference_speed : omega_r [rad/s]
+    torque : T_r at omega_r and T_ref [N*m]
+    exponent : n at T_ref [-]
+    exponent_slope : dn/dT [1/K]
+    activation : B of the Arrhenius-Andrade factor [K]
+    temperatures : the bench data's temperatures [degC] (empty if not known)
+    """
+
+    reference_temperature: float
+    reference_speed: float
+    torque: float
+    exponent: float
+    exponent_slope: float
+    activation: float
+    temperatures: tuple[float, ...] = ()
+    name: str = "power_law"
+
+    def exponent_at(self, temperature: ArrayLike) -> FloatArray:
+        """n(T) [-]."""
+        return power_law_exponent(
+            temperature, self.exponent, self.exponent_slope, self.reference_temperature
+        )
+
+    def reference_torque(self, temperature: ArrayLike) -> FloatArray:
+        """T_r(T), the torque at omega_r [N*m]."""
+        factor = arrhenius_factor(temperature, self.activation, self.reference_temperature)
+        return as_float(self.torque * factor)
+
+    def coefficient(self, temperature: ArrayLike) -> FloatArray:
+        """c(T) of ``T = c omega**n`` [N*m*(s/rad)**n(T)]."""
+        return power_law_coefficient(
+            self.reference_torque(temperature), self.reference_speed, self.exponent_at(temperature)
+        )
+
+    def torque_at(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
+        """The damping torque at a speed [rad/s] and temperature [degC] [N*m]."""
+        return power_law_torque(speed, self.coefficient(temperature), self.exponent_at(temperature))
+
+    def out_of_range(self, temperature: ArrayLike) -> BoolArray:
+        """True outside the bench data's temperatures (all False if they are not known)."""
+        t = as_float(temperature)
+        if not self.temperatures:
+            return np.zeros(t.shape, dtype=bool)
+        return np.asarray((t < min(self.temperatures)) | (t > max(self.temperatures)))
+
+    def describe(self) -> str:
+        """One-line description."""
+        return (
+            f"power law: T = {self.torque:.4g} N*m (w / {self.reference_speed:g} rad/s)^n "
+            f"exp({self.activation:.4g} K (1/T_K - 1/T_ref)), n = {self.exponent:.4g}"
+            + (f" {self.exponent_slope:+.3g}/K (T - T_ref)" if self.exponent_slope else "")
+            + f", T_ref = {self.reference_temperature:g} degC"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready constants (SI)."""
+        return {
+            "reference_temperature_C": self.reference_temperature,
+            "reference_speed_rad_s": self.reference_speed,
+            "torque_Nm": self.torque,
+            "exponent": self.exponent,
+            "exponent_slope_per_K": self.exponent_slope,
+            "activation_K": self.activation,
+            "temperatures_C": list(self.temperatures),
+        }
+
+
+def power_law_fluid(spec: FluidDamperSpec) -> PowerLawFluid:
+    """The power-law fluid of a ``[fluid_damper]`` that has ``power_law``."""
+    law = spec.power_law
+    assert law is not None
+    return PowerLawFluid(
+        reference_temperature=law.reference_temperature,
+        reference_speed=law.reference_speed,
+        torque=law.torque,
+        exponent=law.exponent,
+        exponent_slope=law.exponent_slope,
+        activation=law.activation,
+        temperatures=tuple(law.temperatures),
     )
 
 
 @dataclass(frozen=True)
 class FluidComparison:
-    """The ECD and the matched fluid damper over temperature.
+    """The ECD and the fluid damper over temperature.
 
     Attributes
     ----------
     temperatures : T [degC]
-    law : the fitted viscosity law
-    source : where the viscosity data come from
+    law : the fitted viscosity law, or the measured power law
+    source : where the fluid data come from
     name : the fluid damper's name
-    match_temperature : T_match [degC]
+    match_temperature : T_match [degC]; None for a measured power law (not matched)
     match_speed : speed at which torques are matched [rad/s] (n != 1 only; else None)
-    exponent : n [-]
-    matched_coefficient : c(T_match) [N*m*(s/rad)**n]
+    exponent : n (at the reference temperature for a power law) [-]
+    matched_coefficient : c(T_match) [N*m*(s/rad)**n]; None for a power law
     ecd_damping_rate : BECD_T [N*m*s/rad]
-    fluid_coefficient : c(T) [N*m*(s/rad)**n]
-    viscosity : visc(T) [SI unit of the points]
+    fluid_coefficient : c(T) [N*m*(s/rad)**n(T)]
+    viscosity : visc(T) [SI unit of the points]; None for a power law
     fluid_friction : FECD_T, or the fluid damper's own friction [N*m]
     ecd : the ECD's deployment (its lost motion as deadband)
     fluid : the fluid damper's deployment
-    extrapolated : True where T lies outside the fitted viscosity points
+    extrapolated : True where T lies outside the fitted points
+    fluid_exponent : n(T) [-]
+    reference_speed : the speed at which both dampers' torques are shown [rad/s]
+        (the power law's omega_r, else the matching speed, else None)
     """
 
     temperatures: FloatArray
-    law: AndradeLaw | WaltherLaw
+    law: AndradeLaw | WaltherLaw | PowerLawFluid
     source: str
     name: str
-    match_temperature: float
+    match_temperature: float | None
     match_speed: float | None
     exponent: float
-    matched_coefficient: float
+    matched_coefficient: float | None
     ecd_damping_rate: FloatArray
     fluid_coefficient: FloatArray
-    viscosity: FloatArray
+    viscosity: FloatArray | None
     fluid_friction: FloatArray
     ecd: DeadbandDeployment
     fluid: DeadbandDeployment
     extrapolated: BoolArray
+    fluid_exponent: FloatArray | None = None
+    reference_speed: float | None = None
+
+    @property
+    def exponents(self) -> FloatArray:
+        """n at each temperature [-]."""
+        if self.fluid_exponent is not None:
+            return self.fluid_exponent
+        return as_float(np.full(self.temperatures.shape, self.exponent))
+
+    def torques_at_reference(self) -> tuple[FloatArray, FloatArray] | None:
+        """The ECD's and the fluid's damping torque at the reference speed [N*m] (no
+        Coulomb friction), or None without a reference speed: the spread over
+        temperature, speed for speed."""
+        w = self.reference_speed
+        if w is None:
+            return None
+        ecd = as_float(self.ecd_damping_rate * w)
+        fluid = power_law_torque(w, self.fluid_coefficient, self.exponents)
+        return ecd, fluid
 
     def engagement_torques(self) -> tuple[FloatArray | None, FloatArray | None]:
         """The damping torque at engagement, ECD and fluid damper [N*m]; None without inertia.
@@ -564,8 +654,24 @@ class FluidComparison:
         if self.ecd.engage_speed is None or self.fluid.engage_speed is None:
             return None, None
         ecd = as_float(self.ecd_damping_rate * self.ecd.engage_speed)
-        fluid = as_float(self.fluid_coefficient * np.power(self.fluid.engage_speed, self.exponent))
+        fluid = as_float(self.fluid_coefficient * np.power(self.fluid.engage_speed, self.exponents))
         return ecd, fluid
+
+    def _law_block(self) -> dict[str, Any]:
+        law = self.law
+        if isinstance(law, PowerLawFluid):
+            return {
+                "law": law.name,
+                "law_description": law.describe(),
+                "constants": law.to_dict(),
+                "points": [],
+            }
+        return {
+            "law": law.name,
+            "law_description": law.describe(),
+            "constants": {"A": law.a, "B": law.b},
+            "points": [{"temperature_C": t, "viscosity_SI": v} for t, v in law.points],
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form (infinite times and speeds become null); see docs/sizing.md."""
@@ -574,12 +680,16 @@ class FluidComparison:
             return float(x) if math.isfinite(x) else None
 
         ecd_shock, fluid_shock = self.engagement_torques()
+        at_reference = self.torques_at_reference()
 
         def side(d: DeadbandDeployment, i: int, shock: FloatArray | None) -> dict[str, Any]:
             return {
                 "engagement_torque_Nm": None if shock is None else number(float(shock[i])),
                 "deadband_rad": d.deadband,
                 "damped_time_s": number(float(d.damped_time[i])),
+                "damped_time_paper_s": (
+                    None if d.paper_time is None else number(float(d.paper_time[i]))
+                ),
                 "free_time_s": None if d.free_time is None else number(float(d.free_time[i])),
                 "engage_speed_rad_s": (
                     None if d.engage_speed is None else number(float(d.engage_speed[i]))
@@ -589,28 +699,35 @@ class FluidComparison:
                 "stalled": bool(d.stalled[i]),
             }
 
+        exponents = self.exponents
         return {
             "ecdsim_version": __version__,
             "fluid_damper": {
                 "name": self.name,
                 "source": self.source,
-                "law": self.law.name,
-                "law_description": self.law.describe(),
-                "constants": {"A": self.law.a, "B": self.law.b},
-                "points": [{"temperature_C": t, "viscosity_SI": v} for t, v in self.law.points],
+                **self._law_block(),
                 "exponent": self.exponent,
                 "match_temperature_C": self.match_temperature,
                 "match_speed_rad_s": self.match_speed,
                 "matched_coefficient": self.matched_coefficient,
+                "reference_speed_rad_s": self.reference_speed,
             },
             "cases": [
                 {
                     "temperature_C": float(t),
                     "ecd_damping_rate_Nms_per_rad": float(self.ecd_damping_rate[i]),
                     "fluid_coefficient": float(self.fluid_coefficient[i]),
-                    "viscosity_SI": float(self.viscosity[i]),
+                    "fluid_exponent": float(exponents[i]),
+                    "viscosity_SI": None if self.viscosity is None else float(self.viscosity[i]),
                     "fluid_friction_Nm": float(self.fluid_friction[i]),
                     "viscosity_extrapolated": bool(self.extrapolated[i]),
+                    "extrapolated": bool(self.extrapolated[i]),
+                    "ecd_torque_at_reference_Nm": (
+                        None if at_reference is None else float(at_reference[0][i])
+                    ),
+                    "fluid_torque_at_reference_Nm": (
+                        None if at_reference is None else float(at_reference[1][i])
+                    ),
                     "ecd": side(self.ecd, i, ecd_shock),
                     "fluid": side(self.fluid, i, fluid_shock),
                 }
@@ -625,12 +742,16 @@ def compare_fluid(
     temperatures: ArrayLike,
     load_inertia: float | None = None,
 ) -> FluidComparison:
-    """The ECD and a fluid damper matched to it at T_match, over the temperatures [degC].
+    """The ECD and a fluid damper over the temperatures [degC].
 
-    Both deployments use the same spring and system friction. The fluid damper's Coulomb
-    friction is the ECD's FECD_T at each temperature unless the spec gives its own, so
-    that the comparison isolates the damping's temperature law. The load inertia for the
-    free motion through a deadband is ``spec.load_inertia``, else ``load_inertia`` [kg*m^2]
+    The fluid damper is either a viscosity law matched to the ECD at T_match (its
+    coefficient ``c(T) = c(T_match) visc(T) / visc(T_match)``, docs/sizing.md), or its
+    measured power law ``[fluid_damper.power_law]`` (``c(T)`` and ``n(T)`` as fitted, not
+    matched: the real spread over temperature, docs/qualification.md). Both deployments
+    use the same spring and system friction. The fluid damper's Coulomb friction is the
+    ECD's FECD_T at each temperature unless the spec gives its own, so that the
+    comparison isolates the damping's temperature law. The load inertia for the free
+    motion through a deadband is ``spec.load_inertia``, else ``load_inertia`` [kg*m^2]
     (e.g. the config's ``[load] inertia``), else none (free time not computed). Raises
     :class:`~ecdsim.deployment.ModelDomainError` where BECD <= 0 and ``ValueError`` if a
     deadband is not shorter than the travel or the load has gravity (a ground test).
@@ -644,26 +765,42 @@ def compare_fluid(
             "in flight (a config without [load.gravity], or offload = 1)"
         )
     temps = as_float(temperatures).reshape(-1)
-    law = VISCOSITY_LAWS[spec.law](spec.viscosity_points())
     ecd_run = predict(system, temps, ("exact",))
-    matching = predict(system, as_float([spec.match_temperature]), ("exact",))
-    becd_match = float(np.ravel(matching.ecd.ecd_damping_rate)[0])
+    law: AndradeLaw | WaltherLaw | PowerLawFluid
+    viscosity: FloatArray | None = None
     match_speed: float | None = None
-    if spec.exponent != 1.0:
-        if spec.match_speed is not None:
-            match_speed = spec.match_speed
-        else:
-            time = float(np.ravel(matching.solutions["exact"].deployment_time)[0])
-            travel = float(np.ravel(matching.problem.travel)[0])
-            if not math.isfinite(time):
-                raise ValueError(
-                    "fluid_damper.match_speed: the ECD stalls at the matching temperature; "
-                    "give match_speed explicitly"
-                )
-            match_speed = travel / time
-    coefficient = float(matched_coefficient(becd_match, match_speed or 1.0, spec.exponent))
-    viscosity = law(temps)
-    fluid_c = fluid_damping(coefficient, viscosity, law(spec.match_temperature))
+    coefficient: float | None = None
+    if spec.power_law is not None:
+        law = power_law_fluid(spec)
+        fluid_c = law.coefficient(temps)
+        exponents = law.exponent_at(temps)
+        exponent = law.exponent
+        reference_speed: float | None = law.reference_speed
+        match_temperature: float | None = None
+    else:
+        assert spec.law is not None  # the schema requires it without power_law
+        law = VISCOSITY_LAWS[spec.law](spec.viscosity_points())
+        matching = predict(system, as_float([spec.match_temperature]), ("exact",))
+        becd_match = float(np.ravel(matching.ecd.ecd_damping_rate)[0])
+        if spec.exponent != 1.0:
+            if spec.match_speed is not None:
+                match_speed = spec.match_speed
+            else:
+                time = float(np.ravel(matching.solutions["exact"].deployment_time)[0])
+                travel = float(np.ravel(matching.problem.travel)[0])
+                if not math.isfinite(time):
+                    raise ValueError(
+                        "fluid_damper.match_speed: the ECD stalls at the matching "
+                        "temperature; give match_speed explicitly"
+                    )
+                match_speed = travel / time
+        coefficient = float(matched_coefficient(becd_match, match_speed or 1.0, spec.exponent))
+        viscosity = law(temps)
+        fluid_c = fluid_damping(coefficient, viscosity, law(spec.match_temperature))
+        exponent = spec.exponent
+        exponents = as_float(np.full(temps.shape, exponent))
+        reference_speed = match_speed
+        match_temperature = spec.match_temperature
     problem = ecd_run.problem
     fs = ecd_run.system_friction
     if spec.coulomb_friction is None:
@@ -675,21 +812,23 @@ def compare_fluid(
     )
     inertia = spec.load_inertia if spec.load_inertia is not None else load_inertia
     ecd_side = deploy_with_deadband(problem, fs, system.ecd.gearbox.lost_motion, 1.0, inertia)
-    fluid_side = deploy_with_deadband(fluid_problem, fs, spec.deadband, spec.exponent, inertia)
+    fluid_side = deploy_with_deadband(fluid_problem, fs, spec.deadband, exponents, inertia)
     return FluidComparison(
         temperatures=temps,
         law=law,
         source=spec.source,
         name=spec.name,
-        match_temperature=spec.match_temperature,
+        match_temperature=match_temperature,
         match_speed=match_speed,
-        exponent=spec.exponent,
+        exponent=exponent,
         matched_coefficient=coefficient,
         ecd_damping_rate=as_float(np.broadcast_to(ecd_run.ecd.ecd_damping_rate, temps.shape)),
         fluid_coefficient=as_float(np.broadcast_to(fluid_c, temps.shape)),
-        viscosity=as_float(np.broadcast_to(viscosity, temps.shape)),
+        viscosity=None if viscosity is None else as_float(np.broadcast_to(viscosity, temps.shape)),
         fluid_friction=fluid_friction,
         ecd=ecd_side,
         fluid=fluid_side,
         extrapolated=law.out_of_range(temps),
+        fluid_exponent=as_float(np.broadcast_to(exponents, temps.shape)),
+        reference_speed=reference_speed,
     )

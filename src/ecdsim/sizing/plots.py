@@ -192,11 +192,13 @@ def plot_fluid_comparison(comparison: FluidComparison, units: UnitSystem = "si")
     for label, side in (("ECD", comparison.ecd), (comparison.name, comparison.fluid)):
         times = side.total_time if side.total_time is not None else side.damped_time
         top.plot(t, np.where(np.isfinite(times), times, np.nan), marker=".", label=label)
-    top.axvline(u.value(comparison.match_temperature, "temperature"), color="0.4", linestyle=":")
     top.set_ylabel("deployment time [s]")
+    top.grid(True, alpha=0.3)
+    if comparison.match_temperature is None:
+        return _power_law_panels(comparison, fig, top, bottom, t, u)
+    top.axvline(u.value(comparison.match_temperature, "temperature"), color="0.4", linestyle=":")
     top.set_title("ECD against a fluid damper matched at "
                   f"{u.text(comparison.match_temperature, 'temperature')}")  # fmt: skip
-    top.grid(True, alpha=0.3)
     top.legend(fontsize="small")
     # One axis for both: the ECD's rate is the n = 1 case of the fluid's c(T), and a
     # torque per speed^n converts as the torque does.
@@ -213,6 +215,36 @@ def plot_fluid_comparison(comparison: FluidComparison, units: UnitSystem = "si")
     bottom.set_yscale("log")
     bottom.set_xlabel(u.head("temperature", "temperature"))
     bottom.set_ylabel(f"damping [{u.unit('torque')}*(s/rad)^n]")
+    bottom.grid(True, alpha=0.3, which="both")
+    bottom.legend(fontsize="small")
+    return fig
+
+
+def _power_law_panels(
+    comparison: FluidComparison, fig: Figure, top: Axes, bottom: Axes, t: FloatArray, u: Shown
+) -> Figure:
+    """The measured (power-law) fluid damper: not matched to the ECD, so the lower panel
+    compares both dampers' damping torque at the law's reference speed."""
+    top.set_title("ECD against a fluid damper (measured power law)")
+    # Times spread over decades: a log axis shows both dampers' spread.
+    top.set_yscale("log")
+    tested = getattr(comparison.law, "temperatures", ())
+    if tested:
+        for ax in (top, bottom):
+            ax.axvspan(u.value(min(tested), "temperature"), u.value(max(tested), "temperature"),
+                       color="0.9", zorder=0)  # fmt: skip
+        top.plot([], [], "s", color="0.9", label="bench data's temperatures")
+    top.legend(fontsize="small")
+    torques = comparison.torques_at_reference()
+    assert torques is not None
+    assert comparison.reference_speed is not None
+    speed = comparison.reference_speed
+    bottom.plot(t, u.values(torques[0], "torque"), label="ECD: BECD_T * w_r")
+    bottom.plot(t, u.values(torques[1], "torque"), label="fluid: c(T) w_r^n(T)")
+    bottom.set_yscale("log")
+    bottom.set_title(f"Damping torque at w_r = {speed:g} rad/s", fontsize="medium")
+    bottom.set_xlabel(u.head("temperature", "temperature"))
+    bottom.set_ylabel(u.head("torque", "torque"))
     bottom.grid(True, alpha=0.3, which="both")
     bottom.legend(fontsize="small")
     return fig

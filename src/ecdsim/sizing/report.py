@@ -365,26 +365,41 @@ def _time(side: DeadbandDeployment, i: int) -> str:
 
 
 def fluid_table(comparison: FluidComparison, u: Shown = SI) -> Table:
-    """ECD against fluid damper at each temperature."""
+    """ECD against fluid damper at each temperature.
+
+    A viscosity law matched to the ECD shows both dampings; a measured power law (not
+    matched) shows both dampers' torque at its reference speed and the exponent n(T).
+    Both show the damped phase by the exact solution and by the paper's mean-speed method.
+    """
     inertia = comparison.fluid.free_time is not None
+    measured = comparison.match_temperature is None
     # The fluid coefficient is a torque per speed^n: its factor is the torque's.
     torque = u.unit("torque")
     rate = u.unit("damping_rate")
     exponent = comparison.exponent
     unit = rate if exponent == 1.0 else f"{torque}*(s/rad)^{exponent:g}"
-    headers = [
-        u.head("T", "temperature"),
-        u.head("BECD", "damping_rate"),
-        f"fluid c [{unit}]",
-        "ECD t [s]",
-        "fluid t (damped) [s]",
-    ]
+    speed = comparison.reference_speed
+    if measured:
+        headers = [
+            u.head("T", "temperature"),
+            u.head("ECD at w_r", "torque"),
+            u.head("fluid at w_r", "torque"),
+            "fluid n",
+        ]
+    else:
+        headers = [
+            u.head("T", "temperature"),
+            u.head("BECD", "damping_rate"),
+            f"fluid c [{unit}]",
+        ]
+    headers += ["ECD t [s]", "fluid t (damped) [s]"]
     if inertia:
         headers += ["fluid deadband t [s]", "engage speed [rad/s]", "fluid total [s]"]
-    headers += ["fluid / ECD"]
+    headers += ["fluid / ECD", "fluid t (paper) [s]"]
     ecd_shock, fluid_shock = comparison.engagement_torques()
     if ecd_shock is not None:
         headers += [u.head("fluid shock", "torque"), u.head("ECD shock", "torque")]
+    at_reference = comparison.torques_at_reference()
     rows = []
     for i, t in enumerate(comparison.temperatures):
         ecd_t = comparison.ecd.total_time if inertia else comparison.ecd.damped_time
@@ -392,14 +407,24 @@ def fluid_table(comparison: FluidComparison, u: Shown = SI) -> Table:
         assert ecd_t is not None
         assert fluid_t is not None
         ratio = float(fluid_t[i] / ecd_t[i]) if np.isfinite(ecd_t[i] * fluid_t[i]) else None
-        row = [
-            u.num(float(t), "temperature")
-            + (" (extrapolated)" if comparison.extrapolated[i] else ""),
-            u.num(float(comparison.ecd_damping_rate[i]), "damping_rate"),
-            u.num(float(comparison.fluid_coefficient[i]), "torque"),
-            format_number(float(ecd_t[i])),
-            _time(comparison.fluid, i),
-        ]
+        label = u.num(float(t), "temperature") + (
+            (" *" if measured else " (extrapolated)") if comparison.extrapolated[i] else ""
+        )
+        if measured:
+            assert at_reference is not None
+            row = [
+                label,
+                u.num(float(at_reference[0][i]), "torque"),
+                u.num(float(at_reference[1][i]), "torque"),
+                format_number(float(comparison.exponents[i]), 3),
+            ]
+        else:
+            row = [
+                label,
+                u.num(float(comparison.ecd_damping_rate[i]), "damping_rate"),
+                u.num(float(comparison.fluid_coefficient[i]), "torque"),
+            ]
+        row += [format_number(float(ecd_t[i])), _time(comparison.fluid, i)]
         if inertia:
             assert comparison.fluid.free_time is not None
             assert comparison.fluid.engage_speed is not None
@@ -409,15 +434,29 @@ def fluid_table(comparison: FluidComparison, u: Shown = SI) -> Table:
                 format_number(float(fluid_t[i])),
             ]
         row.append(format_number(ratio, 3))
+        paper = comparison.fluid.paper_time
+        row.append("-" if paper is None else _paper_time(float(paper[i])))
         if ecd_shock is not None and fluid_shock is not None:
             row += [
                 u.num(float(fluid_shock[i]), "torque"),
                 u.num(float(ecd_shock[i]), "torque"),
             ]
         rows.append(row)
-    title = (
-        f"ECD against {comparison.name}, matched at "
-        f"{u.text(comparison.match_temperature, 'temperature')} "
-        f"({comparison.law.describe()}; deadband {np.degrees(comparison.fluid.deadband):.3g} deg)"
-    )
+    deadband = f"deadband {np.degrees(comparison.fluid.deadband):.3g} deg"
+    if measured:
+        title = (
+            f"ECD against {comparison.name}, measured ({comparison.law.describe()}; {deadband}; "
+            f"torques at w_r = {speed:g} rad/s)"
+        )
+    else:
+        assert comparison.match_temperature is not None
+        title = (
+            f"ECD against {comparison.name}, matched at "
+            f"{u.text(comparison.match_temperature, 'temperature')} "
+            f"({comparison.law.describe()}; {deadband})"
+        )
     return title, headers, rows
+
+
+def _paper_time(value: float) -> str:
+    return "stalls" if not np.isfinite(value) else format_number(value)
