@@ -41,7 +41,8 @@ def test_fit_help_lists_both_commands(tmp_path: Path, monkeypatch: pytest.Monkey
     # The commands and options of docs/characterize.md, each described; each example
     # runs as printed.
     group = read_help(runner, app, ["fit"], has_example=False)  # each command shows one
-    assert set(group.commands) == {"drop-test", "trace"}
+    # drive-test and fluid-damper: tests/test_drive_test.py, tests/test_fluid_power_law.py.
+    assert set(group.commands) == {"drop-test", "trace", "drive-test", "fluid-damper"}
     common = {"--json": None, "--plot": None, "--output": "-o", "--reference-temperature": None}
     common |= {"--strict": None, "--units": None, "--wide": None, "--plain": None, "--help": None}
     drop = read_help(runner, app, ["fit", "drop-test"])

@@ -371,3 +371,18 @@ def test_the_help_screens_and_their_examples(
         screen = read_help(runner, app, ["reliability", name])
         assert_options(screen, options | {"--help": None})
         run_example(runner, app, screen, tmp_path / str(i), monkeypatch)
+
+
+def test_the_report_shows_the_probability_of_missing_each_requirement(tmp_path: Path) -> None:
+    sizing = (ROOT / "examples" / "sizing.toml").read_text(encoding="utf-8")
+    tolerances = (ROOT / "examples" / "paper_cc16_tolerances.toml").read_text(encoding="utf-8")
+    config = tmp_path / "study.toml"
+    config.write_text(sizing + "\n" + tolerances[tolerances.index("\n[tolerances]\n") :],
+                      encoding="utf-8")  # fmt: skip
+    out = tmp_path / "report.html"
+    done = runner.invoke(app, ["report", str(config), "-o", str(out)])
+    assert done.exit_code == 0, done.output
+    html = out.read_text(encoding="utf-8")
+    assert 'id="requirement-misses"' in html
+    for name in ("max_deployment_time", "min_torque_margin", "any"):
+        assert f'data-requirement="{name}"' in html

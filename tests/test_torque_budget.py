@@ -348,3 +348,23 @@ def test_the_help_lists_the_options_and_its_example_runs(
     # Only the phase asked for (a table title wraps with the table's width).
     assert "qualification" in shown.stdout
     assert "design" not in shown.stdout
+
+
+def test_the_report_shows_the_configs_budget(tmp_path: Path) -> None:
+    # The report's Qualification section holds the same numbers as `ecdsim margin`.
+    out = tmp_path / "report.html"
+    done = runner.invoke(app, ["report", str(CONFIG_BUDGET), "-o", str(out)])
+    assert done.exit_code == 0, done.output
+    html = out.read_text(encoding="utf-8")
+    assert '<h2 id="qualification">Qualification</h2>' in html
+    document = margin_json(CONFIG_BUDGET)
+    for phase in document["phases"]:
+        assert f'data-phase="{phase["phase"]}"' in html
+        for case in phase["cases"]:
+            assert f"{case['margin']:+.4g}" in html
+            assert case["verdict"] in html
+    # A config without [budget] or a study gets no section.
+    plain = tmp_path / "plain.html"
+    assert runner.invoke(app, ["report", str(ROOT / "examples" / "paper_cc16.toml"), "-o",
+                               str(plain)]).exit_code == 0  # fmt: skip
+    assert 'id="qualification"' not in plain.read_text(encoding="utf-8")
