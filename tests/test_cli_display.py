@@ -93,11 +93,13 @@ def _commands(folder: Path) -> list[list[str]]:
     ``folder`` holding a copy of examples/ (relative paths: short, like a user's)."""
     shutil.copytree(ROOT / "examples", folder / "examples")
     tomls = sorted(p.name for p in (folder / "examples").glob("*.toml"))
-    # A wing file is refused by deploy until the wing's solver lands (docs/wing.md).
+    # A wing file is refused by deploy until the wing's solver lands (docs/wing.md); a
+    # catalogue and a torque budget are not deployment configs.
+    not_configs = ("catalogue.toml", "torque_budget.toml")
     runs = [
         ["deploy", f"examples/{name}"]
         for name in tomls
-        if name != "catalogue.toml" and "wing" not in name
+        if name not in not_configs and "wing" not in name
     ]
     return [
         *runs,
@@ -109,6 +111,14 @@ def _commands(folder: Path) -> list[list[str]]:
         ["montecarlo", "examples/paper_cc16_tolerances.toml", "-n", "256", "--out", "mc"]
         + ["--no-plot", "--no-progress", "--overwrite"],
         ["report", "examples/paper_cc16.toml", "-o", "r.html"],
+        # The qualification commands (docs/qualification.md).
+        ["margin", "examples/torque_budget.toml"],
+        ["margin", "examples/paper_cc16_budget.toml"],
+        ["compare-fluid", "examples/fluid_measured.toml"],
+        ["fit", "fluid-damper", "examples/fluid_bench.csv"],
+        ["fit", "drive-test", "examples/drive_test.csv"],
+        ["reliability", "weibull", "examples/life_test.csv"],
+        ["reliability", "demonstrated", "--runs", "59", "--failures", "1"],
     ]
 
 

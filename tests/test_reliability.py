@@ -362,8 +362,10 @@ def test_the_help_screens_and_their_examples(
     group = read_help(runner, app, ["reliability"])
     assert set(group.commands) == {"demonstrated", "runs-needed", "weibull"}
     expected = {
-        "demonstrated": {"--runs": "-n", "--failures": "-f", "--confidence": "-C", "--json": None},
-        "runs-needed": {"--target": "-R", "--failures": "-f", "--confidence": "-C", "--json": None},
+        "demonstrated": {"--runs": "-n", "--failures": "-f", "--confidence": "-C", "--json": None,
+                         "--wide": None, "--plain": None},
+        "runs-needed": {"--target": "-R", "--failures": "-f", "--confidence": "-C", "--json": None,
+                        "--wide": None, "--plain": None},
         "weibull": {"--confidence": "-C", "--at": None, "--json": None, "--wide": None,
                     "--plain": None},
     }  # fmt: skip

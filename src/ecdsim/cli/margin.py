@@ -152,7 +152,7 @@ def margin(
     path: Annotated[
         Path,
         typer.Argument(
-            help="A torque budget ([budget]) or a deployment config (docs/qualification.md).",
+            help="A torque budget (\\[budget]) or a deployment config (docs/qualification.md).",
             metavar="BUDGET_OR_CONFIG",
         ),
     ],

@@ -79,8 +79,11 @@ def demonstrated_command(
     failures: FailuresOpt = 0,
     confidence: ConfidenceOpt = "0.95",
     as_json: JsonOpt = False,
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
 ) -> None:
     """The reliability N deployments with f failures demonstrate at a confidence."""
+    display.configure(wide=wide, plain=plain)
     import json
 
     from ecdsim.characterize.reliability import demonstrated
@@ -123,8 +126,11 @@ def runs_needed_command(
     ] = 0,
     confidence: ConfidenceOpt = "0.95",
     as_json: JsonOpt = False,
+    wide: WideOpt = False,
+    plain: PlainOpt = False,
 ) -> None:
     """The deployments needed to demonstrate a reliability at a confidence."""
+    display.configure(wide=wide, plain=plain)
     import json
 
     from ecdsim.characterize.reliability import runs_needed

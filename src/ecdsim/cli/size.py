@@ -286,7 +286,7 @@ def compare_fluid(
     wide: WideOpt = False,
     plain: PlainOpt = False,
 ) -> None:
-    """Compare the ECD with a viscous fluid damper matched to it (fluid_damper section)."""
+    """Compare the ECD with a fluid damper: viscous and matched, or its measured power law."""
     display.configure(wide=wide, plain=plain)
     import json
 
