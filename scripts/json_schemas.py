@@ -49,6 +49,12 @@ TITLES = {
     "montecarlo": "ecdsim montecarlo --json (and OUT/summary.json)",
     "repeat": "ecdsim repeat --json",
     "sweep": "ecdsim sweep --json",
+    "margin": "ecdsim margin --json",
+    "reliability_demonstrated": "ecdsim reliability demonstrated --json",
+    "reliability_runs_needed": "ecdsim reliability runs-needed --json",
+    "reliability_weibull": "ecdsim reliability weibull --json",
+    "fit_drive_test": "ecdsim fit drive-test --json",
+    "fit_fluid_damper": "ecdsim fit fluid-damper --json",
 }
 
 

@@ -105,6 +105,8 @@ def _montecarlo(folder: Path, margin: bool = False) -> list[str]:
         text = (EXAMPLES / "paper_cc16_tolerances.toml").read_text(encoding="utf-8")
         text += (
             '\n[requirements]\ntemperature_range = ["-40 degC", "100 degC"]\n'
+            'min_deployment_time = "10 s"\nmax_deployment_time = "60 s"\n'
+            'max_end_speed = "0.1 rad/s"\n'
             "min_torque_margin = 0.5\n[requirements.torque_margin]\n"
             'damping_speed = "0.005 rad/s"\nfactors = { friction = 1.2 }\n'
         )
@@ -135,6 +137,8 @@ PAPER = str(EXAMPLES / "paper_cc16.toml")
 DYNAMIC = str(EXAMPLES / "paper_cc16_dynamic.toml")
 DROP = str(EXAMPLES / "drop_test.csv")
 SIZING = str(EXAMPLES / "sizing.toml")
+BUDGET = str(EXAMPLES / "torque_budget.toml")
+CONFIG_BUDGET = str(EXAMPLES / "paper_cc16_budget.toml")
 CATALOGUE = str(EXAMPLES / "catalogue.toml")
 
 CASES: tuple[Case, ...] = (
@@ -212,10 +216,65 @@ CASES: tuple[Case, ...] = (
         "compare_fluid",
         lambda _: ["compare-fluid", str(EXAMPLES / "fluid.toml"), "--json"],
     ),  # noqa: E501
+    Case(
+        "compare-fluid measured power law",
+        "compare_fluid",
+        lambda _: ["compare-fluid", str(EXAMPLES / "fluid_measured.toml"), "--json"],
+    ),
     Case("montecarlo", "montecarlo", _montecarlo),
     Case("montecarlo torque margin", "montecarlo", lambda f: _montecarlo(f, margin=True)),
     Case("repeat", "repeat", _repeat(DYNAMIC)),
     Case("repeat two-node", "repeat", _repeat(_two_node)),
+    # The qualification commands (docs/qualification.md).
+    Case("margin budget file", "margin", lambda _: ["margin", BUDGET, "--json"]),
+    Case("margin config budget", "margin", lambda _: ["margin", CONFIG_BUDGET, "--json"]),
+    Case("margin sizing config", "margin", lambda _: ["margin", SIZING, "-T", "25", "--json"]),
+    Case(
+        "margin ground test",
+        "margin",
+        lambda _: ["margin", str(EXAMPLES / "paper_cc16_ground_test.toml"), "--json"],
+    ),
+    Case(
+        "reliability demonstrated",
+        "reliability_demonstrated",
+        lambda _: ["reliability", "demonstrated", "--runs", "59", "--failures", "1", "--json"],
+    ),
+    Case(
+        "reliability runs-needed",
+        "reliability_runs_needed",
+        lambda _: ["reliability", "runs-needed", "--target", "0.99", "--json"],
+    ),
+    Case(
+        "reliability weibull",
+        "reliability_weibull",
+        lambda _: [
+            "reliability",
+            "weibull",
+            str(EXAMPLES / "life_test.csv"),
+            "--at",
+            "1000",
+            "--json",
+        ],
+    ),  # fmt: skip
+    Case(
+        "fit drive-test",
+        "fit_drive_test",
+        lambda f: [
+            "fit",
+            "drive-test",
+            str(EXAMPLES / "drive_test.csv"),
+            "--json",
+            "-o",
+            str(f / "hinge.toml"),
+            "--config",
+            CONFIG_BUDGET,
+        ],
+    ),  # fmt: skip
+    Case(
+        "fit fluid-damper",
+        "fit_fluid_damper",
+        lambda _: ["fit", "fluid-damper", str(EXAMPLES / "fluid_bench.csv"), "--json"],
+    ),
     Case(
         "sweep",
         "sweep",

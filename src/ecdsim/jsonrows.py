@@ -34,13 +34,22 @@ SCHEMAS = (
     "montecarlo",
     "repeat",
     "sweep",
+    # The qualification commands (docs/qualification.md).
+    "margin",
+    "reliability_demonstrated",
+    "reliability_runs_needed",
+    "reliability_weibull",
+    "fit_drive_test",
+    "fit_fluid_damper",
 )
 
 
 def schema(name: str) -> dict[str, Any]:
     """The JSON Schema (draft 2020-12) of a ``--json`` document: ``"deploy"``,
     ``"fit_drop_test"``, ``"fit_trace"``, ``"size"``, ``"compare_fluid"``,
-    ``"montecarlo"``, ``"repeat"`` or ``"sweep"``.
+    ``"montecarlo"``, ``"repeat"``, ``"sweep"``, ``"margin"``,
+    ``"reliability_demonstrated"``, ``"reliability_runs_needed"``, ``"reliability_weibull"``,
+    ``"fit_drive_test"`` or ``"fit_fluid_damper"``.
 
     >>> schema("deploy")["title"]
     'ecdsim deploy --json'

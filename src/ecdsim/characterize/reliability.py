@@ -165,7 +165,7 @@ class Demonstrated:
             "confidence": self.confidence,
             "observed_reliability": self.observed,
             "demonstrated_reliability": self.lower_bound,
-            "method": "success run" if self.failures == 0 else "binomial (Clopper-Pearson)",
+            "bound": "success run" if self.failures == 0 else "binomial (Clopper-Pearson)",
         }
 
 
@@ -331,7 +331,7 @@ class WeibullFit:
             "b10_life": self.b_life(0.1),
             "failures": self.failures,
             "suspensions": self.suspensions,
-            "method": "maximum likelihood, right-censored; Fisher-matrix intervals",
+            "estimator": "maximum likelihood, right-censored; Fisher-matrix intervals",
         }
 
 

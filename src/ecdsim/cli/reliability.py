@@ -308,7 +308,7 @@ def print_life_test(block: dict[str, Any], units: str = "si") -> None:
             f"at {shown_t}: {done['runs']} deployments, {len(failed)} failed ({criteria})"
             + (f": {listed}" if failed else "")
             + f"; reliability demonstrated at {_percent(block['confidence'])} confidence: "
-            f"{done['demonstrated_reliability']:.4g} ({done['method']})"
+            f"{done['demonstrated_reliability']:.4g} ({done['bound']})"
         )
         process = case["power_law_process"]
         if process is not None:

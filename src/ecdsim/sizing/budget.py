@@ -231,9 +231,9 @@ class TorqueBudget:
                         "verdict": verdicts[min(i, len(verdicts) - 1)],
                     }
                 )
-            phases.append(
-                {"phase": phase.phase or None, "factors": dict(phase.factors), "cases": cases}
-            )
+            # A list, not a table keyed by kind: the kinds are the user's (open names).
+            factors = [{"kind": k, "factor": float(f)} for k, f in phase.factors.items()]
+            phases.append({"phase": phase.phase or None, "factors": factors, "cases": cases})
         margin, ratio = self.lowest()
         return {
             "ecdsim_version": __version__,
