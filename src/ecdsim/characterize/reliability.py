@@ -15,7 +15,8 @@
 * **Repeated deployments of one unit** (a life test, ``ecdsim repeat``): failures at
   deployments ``t_1 <= ... <= t_n`` of N are fitted by the power-law (Weibull) process of
   Crow (L. H. Crow, "Reliability analysis for complex, repairable systems", in
-  Reliability and Biometry, SIAM 1974, 379-410; MIL-HDBK-189): expected failures
+  Reliability and Biometry, SIAM 1974, 379-410, and AMSAA Technical Report 138, 1975;
+  MIL-HDBK-189): expected failures
   ``lambda t**beta``, for a test ended at N (time-truncated)
   ``beta = n / sum ln(N / t_i)``, ``lambda = n / N**beta``; given n, ``-beta ln(t_i/N)``
   are independent unit exponentials, so ``2 n beta / beta_hat`` is chi-square with 2n
