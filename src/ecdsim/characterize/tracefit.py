@@ -17,8 +17,11 @@ fitted together, from any number of traces. Two fits are therefore offered:
   temperature, jointly over all traces (with the configuration's spring temperature
   coefficient), BECD and the friction taken from the configuration's ECD and load.
 
-Parameters are fitted by ``scipy.optimize.least_squares``; intervals come from the
-Jacobian at the solution, ``covariance = s**2 (J^T J)^-1`` with Student t (n - p dof).
+Parameters are fitted by ``scipy.optimize.least_squares`` and then polished by
+Gauss-Newton steps to the least-squares optimum itself (:func:`_polish`), so that the
+answer does not depend on the path the solver took (nor on the CPU's BLAS kernels):
+docs/reproducibility.md. Intervals come from the Jacobian at the solution,
+``covariance = s**2 (J^T J)^-1`` with Student t (n - p dof).
 The residuals of a recorded trace are usually correlated in time (resolver error,
 vibration), which makes these intervals too narrow; the Durbin-Watson statistic is
 reported and a value below 1 raises a warning.
@@ -362,16 +365,67 @@ def read_traces(
     return table, traces, warnings
 
 
+# The Jacobian's step, a fraction of each parameter's scale. Five-point central
+# differences err by about h**4 |f^(5)| / 30 (truncation) plus 1.5 eps |f| / h (round-off,
+# eps = 2.2e-16): at h = 1e-4 both are about 1e-12 of the derivative, against 1e-10 for
+# the three-point formula at its best step. That error is what leaves the Gauss-Newton
+# fixed point uncertain, so it sets the digits the fit reproduces (docs/reproducibility.md).
+JACOBIAN_STEP = 1e-4
+# Gauss-Newton polish: stop when a step is below this fraction of the parameters' scale
+# (the fixed point's round-off, measured 1e-14 to 2e-12 on the shipped traces) ...
+POLISH_STEP = 1e-12
+# ... or after this many steps (from the solver's answer two or three steps reach it).
+POLISH_STEPS = 8
+
+
 def _central_jacobian(
     model: Callable[[FloatArray], FloatArray], p: FloatArray, scale: FloatArray
 ) -> FloatArray:
-    """d model / d p by central differences with steps 1e-6 of each parameter's scale."""
+    """d model / d p by five-point central differences, steps JACOBIAN_STEP of the scale."""
     columns = []
     for i in range(p.size):
         step = np.zeros_like(p)
-        step[i] = 1e-6 * scale[i]
-        columns.append((model(p + step) - model(p - step)) / (2.0 * step[i]))
+        step[i] = JACOBIAN_STEP * scale[i]
+        near = model(p + step) - model(p - step)
+        far = model(p + 2.0 * step) - model(p - 2.0 * step)
+        columns.append((8.0 * near - far) / (12.0 * step[i]))
     return np.column_stack(columns)
+
+
+def _polish(
+    model: Callable[[FloatArray], FloatArray],
+    observed: FloatArray,
+    p: FloatArray,
+    lower: FloatArray,
+    scale: FloatArray,
+) -> FloatArray:
+    """Gauss-Newton steps from the solver's answer ``p`` to the least-squares optimum.
+
+    ``least_squares`` stops when its cost changes by less than ``ftol`` of itself; the
+    cost is flat at the optimum, so that leaves the parameters about sqrt(ftol) away from
+    it, at a point that depends on the path (measured: 1e-9 relative, differing between
+    BLAS kernels). Gauss-Newton steps with an accurate Jacobian converge to the optimum
+    itself (the fixed point ``J^T r = 0``); a step that would raise the cost beyond
+    round-off, cross a bound or leave the finite numbers ends the polish at the last point.
+    """
+    r = observed - model(p)
+    cost = float(r @ r)
+    previous = math.inf
+    for _ in range(POLISH_STEPS):
+        step = np.linalg.lstsq(_central_jacobian(model, p, scale), r, rcond=None)[0]
+        size = float(np.max(np.abs(step) / scale))
+        trial = p + step
+        if not (np.all(np.isfinite(trial)) and np.all(trial >= lower)):
+            break
+        r_trial = observed - model(trial)
+        trial_cost = float(r_trial @ r_trial)
+        if not math.isfinite(trial_cost) or trial_cost > cost * (1.0 + 1e-12):
+            break
+        p, r, cost = trial, r_trial, trial_cost
+        if size <= POLISH_STEP or size >= previous:
+            break  # converged, or at the fixed point's round-off
+        previous = size
+    return p
 
 
 def _least_squares(
@@ -405,7 +459,7 @@ def _least_squares(
     )
     if not result.success:
         raise TraceFitError(f"the least-squares fit did not converge ({result.message})")
-    p = np.asarray(result.x, dtype=float)
+    p = _polish(model, observed, np.asarray(result.x, dtype=float), lower, scale)
     if np.any((lower > 0.0) & (p <= lower * (1.0 + 1e-9))):
         raise TraceFitError("the fit ran into a bound (a torque or damping rate <= 0)")
     design = _central_jacobian(model, p, scale)
