@@ -26,6 +26,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     (
         "foundation",
         (
+            "ecdsim._numba",
             "ecdsim._types",
             "ecdsim._version",
             "ecdsim.atomic",

@@ -18,7 +18,6 @@ keeps it out of reach.
 from __future__ import annotations
 
 import math
-import os
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -27,6 +26,7 @@ from types import ModuleType
 import numpy as np
 from numpy.typing import NDArray
 
+from ecdsim import _numba
 from ecdsim._types import FloatArray
 from ecdsim.dynamics import linear
 from ecdsim.dynamics.damping import EddyLaw
@@ -295,7 +295,7 @@ def compiled_kernel() -> ModuleType | None:
     implementation); so does a missing numba. numba is imported here, on first use, not
     at start-up.
     """
-    if os.environ.get("ECDSIM_NUMBA", "1").strip() == "0":
+    if _numba.switched_off():
         return None
     # Once imported, the module is read off sys.modules: a dictionary look-up where the
     # import statement runs importlib's from-list handling (some microseconds, cold, in
@@ -304,6 +304,7 @@ def compiled_kernel() -> ModuleType | None:
     if imported is not None:
         return imported
     try:
+        _numba.load()  # numba with ecdsim's set-up (the compile notice) before any kernel
         from ecdsim.dynamics import compiled
     except ImportError:
         return None

@@ -18,7 +18,11 @@ from typing import Any
 import numba
 import numpy as np
 
+from ecdsim import _numba
 from ecdsim._types import FloatArray
+
+# ecdsim's set-up of numba (the compile notice) before any kernel compiles.
+_numba.load()
 
 
 @numba.njit(cache=True, nogil=True, boundscheck=False)

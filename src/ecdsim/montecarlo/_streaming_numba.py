@@ -28,7 +28,11 @@ from typing import Any
 import numba
 import numpy as np
 
+from ecdsim import _numba
 from ecdsim._types import BoolArray, FloatArray
+
+# ecdsim's set-up of numba (the compile notice) before any kernel compiles.
+_numba.load()
 
 Labels = np.ndarray[Any, np.dtype[np.uint8]]
 

@@ -168,9 +168,9 @@ def _bracketed(x: FloatArray, wanted: list[int]) -> dict[int, float] | None:
 def compiled_selection() -> bool:
     """True if the brackets are selected by the compiled pass: numba is loaded already
     (by the run's compiled exact kernel) and not switched off (ECDSIM_NUMBA=0)."""
-    from ecdsim.solvers.exact_kernel import numba_switched_off
+    from ecdsim import _numba
 
-    return "numba" in sys.modules and not numba_switched_off()
+    return "numba" in sys.modules and not _numba.switched_off()
 
 
 def _disjoint(edges: list[tuple[float, float]]) -> bool:

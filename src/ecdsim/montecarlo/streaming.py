@@ -266,9 +266,10 @@ def compiled_sums(cases: int) -> bool:
     switched off (``ECDSIM_NUMBA=0``), and a chunk as large as the exact solution's
     compiled kernel asks for (its import is paid once per run, with that kernel's).
     """
-    from ecdsim.solvers.exact_kernel import NUMBA_MIN_CASES, numba_available, numba_switched_off
+    from ecdsim import _numba
+    from ecdsim.solvers.exact_kernel import NUMBA_MIN_CASES
 
-    return not numba_switched_off() and cases >= NUMBA_MIN_CASES and numba_available()
+    return cases >= NUMBA_MIN_CASES and _numba.enabled()
 
 
 def encode(sums: Sequence[Sums]) -> str:

@@ -16,7 +16,11 @@ import math
 import numba
 import numpy as np
 
+from ecdsim import _numba
 from ecdsim._types import BoolArray, FloatArray
+
+# ecdsim's set-up of numba (the compile notice) before any kernel compiles.
+_numba.load()
 
 SERIES_LIMIT = 1e-6  # ecdsim.solvers.exact_kernel.SERIES_LIMIT
 

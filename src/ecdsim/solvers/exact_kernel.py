@@ -11,8 +11,8 @@ exactly; :mod:`ecdsim.physics.quasistatic`) in two faster ways:
   in-place ufuncs and the branches of the log-mean taken per block (all "far", none "far",
   or a fix-up of the few elements of the other kind). Bit-identical to the reference:
   the operations are the reference's, in the same order (the sign flips used are exact);
-* ``numba``: one compiled loop over the cases (:mod:`ecdsim.solvers._exact_numba`), an
-  optional extra (``pip install 'ecdsim[numba]'``). Its ``log``/``log1p`` are the C
+* ``numba``: one compiled loop over the cases (:mod:`ecdsim.solvers._exact_numba`), numba
+  is a core dependency (:mod:`ecdsim._numba`). Its ``log``/``log1p`` are the C
   library's, not NumPy's SIMD ones, so it agrees with the reference to a few ulp (tested
   <= 1e-12 relative).
 
@@ -25,7 +25,7 @@ reference implementation, so that its edge-case semantics exist in one place onl
 :func:`choose` picks the kernel: ``numba`` when it is importable and the batch holds at
 least :data:`NUMBA_MIN_CASES` cases (importing numba costs about 0.3 s, which only a large
 batch repays, so that ``ecdsim deploy`` never imports it), ``numpy`` otherwise or when
-``ECDSIM_NUMBA=0`` (the switch the dynamic method's compiled integrator obeys too). The
+``ECDSIM_NUMBA=0`` (the switch every compiled kernel obeys, :mod:`ecdsim._numba`). The
 environment variable ``ECDSIM_EXACT_KERNEL`` (``reference``, ``numpy``, ``numba``) forces
 one, for benchmarks and tests.
 """
@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from ecdsim import _numba
 from ecdsim._types import BoolArray, FloatArray
 
 KERNELS = ("reference", "numpy", "numba")
@@ -231,19 +232,6 @@ Ordinary = Callable[
 ]
 
 
-def numba_available() -> bool:
-    """True if numba can be imported (without importing it when it is absent)."""
-    import importlib.util
-
-    return importlib.util.find_spec("numba") is not None
-
-
-def numba_switched_off() -> bool:
-    """True if ``ECDSIM_NUMBA=0`` asks for the NumPy paths (the switch every compiled
-    kernel obeys: this one, the dynamic method's, the Monte Carlo sums)."""
-    return os.environ.get("ECDSIM_NUMBA", "").strip() == "0"
-
-
 def choose(cases: int) -> str:
     """The kernel for a batch of ``cases`` cases (module docstring)."""
     forced = os.environ.get(ENVIRONMENT, "").strip().lower()
@@ -251,9 +239,9 @@ def choose(cases: int) -> str:
         if forced not in KERNELS:
             raise ValueError(f"{ENVIRONMENT}={forced!r}: expected one of {list(KERNELS)}")
         return forced
-    if numba_switched_off():
+    if _numba.switched_off():
         return "numpy"
-    if cases >= NUMBA_MIN_CASES and numba_available():
+    if cases >= NUMBA_MIN_CASES and _numba.available():
         return "numba"
     return "numpy"
 
