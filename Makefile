@@ -7,7 +7,7 @@ STAMP_DEMO := $(VENV)/.installed-demo
 STAMP_TEST := $(VENV)/.installed-test
 DEMO_DIR ?= ecdsim-demo
 
-.PHONY: demo test lint typecheck pytest browser bench validate fuzz clean
+.PHONY: demo test lint typecheck pytest browser bench validate fuzz portability clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -19,9 +19,10 @@ $(STAMP_RUN): pyproject.toml | $(BIN)/python
 	touch $@
 
 # The demo installs the extras too, so that every command the README shows
-# (ecdsim montecarlo, ecdsim app) works after make demo.
+# (ecdsim montecarlo, ecdsim app, ecdsim export-fmu) works after make demo, and compiles
+# the numba kernels ahead (ecdsim precompile: a first run would otherwise wait for them).
 $(STAMP_DEMO): pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e '.[montecarlo,app]'
+	$(BIN)/python -m pip install --quiet -e '.[montecarlo,app,fmu]'
 	touch $@ $(STAMP_RUN)
 
 $(STAMP_TEST): pyproject.toml | $(BIN)/python
@@ -29,6 +30,7 @@ $(STAMP_TEST): pyproject.toml | $(BIN)/python
 	touch $@ $(STAMP_RUN) $(STAMP_DEMO)
 
 demo: $(STAMP_DEMO)
+	$(BIN)/ecdsim precompile
 	$(BIN)/ecdsim demo --out $(DEMO_DIR)
 
 lint: $(STAMP_TEST)
@@ -69,5 +71,12 @@ fuzz: $(STAMP_TEST)
 validate: $(STAMP_TEST)
 	$(BIN)/python -m validation --out docs/validation.md
 
+# The portability matrix (docs/reproducibility.md): the suite under NUMBA_CPU_NAME=generic,
+# OPENBLAS_CORETYPE=Prescott and Haswell, and OPENBLAS_NUM_THREADS=1, one run each (about
+# four times make pytest). PORTABILITY_TESTS narrows it, e.g. tests/test_examples_fixed.py.
+PORTABILITY_TESTS ?=
+portability: $(STAMP_TEST) browser
+	bash scripts/portability.sh $(PORTABILITY_TESTS)
+
 clean:
-	rm -rf $(VENV) $(DEMO_DIR) build dist src/*.egg-info .mypy_cache .pytest_cache .ruff_cache
+	rm -rf $(VENV) $(DEMO_DIR) build dist src/*.egg-info .mypy_cache .pytest_cache .ruff_cache .portability

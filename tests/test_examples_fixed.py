@@ -217,7 +217,10 @@ def test_cancelling_keys_are_held_to_the_accuracy_of_their_terms() -> None:
     # A residual of 1e-5 rad whose model moved by 1e-9 * 1.6 rad passes, one moved by
     # 1e-8 * 1.6 rad does not; a parameter next to it keeps the plain 1e-9.
     kept = {"points": [{"residual_rad": 1e-5}], "damping_rate_Nms_per_rad": 28.0}
-    moved = {"points": [{"residual_rad": 1e-5 + 1.5e-9}], "damping_rate_Nms_per_rad": 28.0}
+    moved: dict[str, Any] = {
+        "points": [{"residual_rad": 1e-5 + 1.5e-9}],
+        "damping_rate_Nms_per_rad": 28.0,
+    }
     assert differences(kept, moved, FIT) == []
     moved["points"][0]["residual_rad"] = 1e-5 + 1.6e-8
     assert differences(kept, moved, FIT) == ["$.points[0].residual_rad: was 1e-05, now 1.0016e-05"]

@@ -65,7 +65,12 @@ def export_fmu(
         written = build_fmu(config, target, deployment=deployment, name=name)
     except ConfigError as exc:
         fail(str(exc).splitlines())
-    except (FmuDependencyError, FmuNameError, FmuCompilerError) as exc:
+    except FmuDependencyError as exc:
+        from ecdsim.cli.invocation import pip_install
+
+        # The install command for this environment: from a checkout, the checkout itself.
+        fail([str(exc).replace("pip install 'ecdsim[fmu]'", pip_install("fmu"))])
+    except (FmuNameError, FmuCompilerError) as exc:
         fail([str(exc)])
     except OSError as exc:
         fail([f"--out {target}: cannot write ({exc.strerror or exc})"])

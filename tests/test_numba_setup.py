@@ -1,0 +1,294 @@
+"""numba's set-up (ecdsim._numba, issue 23 items 2 and 8): the switch, the NumPy paths
+where numba is missing, the compile notice, and the compiled cache of a read-only install.
+
+The compiled kernels are checked against the NumPy paths number by number elsewhere
+(tests/test_exact_kernel.py, tests/test_dynamics_compiled.py,
+tests/test_montecarlo_streaming.py); here: that every entry point falls back where numba
+cannot be imported (a platform without its wheels), that a compile without a cache says
+so, and that `ecdsim precompile` on a package folder nobody can write leaves its kernels
+in the user's cache, where the next process finds them all.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import stat
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+from ecdsim import _numba
+from tests.conftest import ROOT
+
+# A numba that cannot be imported, as on a platform without its wheels: first on the
+# path, it shadows the installed one.
+FAKE_NUMBA = 'raise ImportError("no numba on this platform (a test stand-in)")\n'
+
+# Every compiled entry point, asked what it runs where numba is missing, and each
+# computation run by its NumPy path: the dynamic method (the single-case path, the
+# batched integrator, the spring-table kernel), the exact kernel of a large batch and the
+# Monte Carlo sums and brackets. Prints one JSON document.
+WITHOUT_NUMBA = """
+import json, sys
+import numpy as np
+from ecdsim import _numba
+from ecdsim.cli import precompile
+from ecdsim.deployment import predict
+from ecdsim.api import load
+from ecdsim.dynamics import integrate, single
+from ecdsim.montecarlo import intervals, streaming
+from ecdsim.solvers import exact_kernel
+
+found = {
+    "available": _numba.available(),
+    "compiled_kernel": integrate.compiled_kernel() is not None,
+    "exact_kernel": exact_kernel.choose(10**6),
+    "compiled_sums": streaming.compiled_sums(10**6),
+    "compiled_selection": intervals.compiled_selection(),
+}
+times = {}
+for name, mapping, temps in [
+    ("one case", precompile._heating_rolloff(), [25.0]),
+    ("batch", precompile._heating_rolloff(), [-40.0, 25.0, 100.0]),
+    ("table", precompile._spring_table(), [-40.0, 25.0]),
+]:
+    config = load(mapping)
+    out = predict(config.system, temps, ["dynamic"], config.spec.dynamics())
+    times[name] = np.ravel(out.solutions["dynamic"].deployment_time).tolist()
+precompile._exact_batch()
+found["times"] = times
+found["numba_imported"] = sys.modules.get("numba") is not None
+print(json.dumps(found))
+"""
+
+
+def _run(script: str, env: dict[str, str], cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-c", script],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+
+
+def test_without_numba_every_entry_point_takes_the_numpy_path(tmp_path: Path) -> None:
+    fake = tmp_path / "fake" / "numba"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text(FAKE_NUMBA, encoding="utf-8")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(fake.parent), str(ROOT)])}
+    env.pop("ECDSIM_NUMBA", None)
+    done = _run(WITHOUT_NUMBA, env)
+    assert done.returncode == 0, done.stderr
+    found = json.loads(done.stdout)
+    assert found["available"] is False
+    assert found["compiled_kernel"] is False
+    assert found["exact_kernel"] == "numpy"
+    assert found["compiled_sums"] is False
+    assert found["compiled_selection"] is False
+    assert found["numba_imported"] is False
+    # The same deployments with the compiled kernels, in this process: the NumPy RODAS4
+    # and the compiled one integrate the same equations at the same rtol (1e-8 per step),
+    # and agree to about 1e-9 on deployment times (tests/test_dynamics_compiled.py);
+    # 1e-7 is docs/dynamics.md's stated accuracy of a time.
+    import numpy as np
+
+    from ecdsim.api import load
+    from ecdsim.cli import precompile
+    from ecdsim.deployment import predict
+
+    cases = {
+        "one case": (precompile._heating_rolloff(), [25.0]),
+        "batch": (precompile._heating_rolloff(), [-40.0, 25.0, 100.0]),
+        "table": (precompile._spring_table(), [-40.0, 25.0]),
+    }
+    for name, (mapping, temps) in cases.items():
+        config = load(mapping)
+        out = predict(config.system, temps, ["dynamic"], config.spec.dynamics())
+        compiled = np.ravel(out.solutions["dynamic"].deployment_time)
+        assert np.all(np.isfinite(compiled)), name
+        np.testing.assert_allclose(found["times"][name], compiled, rtol=1e-7, err_msg=name)
+
+
+def test_precompile_without_numba_names_the_install_command(tmp_path: Path) -> None:
+    fake = tmp_path / "fake" / "numba"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text(FAKE_NUMBA, encoding="utf-8")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(fake.parent), str(ROOT)])}
+    env.pop("ECDSIM_NUMBA", None)
+    done = subprocess.run(
+        [sys.executable, "-m", "ecdsim", "precompile"],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 1
+    (line,) = done.stderr.splitlines()
+    assert line.startswith("numba is not installed: ecdsim runs its NumPy paths")
+    assert line.endswith("-m pip install -e '.[numba]'"), line  # this checkout's own
+
+
+def test_the_switch_turns_every_compiled_path_off(monkeypatch: pytest.MonkeyPatch) -> None:
+    from ecdsim.dynamics import integrate
+    from ecdsim.montecarlo import intervals, streaming
+    from ecdsim.solvers import exact_kernel
+
+    monkeypatch.setenv("ECDSIM_NUMBA", "0")
+    monkeypatch.delenv("ECDSIM_EXACT_KERNEL", raising=False)
+    assert _numba.switched_off()
+    assert not _numba.enabled()
+    assert integrate.compiled_kernel() is None
+    assert exact_kernel.choose(10**6) == "numpy"
+    assert not streaming.compiled_sums(10**6)
+    assert not intervals.compiled_selection()
+    monkeypatch.setenv("ECDSIM_NUMBA", "1")
+    assert _numba.enabled()
+    assert integrate.compiled_kernel() is not None
+    assert exact_kernel.choose(10**6) == "numba"
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+@pytest.fixture
+def fresh_notice(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The notice not yet printed in this process, the environment's choice unset."""
+    monkeypatch.setitem(_numba._state, "noticed", False)
+    monkeypatch.delenv(_numba.NOTICE, raising=False)
+
+
+@pytest.mark.usefixtures("fresh_notice")
+def test_the_notice_goes_to_a_terminal_once() -> None:
+    terminal = _Terminal()
+    _numba.notice(terminal)
+    _numba.notice(terminal)
+    assert terminal.getvalue() == _numba.NOTICE_TEXT + "\n"  # once per process
+
+
+@pytest.mark.usefixtures("fresh_notice")
+def test_the_notice_stays_out_of_pipes_unless_asked(monkeypatch: pytest.MonkeyPatch) -> None:
+    pipe = io.StringIO()
+    _numba.notice(pipe)
+    assert pipe.getvalue() == ""  # the output of a command never depends on a cache
+    monkeypatch.setenv(_numba.NOTICE, "1")
+    _numba.notice(pipe)
+    assert pipe.getvalue() == _numba.NOTICE_TEXT + "\n"
+    monkeypatch.setitem(_numba._state, "noticed", False)
+    monkeypatch.setenv(_numba.NOTICE, "0")
+    terminal = _Terminal()
+    _numba.notice(terminal)
+    assert terminal.getvalue() == ""
+
+
+@pytest.mark.usefixtures("fresh_notice")
+def test_a_compile_without_a_cache_is_counted_and_announced(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A function numba has never seen (no disk cache: cache=False) compiles at its first
+    # call: the listener counts it and prints the notice on a terminal stderr.
+    _numba.load()
+    import numba
+
+    terminal = _Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    before = _numba.compilations()
+
+    @numba.njit(cache=False)
+    def twice(x: float) -> float:
+        return 2.0 * x
+
+    assert twice(1.5) == 3.0
+    assert _numba.compilations() > before
+    assert terminal.getvalue() == _numba.NOTICE_TEXT + "\n"
+    again = _numba.compilations()
+    assert twice(2.5) == 5.0  # compiled already: no compile, no second notice
+    assert _numba.compilations() == again
+    assert terminal.getvalue() == _numba.NOTICE_TEXT + "\n"
+
+
+def _read_only(folder: Path) -> None:
+    """Take every write permission off ``folder``'s tree."""
+    for path in [folder, *folder.rglob("*")]:
+        mode = path.stat().st_mode
+        path.chmod(mode & ~(stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH))
+
+
+def _can_mount_read_only() -> bool:
+    """True if this root process can bind-mount a folder read-only in a mount namespace."""
+    if shutil.which("unshare") is None:
+        return False
+    with tempfile.TemporaryDirectory() as folder:
+        probe = f"mount --bind -o ro {folder} {folder} && ! touch {folder}/x 2>/dev/null"
+        done = subprocess.run(
+            ["unshare", "--mount", "sh", "-c", probe], capture_output=True, check=False
+        )
+        return done.returncode == 0
+
+
+def _precompile_command(site: Path) -> list[str]:
+    """``ecdsim precompile`` from the copy in ``site``, which no one can write.
+
+    As a user, the permissions do it. As root (CI), whom permissions do not stop, the
+    folder is bind-mounted read-only over itself in a mount namespace, as a system
+    package on a read-only file system; where that is not allowed, a file named
+    ``__pycache__`` in each package folder stops numba from making its cache folder there,
+    which is what numba checks (it then uses the user's cache folder).
+    """
+    command = [sys.executable, "-m", "ecdsim", "precompile"]
+    if os.geteuid() != 0:
+        return command
+    if _can_mount_read_only():
+        script = f"mount --bind -o ro {site} {site} && exec " + " ".join(command)
+        return ["unshare", "--mount", "sh", "-c", script]
+    for folder in [p for p in site.rglob("*") if p.is_dir()]:
+        if (folder / "__init__.py").exists():
+            (folder / "__pycache__").write_text("not a folder", encoding="utf-8")
+    return command
+
+
+@pytest.mark.slow
+def test_a_read_only_install_compiles_once_into_the_user_cache(tmp_path: Path) -> None:
+    # A system-wide install: the package in a folder nobody can write. The first
+    # precompile compiles into the user's cache folder (XDG_CACHE_HOME/numba), nothing
+    # beside the package; the second, a new process, loads every kernel from there.
+    site = tmp_path / "site"
+    shutil.copytree(
+        ROOT / "src" / "ecdsim", site / "ecdsim", ignore=shutil.ignore_patterns("__pycache__")
+    )
+    before = sorted(str(p.relative_to(site)) for p in site.rglob("*"))
+    command = _precompile_command(site)
+    _read_only(site)
+    cache = tmp_path / "user-cache"
+    env = {**os.environ, "PYTHONPATH": str(site), "XDG_CACHE_HOME": str(cache)}
+    env["PYTHONDONTWRITEBYTECODE"] = "1"
+    for key in ("NUMBA_CACHE_DIR", "ECDSIM_NUMBA", "NUMBA_DISABLE_JIT"):
+        env.pop(key, None)
+    runs = []
+    for _ in range(2):
+        done = subprocess.run(
+            command, cwd=tmp_path, env=env, capture_output=True, text=True, check=False
+        )
+        assert done.returncode == 0, done.stdout + done.stderr
+        runs.append(done.stdout)
+    first, second = runs
+    assert f"cached in\n{cache / 'numba'}" in first, first  # numba's user-wide folder
+    assert "0 compilations in this process" not in first, first
+    assert "0 compilations in this process" in second, second
+    assert "compilations)" not in second  # no workload compiled anything
+    assert list((cache / "numba").rglob("*.nbi")), "no index in the user cache"
+    assert list((cache / "numba").rglob("*.nbc")), "no machine code in the user cache"
+    after = sorted(str(p.relative_to(site)) for p in site.rglob("*") if p.name != "__pycache__")
+    assert after == [b for b in before if not b.endswith("__pycache__")]
+    for path in site.rglob("*"):
+        path.chmod(path.stat().st_mode | stat.S_IWUSR)  # let tmp_path be removed
