@@ -285,7 +285,7 @@ def test_a_read_only_install_compiles_once_into_the_user_cache(tmp_path: Path) -
     assert f"cached in\n{cache / 'numba'}" in first, first  # numba's user-wide folder
     assert "0 compilations in this process" not in first, first
     assert "0 compilations in this process" in second, second
-    assert "compilations)" not in second  # no workload compiled anything
+    assert "compilation" not in second.replace("0 compilations in this process", "")
     assert list((cache / "numba").rglob("*.nbi")), "no index in the user cache"
     assert list((cache / "numba").rglob("*.nbc")), "no machine code in the user cache"
     after = sorted(str(p.relative_to(site)) for p in site.rglob("*") if p.name != "__pycache__")

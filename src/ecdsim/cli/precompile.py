@@ -258,7 +258,8 @@ def precompile() -> None:
             typer.echo(f"error: {workload.label}: {type(exc).__name__}: {exc}", err=True)
             raise typer.Exit(1) from None
         compiled = _numba.compilations() - before
-        note = f" ({compiled} compilations)" if compiled else workload.note
+        plural = "" if compiled == 1 else "s"
+        note = f" ({compiled} compilation{plural})" if compiled else workload.note
         typer.echo(f"{time.perf_counter() - clock:6.1f} s  {workload.label}{note}")
     typer.echo(
         f"done in {time.perf_counter() - started:.1f} s, {_numba.compilations()} compilations "
