@@ -215,6 +215,7 @@ def test_help_and_version(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> No
         "fit",
         "margin",
         "reliability",
+        "precompile",
     }
     assert_options(top, {"--version": None, "--help": None})
     run_example(runner, app, top, tmp_path / "top", monkeypatch)
@@ -290,6 +291,8 @@ MONTECARLO_OPTIONS: dict[str, str | None] = {
             {"--host": None, "--port": None, "--units": None, "--help": None},
             ["app", "examples/paper_cc16.toml"],
         ),
+        # run in tests/test_numba_setup.py (from a read-only copy of the package)
+        ("precompile", {"--help": None}, ["precompile"]),
     ],
 )
 def test_help_of_the_other_commands(
