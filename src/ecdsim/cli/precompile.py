@@ -230,8 +230,10 @@ def workloads() -> list[Workload]:
 
 
 def precompile() -> None:
-    """Compile the numerical kernels for this CPU ahead of the first run (about 15 to 30 s
-    once; later runs, and this command again, load them from the cache)."""
+    """Compile the numerical kernels for this CPU ahead of the first run.
+
+    About 25 s of CPU, once; later runs, and this command again, load them from the cache.
+    """
     from ecdsim import _numba
 
     if _numba.switched_off():
