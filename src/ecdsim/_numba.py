@@ -46,10 +46,8 @@ __all__ = [
 SWITCH = "ECDSIM_NUMBA"
 # The compile notice: "1" always, "0" never, anything else: when stderr is a terminal.
 NOTICE = "ECDSIM_COMPILE_NOTICE"
-NOTICE_TEXT = (
-    "ecdsim: compiling the numerical kernels for this CPU (once; about 15 to 30 s); "
-    "later runs load them from the cache"
-)
+# One line within 80 columns.
+NOTICE_TEXT = "ecdsim: compiling its kernels for this CPU, once (about 15 to 30 s)"
 
 _lock = threading.Lock()
 _state: dict[str, Any] = {"listener": None, "compilations": 0, "noticed": False}
