@@ -394,8 +394,16 @@ def test_executor_choice(monkeypatch: pytest.MonkeyPatch) -> None:
     assert choose_executor(LARGE_RUN_SAMPLES, None, None) == DaskExecutor(workers=3)
     with pytest.raises(RunError, match="either --workers or --scheduler"):
         choose_executor(10, 2, "tcp://h:8786")
-    with pytest.raises(RunError, match="must be >= 0"):
-        choose_executor(10, -1, None)
+    # Issue 23: at most one worker per CPU, and 4 on any machine (each is a process).
+    assert choose_executor(10, 4, None) == DaskExecutor(workers=4)
+    for workers in (-1, 5, 100_000):
+        message = rf"--workers {workers}: expected 0 .* to 4: .*\(3 here\)"
+        with pytest.raises(RunError, match=message):
+            choose_executor(10, workers, None)
+    monkeypatch.setattr(os, "cpu_count", lambda: 8)
+    assert choose_executor(10, 8, None) == DaskExecutor(workers=8)
+    with pytest.raises(RunError, match="--workers 9: expected 0 .* to 8"):
+        choose_executor(10, 9, None)
 
 
 def test_cli_both_workers_and_scheduler_exit_2(tmp_path: Path) -> None:

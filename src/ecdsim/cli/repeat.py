@@ -25,6 +25,14 @@ EPILOG = (
 )
 
 
+# The most deployments ``--count`` accepts (2,000 times the paper's 500-deployment life
+# test), and in all over the temperatures: every deployment keeps seven float64 results
+# per temperature (56 bytes), reserved up front, so 10,000,000 deployments hold 560 MB
+# (--count 1000000000 reserved 22.4 GiB per array before the first deployment).
+MAX_COUNT = 1_000_000
+MAX_DEPLOYMENTS = 10_000_000
+
+
 def _duration(option: str, text: str) -> float:
     """A time option [s]; a bare number is seconds."""
     from ecdsim.config.units import TIME, QuantityError
@@ -215,12 +223,20 @@ def repeat(
 
     display.configure(wide=wide, plain=plain)
     problems = []
-    if count < 1:
-        problems.append(f"--count {count}: expected a number of deployments >= 1")
+    if not 1 <= count <= MAX_COUNT:
+        problems.append(
+            f"--count {count}: expected 1 to {MAX_COUNT:,} deployments (the results of "
+            "every deployment are kept in memory, 56 bytes per temperature)"
+        )
     cool = _duration("--cool-down", cool_down)
     stow = _duration("--stow-time", stow_time)
     loaded = load_run(config, temperature, ["dynamic"])
     system = units_option(units, loaded)
+    if count <= MAX_COUNT and count * len(loaded.temperatures) > MAX_DEPLOYMENTS:
+        problems.append(
+            f"--count {count} at {len(loaded.temperatures)} temperatures: at most "
+            f"{MAX_DEPLOYMENTS:,} deployments in all (56 bytes of results each, kept in memory)"
+        )
     params = loaded.spec.dynamics()
     if params is None:
         problems.append(

@@ -110,19 +110,18 @@ def sweep(
     units: UnitsOpt = None,
 ) -> None:
     """Vary config keys (full factorial or Latin hypercube) and tabulate every result."""
-    import tomllib
-
     from ecdsim.cli.common import load_run, units_option
     from ecdsim.config import ConfigError
-    from ecdsim.config.loader import read_config_text
+    from ecdsim.config.loader import parse_toml, read_config_text
+    from ecdsim.config.seeds import seed_problem
     from ecdsim.sweeps import SweepError, design, parse_vary, run_sweep
 
     loaded = load_run(config, temperature, method)  # the base config, checked once
     system = units_option(units, loaded)
     try:
-        raw = tomllib.loads(read_config_text(config))
-    except (ConfigError, tomllib.TOMLDecodeError) as exc:  # pragma: no cover - load_run read it
-        fail([f"{config}: {exc}"])
+        raw = parse_toml(read_config_text(config), str(config))
+    except ConfigError as exc:  # pragma: no cover - load_run read it
+        fail(str(exc).splitlines())
     problems: list[str] = []
     varies = []
     for text in vary:
@@ -132,6 +131,9 @@ def sweep(
             problems.extend(exc.problems)
     if latin is not None and latin < 1:
         problems.append(f"--latin {latin}: expected a number of points >= 1")
+    bad_seed = seed_problem(seed)
+    if bad_seed is not None:
+        problems.append(f"--seed {seed}: {bad_seed}")
     if problems:
         fail(problems)
     try:

@@ -29,6 +29,7 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
+from ecdsim.config.seeds import EXPECTED_SEED, seed_problem
 from ecdsim.config.units import (
     ANGLE,
     DAMPING,
@@ -442,11 +443,26 @@ class TolerancesSpec(_Section):
     """
 
     sampling: Literal["random", "lhs", "sobol"] = "lhs"
-    seed: int | None = Field(default=None, ge=0)
+    seed: int | None = None
     chunk_size: int = Field(default=DEFAULT_CHUNK_SIZE, ge=1)
     quantities: dict[str, QuantityToleranceSpec] = Field(min_length=1)
     correlations: list[CorrelationSpec] = Field(default_factory=list)
     repeatability: RepeatabilitySpec = Field(default_factory=RepeatabilitySpec)
+
+    @field_validator("seed", mode="before")
+    @classmethod
+    def _seed_not_boolean(cls, value: object) -> object:
+        if isinstance(value, bool):  # pydantic would read true as 1
+            raise ValueError(f"{quoted(value)} is not a seed; {EXPECTED_SEED}")
+        return value
+
+    @field_validator("seed")
+    @classmethod
+    def _seed_in_range(cls, value: int | None) -> int | None:
+        problem = None if value is None else seed_problem(value)  # the one rule for seeds
+        if problem is not None:
+            raise ValueError(f"{quoted(value)} is not a seed; {problem}")
+        return value
 
     @field_validator("quantities", mode="before")
     @classmethod

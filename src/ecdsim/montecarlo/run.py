@@ -230,6 +230,7 @@ def build_plan(
     new run draws a fresh one (recorded in the manifest and the summary).
     Raises :class:`ecdsim.config.ConfigError` or :class:`RunError` on bad input.
     """
+    from ecdsim.config.seeds import seed_problem
     from ecdsim.config.tolerance_schema import DEFAULT_CHUNK_SIZE, SAMPLING_METHODS
     from ecdsim.methods import SOLVERS
 
@@ -255,8 +256,8 @@ def build_plan(
     temps = tuple(float(t) for t in (temperatures or config.temperatures))
     if len(set(temps)) != len(temps):
         problems.append(f"temperatures repeat: {list(temps)} degC")
-    if seed is not None and seed < 0:
-        problems.append(f"--seed: {seed} must be >= 0")
+    if seed is not None and (bad_seed := seed_problem(seed)) is not None:
+        problems.append(f"--seed {seed}: {bad_seed}")
     if problems:
         raise RunError(problems)
     chosen_seed = seed if seed is not None else spec.seed
@@ -829,6 +830,23 @@ def _ignore_interrupts() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+# --workers accepts up to one LocalCluster worker per CPU, and never fewer than this many
+# (so that a run can be tried with real workers on any machine).
+MIN_WORKERS_ALLOWED = 4
+
+
+def workers_limit() -> int:
+    """The most ``--workers`` accepted here: one per CPU, at least :data:`MIN_WORKERS_ALLOWED`.
+
+    Each LocalCluster worker is a process of its own (an interpreter with NumPy, ecdsim,
+    dask and its chunk's arrays: about 310 MB resident each, measured with two workers
+    on 3,000,000 samples); workers beyond one per CPU only take turns on the same CPUs,
+    so they add memory and no speed (``--workers 100000`` started processes until the
+    memory ran out).
+    """
+    return max(os.cpu_count() or 1, MIN_WORKERS_ALLOWED)
+
+
 def choose_executor(samples: int, workers: int | None, scheduler: str | None) -> Executor:
     """The executor for ``--workers`` / ``--scheduler``; large runs default to a LocalCluster.
 
@@ -845,11 +863,17 @@ def choose_executor(samples: int, workers: int | None, scheduler: str | None) ->
         raise RunError(["give either --workers or --scheduler, not both"])
     if scheduler is not None:
         return DaskExecutor(address=scheduler)
-    if workers is not None:
-        if workers < 0:
-            raise RunError([f"--workers: {workers} must be >= 0 (0: in this process)"])
-        return in_process() if workers == 0 else DaskExecutor(workers=workers)
     cpus = os.cpu_count() or 1
+    if workers is not None:
+        if not 0 <= workers <= workers_limit():
+            raise RunError(
+                [
+                    f"--workers {workers}: expected 0 (in this process) to {workers_limit()}: "
+                    "each worker is a process of about 300 MB, and more workers than CPUs "
+                    f"({cpus} here) add memory, not speed"
+                ]
+            )
+        return in_process() if workers == 0 else DaskExecutor(workers=workers)
     local = in_process()
     if local.forks and local.threads >= cpus:
         return local
