@@ -8,6 +8,7 @@ message and exit code 2, never a traceback.
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -125,3 +126,83 @@ def test_number_pattern_splits_a_digit_run_one_way() -> None:
     # 150-character run is refused by the grammar, not by a timeout.
     with pytest.raises(QuantityError, match="does not start with a finite number|unit"):
         TORQUE.parse("1" * 150 + "x")
+
+
+# --- issue 23: the Python API's crashers, fixed where configs are read -------------------
+
+
+def _nested(depth: int) -> dict[str, object]:
+    top: dict[str, object] = {}
+    node = top
+    for _ in range(depth):
+        child: dict[str, object] = {}
+        node["a"] = child
+        node = child
+    return top
+
+
+def _api_problems(*args: object, **kwargs: object) -> list[str]:
+    import ecdsim
+
+    with pytest.raises(ConfigError) as info:
+        ecdsim.load(*args, **kwargs)  # type: ignore[arg-type]
+    return info.value.problems
+
+
+def test_a_mapping_nested_5000_deep_is_a_config_error_not_a_recursion_error() -> None:
+    # RecursionError (copy.deepcopy) before; files and HTTP bodies stop at MAX_NESTING.
+    too_deep = f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"
+    assert _api_problems(_nested(5000)) == [f"config: {too_deep}"]
+    assert _api_problems(PAPER_CONFIG, overrides={"load.extra": _nested(5000)}) == [
+        f"load.extra: {too_deep}"
+    ]
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "shown"),
+    [
+        ("gearbox.ratio", 10**400, "1" + "0" * 76 + "... (401 characters)"),
+        ("load.start_torque", -(10**400), "-1" + "0" * 75 + "... (402 characters)"),
+        ("gearbox.ratio", 10**5000, "an integer of 5001 digits"),  # too long to write out
+    ],
+    ids=["10**400", "-10**400", "10**5000"],
+)
+def test_an_integer_beyond_float64_is_a_config_error_naming_the_key(
+    key: str, value: int, shown: str
+) -> None:
+    # OverflowError (int too large to convert to float) before.
+    problems = _api_problems(PAPER_CONFIG, overrides={key: value})
+    assert problems == [
+        f"{key} = {shown}: is outside the magnitudes ecdsim accepts (1e-30 to 1e+30 in SI "
+        "units, or 0)"
+    ]
+    # The same integer inside a mapping is read by the config's own fields.
+    document = tomllib.loads(PAPER)
+    document["gearbox"]["ratio"] = value
+    (line,) = _api_problems(document)
+    assert line == (
+        f"gearbox.ratio: {shown} is outside the magnitudes ecdsim accepts (1e-30 to 1e+30 in "
+        "SI units, or 0); expected a dimensionless number (a plain number, e.g. 380)"
+    )
+
+
+def test_an_override_key_that_is_not_a_string_is_named() -> None:
+    assert _api_problems(PAPER_CONFIG, overrides={1: 2}) == [
+        "1: not a config key (expected e.g. gearbox.ratio)"
+    ]
+
+
+@pytest.mark.parametrize("rtol", ["1e-30", "0", "9e-14", "0.2"])
+def test_an_integrator_tolerance_it_cannot_meet_is_refused(rtol: str) -> None:
+    # rtol = 1e-30 was accepted and the dynamic method stopped at 1e-13 s ("horizon").
+    text = PAPER.replace("[analysis]", f"[analysis]\nrtol = {rtol}")
+    why = " (below it the integrator chases float64 round-off)" if float(rtol) < 1e-13 else ""
+    assert _problems(text) == [
+        f"analysis.rtol: {rtol} must be in [1e-13, 0.1]{why}; expected a dimensionless number "
+        "(a plain number, e.g. 380)"
+    ]
+
+
+@pytest.mark.parametrize("rtol", ["1e-13", "0.1"])
+def test_the_tolerance_bounds_are_accepted(rtol: str) -> None:
+    parse_config(PAPER.replace("[analysis]", f"[analysis]\nrtol = {rtol}"))

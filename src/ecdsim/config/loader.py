@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
+import sys
 import tomllib
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -14,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import ValidationError
 
 from ecdsim.config.errors import ConfigError
-from ecdsim.config.units import quoted
+from ecdsim.config.units import MAX_QUOTED, quoted
 from ecdsim.model import DeploymentSystem
 
 
@@ -95,17 +97,52 @@ def load_config(path: str | Path) -> Config:
 MAX_NESTING = 32
 
 
-def parse_config(text: str, source: str = "<string>") -> Config:
-    """Validate TOML text; :class:`ConfigError` lists every problem."""
+TOO_DEEP = f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"
+
+# A digit run (underscores allowed, as TOML writes 1_000) longer than Python converts.
+_LONG_DIGITS = re.compile(r"[0-9][0-9_]*")
+
+
+def parse_toml(text: str, source: str = "<string>") -> dict[str, Any]:
+    """The TOML document ``text``; :class:`ConfigError` (one line) if it cannot be read.
+
+    Every TOML reader of ecdsim's inputs goes through it, so that each refusal is a line
+    naming the problem: invalid TOML (tomllib's message, with line and column), nesting
+    beyond :data:`MAX_NESTING` (tomllib recurses and would exhaust the stack), and an
+    integer longer than Python converts (``sys.get_int_max_str_digits()``, 4,300 digits
+    by default, a guard against quadratic-time conversions; tomllib raises a bare
+    ValueError that names no line).
+    """
     try:
-        raw = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError([f"not valid TOML: {exc}"], source) from None
     except RecursionError:
         # tomllib parses nested arrays and inline tables recursively.
-        raise ConfigError(
-            [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"], source
-        ) from None
+        raise ConfigError([TOO_DEEP], source) from None
+    except ValueError as exc:  # int() refused a digit run over the limit
+        raise ConfigError([_long_integer(text, exc)], source) from None
+
+
+def _long_integer(text: str, error: ValueError) -> str:
+    """The line naming the first integer of ``text`` longer than Python converts."""
+    limit = sys.get_int_max_str_digits()
+    for number, line in enumerate(text.splitlines(), start=1):
+        for match in _LONG_DIGITS.finditer(line):
+            digits = len(match.group().replace("_", ""))
+            if digits > limit:
+                key = line[: match.start()].strip().rstrip("=+-[,").strip() or "value"
+                return (
+                    f"line {number}: {key[:MAX_QUOTED]} = an integer of {digits:,} digits; "
+                    f"expected a number of at most {limit:,} digits (ecdsim accepts "
+                    "magnitudes up to 1e30)"
+                )
+    return f"not valid TOML: {quoted(str(error))}"
+
+
+def parse_config(text: str, source: str = "<string>") -> Config:
+    """Validate TOML text; :class:`ConfigError` lists every problem."""
+    raw = parse_toml(text, source)
     spec = validate(raw, source)
     system = DeploymentSystem(ecd=spec.ecd(), load=spec.load.to_model(), name=spec.title)
     return Config(
@@ -154,9 +191,7 @@ def validate(raw: dict[str, Any], source: str = "<string>") -> ConfigSpec | Core
     messages (their keys are described by the whole schema).
     """
     if nesting_depth(raw) > MAX_NESTING:
-        raise ConfigError(
-            [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"], source
-        )
+        raise ConfigError([TOO_DEEP], source)
     if "wing" in raw:  # a wing file (ecdsim.config.wing_schema), not a single hinge's
         raise ConfigError([WING_FILE], source)
     try:

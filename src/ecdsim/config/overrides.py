@@ -19,7 +19,7 @@ from collections.abc import Mapping
 from typing import Any, get_origin
 
 from ecdsim.config.errors import ConfigError
-from ecdsim.config.units import Kind
+from ecdsim.config.units import Kind, magnitude_problem, quoted
 
 
 class OverrideError(ConfigError):
@@ -91,10 +91,14 @@ def config_value(key: str, value: object) -> object:
         value = number
     if isinstance(value, bool) or not isinstance(value, int | float):
         return value
-    if not math.isfinite(value):
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond float64 (10**400)
+        raise OverrideError([f"{key} = {quoted(value)}: {magnitude_problem(math.inf)}"]) from None
+    if not math.isfinite(number):
         raise OverrideError([f"{key} = {value!r}: not a finite number"])
     if unit:
-        return f"{float(value)!r} {unit}"
+        return f"{number!r} {unit}"
     return value
 
 
@@ -104,9 +108,23 @@ def apply_overrides(raw: Mapping[str, Any], overrides: Mapping[str, object]) -> 
     Missing tables on the way are created; a key that passes through a non-table value
     raises :class:`OverrideError`. Unknown keys are left for validation to name.
     """
+    from ecdsim.config.loader import MAX_NESTING, TOO_DEEP, nesting_depth
+
+    # Measured before anything walks them (deepcopy and validation recurse): a mapping
+    # nested 5,000 deep would exhaust the stack, where a file or a request is refused.
+    if nesting_depth(dict(raw)) > MAX_NESTING:
+        raise OverrideError([f"config: {TOO_DEEP}"])
+    deep = [key for key, value in overrides.items() if nesting_depth(value) > MAX_NESTING - 1]
+    if deep:
+        raise OverrideError([f"{key}: {TOO_DEEP}" for key in deep])
     document: dict[str, Any] = copy.deepcopy(dict(raw))
     problems = []
-    for key, value in overrides.items():
+    # The type says str keys; a notebook may pass anything.
+    given: list[tuple[object, object]] = list(overrides.items())
+    for key, value in given:
+        if not isinstance(key, str):
+            problems.append(f"{quoted(key)}: not a config key (expected e.g. gearbox.ratio)")
+            continue
         parts = key.split(".")
         if not key or any(not p for p in parts):
             problems.append(f"{key!r}: not a config key (expected e.g. gearbox.ratio)")

@@ -47,11 +47,40 @@ class QuantityError(ValueError):
 
 
 def quoted(value: object, limit: int = MAX_QUOTED) -> str:
-    """``repr(value)``, cut to about ``limit`` characters for an error line."""
+    """``repr(value)``, cut to about ``limit`` characters for an error line.
+
+    An integer too long for Python to write out (over ``sys.get_int_max_str_digits()``
+    digits, 4,300 by default: ``repr`` raises ValueError) is described by its size.
+
+    >>> quoted(10**5000)
+    'an integer of 5001 digits'
+    """
+    if isinstance(value, int) and value.bit_length() > _BITS_WRITTEN_OUT:
+        return f"an integer of {integer_digits(value)} digits"
     text = repr(value)
     if len(text) <= limit:
         return text
     return f"{text[: limit - 3]}... ({len(str(value))} characters)"
+
+
+# Integers up to this many bits are written out in error lines (about 1,200 digits, well
+# inside Python's 4,300-digit limit on converting integers to text).
+_BITS_WRITTEN_OUT = 4000
+
+
+def integer_digits(value: int) -> int:
+    """The number of decimal digits of ``value`` (without writing it out: Python refuses
+    to convert integers of more than 4,300 digits to text).
+
+    >>> integer_digits(10**5000), integer_digits(-999), integer_digits(0)
+    (5001, 3, 1)
+    """
+    magnitude = abs(value)
+    if magnitude == 0:
+        return 1
+    digits = int(magnitude.bit_length() * 0.30102999566398120)  # log10(2)
+    # The estimate is at most one short: correct it with one exact comparison.
+    return digits + 1 if magnitude >= 10**digits else digits
 
 
 def check_unit_grammar(unit_text: str) -> str | None:
@@ -212,7 +241,7 @@ class Kind:
         if isinstance(value, bool):
             raise QuantityError(f"{quoted(value)} is not a number; {self.expected}")
         if isinstance(value, int | float):
-            number = float(value)
+            number = _as_float(value, self)
             if self.unit != "":
                 raise QuantityError(f"{quoted(value)} has no unit; {self.expected}")
             return _in_range(_finite(number, value, self), value, self)
@@ -263,6 +292,19 @@ def magnitude_problem(value: float) -> str | None:
     if value == 0.0 or low <= abs(value) <= high:
         return None
     return f"is outside the magnitudes ecdsim accepts ({low:g} to {high:g} in SI units, or 0)"
+
+
+def _as_float(value: int | float, kind: Kind) -> float:
+    """``float(value)``; a QuantityError naming the range for an integer beyond float64
+    (``10**400``: Python raises OverflowError)."""
+    try:
+        return float(value)
+    except OverflowError:
+        low, high = MAGNITUDE_RANGE
+        raise QuantityError(
+            f"{quoted(value)} is outside the magnitudes ecdsim accepts ({low:g} to {high:g} "
+            f"in SI units, or 0); {kind.expected}"
+        ) from None
 
 
 def _finite(number: float, raw: object, kind: Kind) -> float:

@@ -30,7 +30,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from ecdsim._version import __version__
 from ecdsim.config import Config, ConfigError, parse_config
-from ecdsim.config.loader import MAX_NESTING, nesting_depth
+from ecdsim.config.loader import MAX_NESTING, nesting_depth, parse_toml
 from ecdsim.deployment import ModelDomainError, Prediction, predict
 from ecdsim.report.builder import predict_config, render_html
 from ecdsim.units_display import UnitSystem, check_system, convert_text, describe, key_units
@@ -496,11 +496,9 @@ def create_app(config_text: str | None = None, units: UnitSystem | None = None) 
     def parse(body: TomlBody) -> dict[str, Any]:
         """Validate TOML text and return it as the JSON config the API takes."""
         try:
-            raw = tomllib.loads(body.toml)
-        except tomllib.TOMLDecodeError as exc:
-            raise _refuse([f"toml: not valid TOML: {exc}"]) from None
-        except RecursionError:
-            raise _refuse([f"toml: nested too deeply (at most {MAX_NESTING} levels)"]) from None
+            raw = parse_toml(body.toml)
+        except ConfigError as exc:
+            raise _refuse([f"toml: {problem}" for problem in exc.problems]) from None
         config, _ = load_body(raw)
         system = display_system(config, None, units)
         return {
