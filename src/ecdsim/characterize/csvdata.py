@@ -36,6 +36,7 @@ from ecdsim.config.units import (
     Kind,
     QuantityError,
     magnitude_problem,
+    quoted,
 )
 
 MASS = Kind("mass", "kg", "250 g")
@@ -113,7 +114,7 @@ class BadRow:
     def message(self) -> str:
         """One readable line."""
         where = f"row {self.row}" + (f", column {self.column!r}" if self.column else "")
-        return f"{where}: {self.value!r} {self.reason}; row excluded"
+        return f"{where}: {quoted(self.value)} {self.reason}; row excluded"
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form."""
@@ -306,10 +307,13 @@ def read_table(path: str | Path, columns: Sequence[Column]) -> Table:
     reader = csv.reader(lines) if plain else csv.reader(io.StringIO(text, newline=""))
     del text
     header: list[str] | None = None
-    for record in reader:
-        if any(cell.strip() for cell in record):
-            header = record
-            break
+    try:
+        for record in reader:
+            if any(cell.strip() for cell in record):
+                header = record
+                break
+    except csv.Error as exc:  # a cell over the csv module's field limit (131,072 characters)
+        raise ConfigError([_csv_problem(reader.line_num, exc)], source) from None
     if header is None:
         raise ConfigError(["the file has no header row (it is empty)"], source)
     layout = _layout(header, columns, source)
@@ -380,9 +384,19 @@ def _read_with_csv_module(
                 rows.append(reader.line_num)
                 values.append(parsed)
     except csv.Error as exc:
-        raise ConfigError([f"row {reader.line_num}: not valid CSV ({exc})"], source) from None
+        raise ConfigError([_csv_problem(reader.line_num, exc)], source) from None
     array = np.array(values, dtype=float).reshape(len(values), len(parse.keys))
     return np.array(rows, dtype=np.int64), array, bad
+
+
+def _csv_problem(row: int, error: csv.Error) -> str:
+    """One line for what the csv module refused at ``row``."""
+    if "field limit" in str(error):
+        return (
+            f"row {row}: a cell longer than {csv.field_size_limit():,} characters; expected a "
+            "column name or a number"
+        )
+    return f"row {row}: not valid CSV ({error})"
 
 
 def _read_plain(
@@ -410,7 +424,10 @@ def _read_plain(
         slow_rows: list[int] = []
         slow_values: list[tuple[float, ...]] = []
         for i in sorted(slow_set):
-            record = next(csv.reader([block[i]]))
+            # A plain line (no quotes, no carriage return: _plain) is its cells split at
+            # the commas, exactly as the csv module reads it, with no field-size limit
+            # (the csv module refuses a cell over 131,072 characters with an exception).
+            record = block[i].split(",")
             parsed = parse(record, int(numbers[i]), bad)
             if parsed is not None:
                 slow_rows.append(i)

@@ -188,12 +188,66 @@ def transient_lag(time: ArrayLike, damping_rate: ArrayLike, inertia: ArrayLike) 
     return as_float(np.where(moving, -safe_tau * np.expm1(-t / safe_tau), 0.0))
 
 
+# Below this x = t / tau the differences x - (1 - e**-x) and (1 - e**-x) - x e**-x lose
+# digits to cancellation (relative error about 2 eps / x) and are summed as series; the
+# series' terms up to x**21 leave a relative error below 1e-19 there.
+_SERIES_BELOW = 1.0
+_SERIES_TERMS = 20
+
+
+def _series(x: FloatArray, coefficient: Callable[[int], float]) -> FloatArray:
+    """``sum over n = 2 .. 21 of coefficient(n) * (-x)**n / n!``, by Horner's rule."""
+    total = np.zeros_like(x)
+    for n in range(_SERIES_TERMS + 1, 1, -1):
+        total = total * -x + coefficient(n) / math.factorial(n)
+    return as_float(total * x * x)
+
+
+def _span(t: FloatArray, tau: FloatArray) -> FloatArray:
+    """``t - lag = t - tau (1 - e**-x)``, x = t / tau > 0, without cancellation for small
+    x (there ``tau (x - (1 - e**-x))`` summed as a series)."""
+    x = t / tau
+    small = x < _SERIES_BELOW
+    direct = t + tau * np.expm1(-np.where(small, 0.0, x))
+    ramp = _series(np.where(small, x, 0.0), lambda n: 1.0)
+    return as_float(np.where(small, tau * ramp, direct))
+
+
+def _ramp_bracket(x: FloatArray) -> FloatArray:
+    """``(1 - e**-x) - x e**-x`` (>= 0) without cancellation for small x."""
+    small = x < _SERIES_BELOW
+    big = np.where(small, 1.0, x)
+    direct = -np.expm1(-big) - big * np.exp(-big)
+    return as_float(np.where(small, _series(np.where(small, x, 0.0), lambda n: n - 1.0), direct))
+
+
+def steady_span(time: ArrayLike, damping_rate: ArrayLike, inertia: ArrayLike) -> FloatArray:
+    """``t - lag = tau (x - (1 - e**-x))``, x = t / tau: the time the drop would have taken
+    at its steady speed (``theta = w_ss (t - lag)``, :func:`transient_lag`).
+
+    Computed without cancellation: where the inertia is so large that the shaft is far
+    from its steady speed (x small), ``t - lag`` is about ``t**2 / (2 tau)``, which
+    ``t - transient_lag(t)`` rounded to 0 (rig_inertia 1e20 kg*m^2 made the fit's
+    residuals infinite).
+
+    >>> round(float(steady_span(10.0, 2.0, 4.0)), 12)  # 10 - transient_lag's example
+    8.013475893998
+    >>> float(steady_span(1.0, 1.0, 1e20))  # t**2 / (2 tau) = 1 / 2e20
+    5e-21
+    """
+    t, tau = np.broadcast_arrays(
+        np.asarray(time, dtype=float), _time_constant(damping_rate, inertia)
+    )
+    moving = tau > 0.0
+    return as_float(np.where(moving, _span(t, np.where(moving, tau, 1.0)), t))
+
+
 def _lag_derivative(time: FloatArray, damping_rate: float, inertia: FloatArray) -> FloatArray:
     """``d lag / d BECD = -(J / B**2) * ((1 - e**-x) - x e**-x)``, x = t B / J."""
     tau = _time_constant(damping_rate, inertia)
     moving = tau > 0.0
     x = time / np.where(moving, tau, 1.0)
-    bracket = -np.expm1(-x) - x * np.exp(-x)
+    bracket = _ramp_bracket(np.where(moving, x, 1.0))
     return as_float(np.where(moving, -(inertia / damping_rate**2) * bracket, 0.0))
 
 
@@ -210,9 +264,7 @@ def startup_angle(
     damping_rate : BECD [N*m*s/rad]
     inertia : total inertia at the shaft J [kg*m**2]
     """
-    t = np.asarray(time, dtype=float)
-    lag = transient_lag(t, damping_rate, inertia)
-    return as_float(np.asarray(steady, dtype=float) * (t - lag))
+    return as_float(np.asarray(steady, dtype=float) * steady_span(time, damping_rate, inertia))
 
 
 def drop_time(
@@ -242,7 +294,7 @@ def drop_time(
     safe_tau = np.where(moving, tau, 1.0)
     t = pace + np.where(moving, tau, 0.0)
     for _ in range(200):
-        excess = np.where(moving, t + safe_tau * np.expm1(-t / safe_tau), t) - pace
+        excess = np.where(moving, _span(t, safe_tau), t) - pace
         rate = np.where(moving, -np.expm1(-t / safe_tau), 1.0)
         step = excess / rate
         t = t - step
@@ -264,8 +316,7 @@ def corrected_speed(
     damping_rate : BECD [N*m*s/rad], > 0
     inertia : total inertia at the shaft J [kg*m**2]
     """
-    t = np.asarray(time, dtype=float)
-    return as_float(np.asarray(angle, dtype=float) / (t - transient_lag(t, damping_rate, inertia)))
+    return as_float(np.asarray(angle, dtype=float) / steady_span(time, damping_rate, inertia))
 
 
 @dataclass(frozen=True)
@@ -601,8 +652,11 @@ def _timing_line(
         return as_float(-model(p)[1] * np.array([friction - ceiling, damping]))
 
     friction_start = min(start[0], ceiling - 0.01 * scale)
-    result = leastsq.solve(
-        residual, jacobian, np.array([math.log((ceiling - friction_start) / scale), 0.0])
+    result = _solve(
+        "timing-noise",
+        residual,
+        jacobian,
+        np.array([math.log((ceiling - friction_start) / scale), 0.0]),
     )
     if not result.success:
         raise LineFitError(f"the timing-noise fit did not converge ({result.message})")
@@ -694,7 +748,8 @@ def _fit_with_startup(
         return np.column_stack([-np.ones_like(w), -dw])
 
     b0 = start[1]
-    result = leastsq.solve(
+    result = _solve(
+        "start-up-corrected",
         residual,
         jacobian,
         np.array([start[0], b0]),
@@ -706,8 +761,24 @@ def _fit_with_startup(
     return float(result.x[0]), float(result.x[1])
 
 
+def _solve(
+    what: str,
+    residual: Callable[[FloatArray], FloatArray],
+    jacobian: Callable[[FloatArray], FloatArray],
+    x0: FloatArray,
+    **options: Any,
+) -> leastsq.Solution:
+    """:func:`leastsq.solve`; a fit that cannot start (residuals not finite at its first
+    point) is this temperature's LineFitError, reported with the others, never a crash."""
+    try:
+        return leastsq.solve(residual, jacobian, x0, **options)
+    except ValueError as exc:
+        raise LineFitError(f"the {what} fit cannot start ({exc})") from None
+
+
 def read_drop_test(path: str | Path, gravity: float = STANDARD_GRAVITY) -> Table:
-    """Read a drop-test CSV file; rows whose drive torque is not positive are excluded."""
+    """Read a drop-test CSV file; rows whose drive torque is not positive are excluded, and
+    so are rows that turn further than their inertia allows (:func:`_exclude_unreachable`)."""
     table = read_table(path, DROP_TEST_COLUMNS)
     torque = _drive_torques(table, gravity)
     bad = torque <= 0.0
@@ -718,12 +789,46 @@ def read_drop_test(path: str | Path, gravity: float = STANDARD_GRAVITY) -> Table
             "cannot turn the damper"
             for value in torque[bad]
         ]
-        table = table.exclude(bad, key, reasons)
-        if table.rows.size == 0:
-            from ecdsim.config.errors import ConfigError
+        table = _checked_exclusion(table.exclude(bad, key, reasons))
+    return _exclude_unreachable(table, gravity)
 
-            lines = [b.message() for b in table.bad_rows]
-            raise ConfigError([*lines, "no usable data row remains"], table.source)
+
+def _exclude_unreachable(table: Table, gravity: float) -> Table:
+    """The table without the rows whose inertia forbids the recorded drop.
+
+    Released from rest, the shaft turns at most ``torque t**2 / (2 J)`` in a time t,
+    its free acceleration: damping and friction only slow it. A row that turns further
+    cannot be a drop of that inertia (rig_inertia 1e20 kg*m^2 with a 3 kg mass: 1e-16 rad
+    in two minutes, not half a turn); it is excluded with a line saying so, rather than
+    handed to a fit no parameters can satisfy.
+    """
+    if not table.has("rig_inertia"):
+        return table
+    v = table.values
+    torque = _drive_torques(table, gravity)
+    inertia = v["rig_inertia"] + falling_mass_inertia(v["mass"], v["radius"])
+    reach = torque * v["time"] ** 2 / (2.0 * inertia)
+    bad = v["angle"] > reach
+    if not np.any(bad):
+        return table
+    reasons = [
+        f"kg*m^2 is too large for the drop: even undamped, its drive torque {t:.4g} N*m turns "
+        f"J = {j:.4g} kg*m^2 (with the falling mass) only {r:.4g} rad in {s:.4g} s, not "
+        f"{a:.4g} rad"
+        for t, j, r, s, a in zip(
+            torque[bad], inertia[bad], reach[bad], v["time"][bad], v["angle"][bad], strict=True
+        )
+    ]
+    return _checked_exclusion(table.exclude(bad, "rig_inertia", reasons))
+
+
+def _checked_exclusion(table: Table) -> Table:
+    """``table``, or a ConfigError listing every bad row if no usable row remains."""
+    if table.rows.size == 0:
+        from ecdsim.config.errors import ConfigError
+
+        lines = [b.message() for b in table.bad_rows]
+        raise ConfigError([*lines, "no usable data row remains"], table.source)
     return table
 
 
