@@ -174,3 +174,171 @@ def test_montecarlo_ctrl_c_at_a_chunk_write_resumes_identically(
     resumed = runner.invoke(app, _study(config, out, "--resume"))
     assert resumed.exit_code == 0, resumed.output
     assert_identical_runs(reference, out)
+
+
+# --- what is at the output path (issue 23, item 5) ---------------------------------------
+
+SWEEP = [
+    "sweep", str(PAPER_CONFIG), "--vary", "gearbox.ratio=300:400:3", "-m", "exact", "-T", "25",
+]  # fmt: skip
+
+
+def _sweep_to(target: Path | str) -> Result:
+    return runner.invoke(app, [*SWEEP, "-o", str(target)])
+
+
+@pytest.fixture
+def expected_csv(tmp_path: Path) -> bytes:
+    """The table the sweep writes into a plain new file (what every other target must get)."""
+    plain = tmp_path / "plain.csv"
+    result = _sweep_to(plain)
+    assert result.exit_code == 0, result.output
+    return plain.read_bytes()
+
+
+def test_a_symlink_is_written_through_to_its_target(tmp_path: Path, expected_csv: bytes) -> None:
+    # The temporary file was renamed over the link: the link became a file and its target
+    # kept the old content.
+    target = tmp_path / "results" / "real.csv"
+    target.parent.mkdir()
+    target.write_text("an earlier result\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to(target)
+    result = _sweep_to(link)
+    assert result.exit_code == 0, result.output
+    assert link.is_symlink() and link.readlink() == target
+    assert target.read_bytes() == expected_csv
+    assert no_temporary_files(tmp_path)
+    # A dangling link is written where it points (as the shell's > does).
+    dangling = tmp_path / "dangling.csv"
+    dangling.symlink_to(tmp_path / "results" / "new.csv")
+    assert _sweep_to(dangling).exit_code == 0
+    assert dangling.is_symlink()
+    assert (tmp_path / "results" / "new.csv").read_bytes() == expected_csv
+
+
+def test_a_fifo_is_written_directly_and_stays_a_fifo(tmp_path: Path, expected_csv: bytes) -> None:
+    import stat
+    import threading
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    received: list[bytes] = []
+    reader = threading.Thread(target=lambda: received.append(fifo.read_bytes()))
+    reader.start()  # a FIFO's writer waits for a reader, as with the shell's >
+    result = _sweep_to(fifo)
+    reader.join(60.0)
+    assert result.exit_code == 0, result.output
+    assert received == [expected_csv]
+    assert stat.S_ISFIFO(fifo.stat().st_mode)
+    assert no_temporary_files(tmp_path)
+
+
+def _full_device(tmp_path: Path) -> Path:
+    """A node of /dev/full (character device 1, 7): its own node where this process may
+    create one (root), so that a regression replaces the copy, not the system's device;
+    else /dev/full itself, which a non-root process cannot replace."""
+    import stat
+
+    if os.geteuid() == 0:
+        node = tmp_path / "full"
+        os.mknod(node, 0o666 | stat.S_IFCHR, os.makedev(1, 7))
+        return node
+    return Path("/dev/full")
+
+
+def test_a_full_device_fails_in_one_line_and_stays_a_device(tmp_path: Path) -> None:
+    import stat
+
+    # Run as root, -o /dev/full exited 0 and turned the device into a 3 kB regular file.
+    device = _full_device(tmp_path)
+    result = _sweep_to(device)
+    assert_one_error_line(
+        result, 2, f"error: --out {device}: cannot write (No space left on device)"
+    )
+    assert stat.S_ISCHR(device.stat().st_mode)
+    result = runner.invoke(app, [*SWEEP, "-o", str(tmp_path / "s.csv"), "--plot", str(device)])
+    assert_one_error_line(result, 2, f"error: --plot {device}: cannot write (No space left")
+    assert stat.S_ISCHR(device.stat().st_mode)
+
+
+def test_a_folder_or_a_socket_is_refused_in_one_line(tmp_path: Path) -> None:
+    import socket
+
+    folder = tmp_path / "folder"
+    folder.mkdir()
+    result = _sweep_to(folder)
+    assert_one_error_line(
+        result,
+        2,
+        f"error: --out {folder}: cannot write (it is a folder, not a file; ecdsim writes "
+        "files, FIFOs and character devices)",
+    )
+    path = tmp_path / "socket"
+    with socket.socket(socket.AF_UNIX) as server:
+        server.bind(str(path))
+        result = _sweep_to(path)
+    assert_one_error_line(result, 2, f"error: --out {path}: cannot write (it is a socket,")
+    assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_a_block_device_is_never_written() -> None:
+    import stat
+
+    # A block device is a disk: refused before anything is written (no device is needed
+    # to test the rule: the mode decides).
+    assert atomic._what(stat.S_IFBLK | 0o660) == "block device"
+    assert atomic._what(stat.S_IFCHR | 0o666) in atomic.STREAMS
+    assert atomic._what(stat.S_IFIFO | 0o644) in atomic.STREAMS
+    assert atomic._what(stat.S_IFREG | 0o644) is None
+
+
+def test_a_missing_folder_is_created_and_said(tmp_path: Path, expected_csv: bytes) -> None:
+    # -o /nonexistent/dir/s.csv created the folders silently.
+    target = tmp_path / "new" / "deeper" / "s.csv"
+    result = _sweep_to(target)
+    assert result.exit_code == 0, result.output
+    assert target.read_bytes() == expected_csv
+    notes = [line for line in result.stderr.splitlines() if line.startswith("note:")]
+    assert notes == [f"note: created the folder {target.parent} (it did not exist)"]
+    assert "note:" not in _sweep_to(target).stderr  # there now: nothing to say
+    # A file where a folder should be is one line, not a traceback.
+    result = _sweep_to(target / "s.csv")
+    assert_one_error_line(result, 2, f"error: --out {target / 's.csv'}: cannot write")
+
+
+def test_stdout_redirected_to_a_file_gets_the_table_then_the_messages(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    # -o /dev/stdout with stdout redirected to a file: /dev/stdout is a link to this
+    # process's descriptor 1; renaming over the file it names, or opening it anew
+    # (truncated, written from the start), would lose what the process prints around it.
+    captured = tmp_path / "captured.txt"
+    with captured.open("wb") as stdout:
+        done = subprocess.run(
+            [sys.executable, "-m", "ecdsim", *SWEEP, "-o", "/dev/stdout"],
+            stdout=stdout,
+            stderr=subprocess.PIPE,
+            check=False,
+        )
+    assert done.returncode == 0, done.stderr
+    plain = tmp_path / "plain.csv"
+    assert _sweep_to(plain).exit_code == 0
+    assert captured.read_bytes() == plain.read_bytes() + b"wrote /dev/stdout (3 points, 3 rows)\n"
+
+
+def test_a_failed_montecarlo_leaves_no_folder(tmp_path: Path) -> None:
+    # The dynamic method needs [load] inertia: the run fails at its first chunk, and left
+    # empty out/ and out/chunks/ folders although nothing was written.
+    config = write_config(tmp_path, QUANTITIES)
+    out = tmp_path / "new" / "run"
+    result = runner.invoke(app, _study(config, out, "--method", "dynamic"))
+    assert_one_error_line(result, 2, "load.inertia: missing")
+    assert not (tmp_path / "new").exists()
+    # An existing folder stays, with what the user had in it.
+    out.mkdir(parents=True)
+    (out / "notes.txt").write_text("mine")
+    result = runner.invoke(app, _study(config, out, "--method", "dynamic"))
+    assert result.exit_code == 2
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]

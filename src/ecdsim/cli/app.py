@@ -27,6 +27,7 @@ from ecdsim.cli.common import (
     import_numpy_single_threaded,
     is_placeholder,
     load_run,
+    note_created_folders,
     pause_gc,
     predict_run,
     resume_gc,
@@ -90,6 +91,7 @@ def _root(
     ] = False,
 ) -> None:
     """Model, size and verify eddy current dampers in spring-driven deployments."""
+    note_created_folders()  # every command: say when an output creates a folder
 
 
 def _write_timeseries(prediction: Prediction, path: Path, as_json: bool) -> None:

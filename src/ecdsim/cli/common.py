@@ -104,6 +104,20 @@ def echo_wrapped(text: str, *, err: bool = True) -> None:
     typer.echo("\n".join(lines) if lines else text, err=err)
 
 
+def note_created_folders() -> None:
+    """Say on stderr, in a note, whenever an output creates a folder that did not exist
+    (``-o new/dir/file``): a mistyped folder name does not pass unnoticed. The writes go
+    through :mod:`ecdsim.atomic`, which tells its listeners; registered once per process,
+    as a command starts (``cli.app``'s root callback)."""
+    from ecdsim import atomic
+
+    atomic.on_folder_created(_note_folder)
+
+
+def _note_folder(folder: Path) -> None:
+    echo_wrapped(f"note: created the folder {folder} (it did not exist)")
+
+
 def fail(problems: list[str]) -> NoReturn:
     """Print user errors on stderr, one line each, and exit with code 2."""
     for problem in problems:

@@ -64,7 +64,6 @@ def report(
     failon.require_requirements(conditions, loaded)
     prediction = predict_run(loaded)
     text = config.read_text(encoding="utf-8")
-    missing = _missing_folder(output)
     try:
         written = write_report(loaded, prediction, text, output, system)
     except OSError as exc:
@@ -76,8 +75,6 @@ def report(
         )
         raise typer.Exit(INTERRUPTED) from None
     echo_warnings(prediction, system)
-    if missing is not None:
-        typer.echo(f"note: created the folder {missing} (it did not exist)", err=True)
     typer.echo(f"wrote {written}")
     if pdf:
         target = output.with_suffix(".pdf")
@@ -92,11 +89,6 @@ def report(
     if "requirements" in conditions:
         reasons += failon.requirement_reasons(loaded)
     failon.finish(conditions, reasons)
-
-
-def _missing_folder(output: Path) -> Path | None:
-    """``output``'s folder if it does not exist yet (the write creates it), else None."""
-    return None if output.parent.exists() else output.parent
 
 
 def explore(

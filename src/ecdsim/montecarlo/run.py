@@ -995,6 +995,26 @@ def _prepare(plan: Plan, out: Path, resume: bool, notes: list[str]) -> bool:
     return True
 
 
+def _make_folders(out: Path) -> list[Path]:
+    """Create the run's folder (announced to :func:`ecdsim.atomic.on_folder_created`'s
+    listeners) and its chunks folder; the folders that did not exist, outermost first."""
+    from ecdsim import atomic
+
+    made = atomic.make_folder(out)
+    chunks = out / store.CHUNKS
+    if not chunks.exists():
+        chunks.mkdir()
+        made.append(chunks)
+    return made
+
+
+def _remove_empty(folders: list[Path]) -> None:
+    """Remove ``folders`` (made by :func:`_make_folders`), innermost first, where empty."""
+    for folder in reversed(folders):
+        with contextlib.suppress(OSError):  # not empty (a user's file), or gone
+            folder.rmdir()
+
+
 def run(
     plan: Plan,
     out: Path,
@@ -1013,7 +1033,12 @@ def run(
     chosen = executor or InProcess()
     notes: list[str] = []
     out = Path(out)
-    created = _prepare(plan, out, resume, notes)
+    made = _make_folders(out)
+    try:
+        created = _prepare(plan, out, resume, notes)
+    except BaseException:
+        _remove_empty(made)
+        raise
     removed = store.remove_partial_files(out)
     if removed:
         notes.append(f"removed {len(removed)} unfinished file(s) left by an interrupted run")
@@ -1104,8 +1129,10 @@ def run(
         store.remove_partial_files(out)  # files staged by forked workers, not installed
         if created and computed == 0:
             # Nothing was computed (no scheduler, a missing package, a bad first chunk):
-            # leave no half-started run behind, so that the same command can be repeated.
+            # leave no half-started run behind, so that the same command can be repeated,
+            # nor the folders this run made for it (docs: a failed run writes nothing).
             (out / store.MANIFEST).unlink(missing_ok=True)
+            _remove_empty(made)
         raise
     finally:
         writer.shutdown(wait=True)
