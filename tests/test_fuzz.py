@@ -460,7 +460,9 @@ def test_mutated_trace_csv_exits_0_or_2(data: bytes) -> None:
 
 # --- the explorer's API -----------------------------------------------------------------
 
-APP = create_app()
+# Served as if bound to "testserver", the name schemathesis's in-process client (and
+# TestClient's) sends as Host: the explorer answers only its own names (HostCheck).
+APP = create_app(host="testserver")
 client = TestClient(APP, raise_server_exceptions=False)
 json_configs = st.one_of(
     mutated_config(PAPER),

@@ -367,7 +367,7 @@ def test_the_report_and_the_explorer_api_carry_flight_and_test() -> None:
     # The figures are the ground test's and say so; without gravity they say nothing.
     assert "Deployed angle against time (paper Fig. 4-6) (ground test, 1 g)" in html
     assert "(ground test, 1 g)" not in plain_html
-    client = TestClient(create_app(None))
+    client = TestClient(create_app(None), base_url="http://localhost")
     raw = client.post("/api/config/parse", json={"toml": text}).json()["config"]
     body = client.post("/api/deploy", json={"config": raw, "sweep_points": 0}).json()
     ground = body["prediction"]["ground_test"]

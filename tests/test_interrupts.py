@@ -206,7 +206,8 @@ def test_a_symlink_is_written_through_to_its_target(tmp_path: Path, expected_csv
     link.symlink_to(target)
     result = _sweep_to(link)
     assert result.exit_code == 0, result.output
-    assert link.is_symlink() and link.readlink() == target
+    assert link.is_symlink()
+    assert link.readlink() == target
     assert target.read_bytes() == expected_csv
     assert no_temporary_files(tmp_path)
     # A dangling link is written where it points (as the shell's > does).

@@ -97,7 +97,7 @@ def test_unknown_system_is_named() -> None:
 
 # --- the explorer's API ----------------------------------------------------------------------
 
-client = TestClient(create_app())
+client = TestClient(create_app(), base_url="http://localhost")
 
 
 def _degf_config() -> dict[str, Any]:
@@ -438,7 +438,7 @@ def test_api_report_and_app_default_units() -> None:
     assert response.status_code == 200
     assert "<th>T [degF]</th>" in response.text
     # ecdsim app --units us: the system of requests that do not choose one.
-    us_client = TestClient(create_app(units="us"))
+    us_client = TestClient(create_app(units="us"), base_url="http://localhost")
     assert us_client.get("/api/example").json()["display_units"] == "us"
     small = {"config": _degf_config(), "time_points": 2, "sweep_points": 0}
     assert us_client.post("/api/deploy", json=small).json()["display_units"] == "us"

@@ -153,7 +153,7 @@ def test_the_shared_reader_refuses_absolute_zero_and_below(text: str) -> None:
 
 # The explorer's API: a config with such a temperature is refused with 422 naming the
 # field, on every endpoint that takes a config, and never computed.
-client = TestClient(create_app())
+client = TestClient(create_app(), base_url="http://localhost")
 
 
 def _paper() -> dict[str, Any]:

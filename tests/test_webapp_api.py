@@ -20,7 +20,7 @@ from tests import hand
 from tests.conftest import PAPER_CONFIG, ROOT
 
 DYNAMIC_CONFIG = ROOT / "examples" / "paper_cc16_dynamic.toml"
-APP = create_app()
+APP = create_app(host="testserver")  # the Host schemathesis and TestClient send
 client = TestClient(APP)
 runner = CliRunner()
 

@@ -21,7 +21,7 @@ from ecdsim.webapp.server import create_app
 from tests.conftest import PAPER_CONFIG, ROOT
 
 DROP_TEST = ROOT / "examples" / "drop_test.csv"
-client = TestClient(create_app())
+client = TestClient(create_app(), base_url="http://localhost")
 runner = CliRunner()
 # Keys of the CLI's JSON that name files on disk, not results.
 FILE_KEYS = ("source", "parameter_file", "plots")

@@ -112,7 +112,7 @@ def explore(
     try:
         import uvicorn
 
-        from ecdsim.webapp.server import create_app
+        from ecdsim.webapp.server import create_app, exposure_warning
     except ImportError as exc:
         fail(
             [
@@ -127,6 +127,9 @@ def explore(
         text = config.read_text(encoding="utf-8")
     # The page starts in --units if given (else the config's [output] units) and may switch.
     system = units_option(units, loaded) if units is not None else None
-    application = create_app(text, units=system)
+    application = create_app(text, units=system, host=host)
     typer.echo(f"ecdsim explorer on http://{host}:{port}/ (Ctrl-C stops it)")
+    warning = exposure_warning(host, port)
+    if warning is not None:
+        typer.echo(warning, err=True)
     uvicorn.run(application, host=host, port=port, log_level="warning")

@@ -31,10 +31,12 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from ecdsim._version import __version__
 from ecdsim.config import Config, ConfigError, parse_config
 from ecdsim.config.loader import MAX_NESTING, nesting_depth, parse_toml
+from ecdsim.config.units import quoted
 from ecdsim.deployment import ModelDomainError, Prediction, predict
 from ecdsim.report.builder import predict_config, render_html
 from ecdsim.units_display import UnitSystem, check_system, convert_text, describe, key_units
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
+from ecdsim.webapp.workers import Busy, Reply, Timeout, WorkerDied, shared_pool
 
 _LOG = logging.getLogger(__name__)
 
@@ -175,26 +177,114 @@ _LIMITED: dict[int | str, dict[str, Any]] = {
 }
 
 
-async def within_time_limit(compute: Callable[[], Response]) -> Response:
-    """Run ``compute`` in a worker thread, off the event loop, for at most the time limit.
+async def within_time_limit(
+    job: Callable[..., Reply], args: tuple[Any, ...], limit_s: float
+) -> Response:
+    """``job(*args)`` in a worker process (:mod:`ecdsim.webapp.workers`), for at most
+    ``limit_s`` seconds, off the event loop: other requests are served meanwhile.
 
-    Other requests are served meanwhile. Past :data:`COMPUTE_LIMIT_S` the client gets
-    503 at once; the thread cannot be killed and finishes in the background, its result
-    discarded.
+    Past the limit the client gets 503 and the worker is killed, so the computation stops
+    using the CPU then (a thread, as before, ran on in the background). A request that
+    finds every worker busy waits for one within the same limit.
     """
     import anyio
 
+    pool = shared_pool()
     try:
-        with anyio.fail_after(COMPUTE_LIMIT_S):
-            return await anyio.to_thread.run_sync(compute, abandon_on_cancel=True)
-    except TimeoutError:
+        reply = await anyio.to_thread.run_sync(pool.call, job, args, limit_s)
+    except Timeout:
         raise HTTPException(
             status_code=503,
             detail=[
-                f"computation: took longer than {COMPUTE_LIMIT_S:g} s; ask for fewer "
-                "temperatures, points or a shorter stop_time"
+                f"computation: took longer than {limit_s:g} s and was stopped; ask for "
+                "fewer temperatures, points or a shorter stop_time"
             ],
         ) from None
+    except Busy:
+        raise HTTPException(
+            status_code=503,
+            detail=[
+                f"computation: not started within {limit_s:g} s: the server's {pool.size} "
+                "workers were busy; try again"
+            ],
+        ) from None
+    except WorkerDied:
+        _LOG.error("a computation's worker process ended while computing")
+        raise HTTPException(
+            status_code=500,
+            detail=["internal error (the computation's process ended); please report it"],
+        ) from None
+    if reply.defect is not None:
+        _LOG.error("internal error in a computation:\n%s", reply.defect)
+    return Response(
+        reply.body, status_code=reply.status, media_type=reply.media_type, headers=reply.headers
+    )
+
+
+def as_reply(compute: Callable[[], Response]) -> Reply:
+    """Run ``compute`` (in a worker) and turn its response, or its refusal, into a Reply."""
+    try:
+        response = compute()
+    except HTTPException as exc:
+        raw: Any = exc.detail
+        detail = raw if isinstance(raw, list) else [str(raw)]
+        return Reply(exc.status_code, json.dumps({"errors": detail}).encode())
+    kept = {k: v for k, v in response.headers.items() if k.lower() == "content-disposition"}
+    return Reply(
+        response.status_code,
+        bytes(response.body),
+        response.media_type or "application/octet-stream",
+        kept,
+    )
+
+
+def deploy_job(
+    config: dict[str, Any],
+    units: UnitSystem | None,
+    time_points: int,
+    sweep_points: int,
+    default_units: UnitSystem | None,
+) -> Reply:
+    """``POST /api/deploy``'s computation (in a worker): the prediction and its curves."""
+
+    def compute() -> Response:
+        loaded, text = load_body(config)
+        began = time.perf_counter()
+        prediction = _predict(loaded)
+        document = prediction.to_dict()
+        extra = curves(prediction, loaded, time_points, sweep_points)
+        elapsed = 1000.0 * (time.perf_counter() - began)
+        system = display_system(loaded, units, default_units)
+        document["display_units"] = system
+        for warning in document["warnings"]:
+            # The message stays SI (stable JSON); the page shows this one.
+            warning["display_message"] = convert_text(warning["message"], system)
+        payload = {
+            "prediction": document,
+            **extra,
+            "toml": text,
+            "compute_ms": elapsed,
+            **display_block(system, document, extra),
+        }
+        return Response(json.dumps(payload, allow_nan=False), media_type="application/json")
+
+    return as_reply(compute)
+
+
+def report_job(
+    config: dict[str, Any], units: UnitSystem | None, default_units: UnitSystem | None
+) -> Reply:
+    """``POST /api/report``'s computation (in a worker): the HTML report."""
+
+    def compute() -> Response:
+        loaded, text = load_body(config)
+        system = display_system(loaded, units, default_units)
+        html = render_html(loaded, _predict(loaded), text, system)
+        return HTMLResponse(
+            html, headers={"Content-Disposition": 'attachment; filename="ecdsim-report.html"'}
+        )
+
+    return as_reply(compute)
 
 
 def _refuse(problems: list[str]) -> HTTPException:
@@ -288,27 +378,43 @@ def curves(
     return {"trajectories": trajectories, "sweep": sweep}
 
 
+# The longest a client may take to send a request's body [s]: 1,000,000 bytes (the
+# limit) at 33 kB/s. A client that promises a Content-Length and sends it a byte at a
+# time would otherwise hold its connection and a request open for ever.
+BODY_TIMEOUT_S = 30.0
+
+
 class BodyLimit:
-    """ASGI middleware: refuse a request body over ``limit`` bytes with 413 and JSON.
+    """ASGI middleware: refuse a request body over ``limit`` bytes with 413 and JSON, and
+    one not received within ``timeout_s`` seconds with 408.
 
     The body is read (up to the limit) before the app sees it and then replayed, so that
     a body without a Content-Length header is bounded too.
     """
 
-    def __init__(self, app: Any, limit: int) -> None:
+    def __init__(self, app: Any, limit: int, timeout_s: float = BODY_TIMEOUT_S) -> None:
         self.app = app
         self.limit = limit
+        self.timeout_s = timeout_s
 
     async def __call__(self, scope: Any, receive: Any, send: Any) -> None:
-        """Pass the request on with its body read, or answer 413 if it is too large."""
+        """Pass the request on with its body read, or answer 413 or 408."""
+        import anyio
+
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
         chunks: list[bytes] = []
         size = 0
         more = True
+        deadline = anyio.current_time() + self.timeout_s
         while more:
-            message = await receive()
+            message = None
+            with anyio.move_on_after(max(deadline - anyio.current_time(), 0.0)):
+                message = await receive()
+            if message is None:
+                await _too_slow(self.timeout_s, size, scope, send)
+                return
             if message["type"] != "http.request":
                 await self.app(scope, _replay([message]), send)
                 return
@@ -321,6 +427,101 @@ class BodyLimit:
             more = message.get("more_body", False)
         body = {"type": "http.request", "body": b"".join(chunks), "more_body": False}
         await self.app(scope, _replay([body], receive), send)
+
+
+class HostCheck:
+    """ASGI middleware: answer only requests addressed to this server by a name it has.
+
+    The explorer has no authentication; what keeps other web pages out is the browser's
+    same-origin rule, which DNS rebinding defeats: a page from ``evil.example`` whose
+    name then resolves to 127.0.0.1 reads ``/api/example`` (the user's config) as its
+    own origin. Its requests carry ``Host: evil.example``; so a request is answered only
+    when its Host names an IP address (a page served from an address is that server's
+    own), ``localhost`` or a name under ``.localhost`` (which browsers resolve to the
+    loopback themselves, RFC 6761), or the name the server was bound to (``--host``;
+    with a wildcard address, also this machine's host name). Anything else is refused
+    with 400 and one line saying which names are answered. A request without a Host
+    header (HTTP/1.0; browsers always send one) passes.
+    """
+
+    def __init__(self, app: Any, names: frozenset[str]) -> None:
+        self.app = app
+        self.names = names
+
+    async def __call__(self, scope: Any, receive: Any, send: Any) -> None:
+        """Pass a request whose Host is one of this server's names; refuse the rest."""
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        raw = next((v for k, v in scope.get("headers", []) if k == b"host"), None)
+        if raw is None or host_is_ours(raw.decode("latin-1"), self.names):
+            await self.app(scope, receive, send)
+            return
+        problem = (
+            f"host: {quoted(raw.decode('latin-1'))} is not a name of this server; open it as "
+            "localhost or by its address (other names are refused against DNS rebinding)"
+        )
+        await _json_response(400, {"errors": [problem]}, send)
+
+
+def host_name(header: str) -> str:
+    """The name in a Host header, without the port, lower case, without a final dot.
+
+    >>> host_name("LocalHost.:8765"), host_name("[::1]:8765"), host_name("10.0.0.5")
+    ('localhost', '::1', '10.0.0.5')
+    """
+    text = header.strip()
+    if text.startswith("["):  # an IPv6 literal
+        return text[1:].partition("]")[0].lower()
+    if text.count(":") > 1:  # an IPv6 address without brackets (as --host takes it)
+        return text.lower()
+    return text.rpartition(":")[0].lower().rstrip(".") if ":" in text else text.lower().rstrip(".")
+
+
+def host_is_ours(header: str, names: frozenset[str]) -> bool:
+    """True if a request's Host header addresses this server (:class:`HostCheck`)."""
+    import ipaddress
+
+    name = host_name(header)
+    try:
+        ipaddress.ip_address(name)
+    except ValueError:
+        return name == "localhost" or name.endswith(".localhost") or name in names
+    return True
+
+
+WILDCARD_HOSTS = frozenset({"0.0.0.0", "::", ""})
+
+
+def server_names(host: str | None) -> frozenset[str]:
+    """The names :class:`HostCheck` answers besides addresses and localhost: the bound
+    ``host`` and, bound to every interface, this machine's names."""
+    if host is None:
+        return frozenset()
+    names = {host_name(host)}
+    if host in WILDCARD_HOSTS:
+        import socket
+
+        names |= {socket.gethostname().lower(), socket.getfqdn().lower()}
+    return frozenset(names)
+
+
+def exposure_warning(host: str, port: int) -> str | None:
+    """One line warning that ``--host`` makes the explorer reachable from other machines,
+    or None for a loopback address (``127.0.0.1``, ``::1``, ``localhost``)."""
+    import ipaddress
+
+    try:
+        loopback = ipaddress.ip_address(host_name(host)).is_loopback
+    except ValueError:
+        loopback = host_name(host) == "localhost"
+    if loopback:
+        return None
+    return (
+        f"warning: --host {host} makes the explorer reachable from other machines on port "
+        f"{port}, and it has no authentication: anyone who reaches it reads your config "
+        "and uses this machine's CPU; keep 127.0.0.1 unless the network is trusted"
+    )
 
 
 class InternalErrorAsJson:
@@ -369,30 +570,49 @@ def _replay(messages: list[Any], then: Any = None) -> Any:
     return receive
 
 
+async def _too_slow(timeout_s: float, size: int, scope: Any, send: Any) -> None:
+    promised = next(
+        (v.decode("latin-1") for k, v in scope.get("headers", []) if k == b"content-length"),
+        None,
+    )
+    of = f" of the {promised} its Content-Length promised" if promised is not None else ""
+    problem = f"body: not received within {timeout_s:g} s ({size} bytes arrived{of})"
+    await _json_response(408, {"errors": [problem]}, send, close=True)
+
+
 async def _too_large(limit: int, send: Any) -> None:
     await _json_response(413, {"errors": [f"body: larger than {limit} bytes"]}, send)
 
 
-async def _json_response(status: int, content: Any, send: Any) -> None:
+async def _json_response(status: int, content: Any, send: Any, *, close: bool = False) -> None:
     payload = json.dumps(content).encode()
-    await send(
-        {
-            "type": "http.response.start",
-            "status": status,
-            "headers": [
-                (b"content-type", b"application/json"),
-                (b"content-length", str(len(payload)).encode()),
-            ],
-        }
-    )
+    headers = [
+        (b"content-type", b"application/json"),
+        (b"content-length", str(len(payload)).encode()),
+    ]
+    if close:  # the rest of the request is not read: the connection cannot be reused
+        headers.append((b"connection", b"close"))
+    await send({"type": "http.response.start", "status": status, "headers": headers})
     await send({"type": "http.response.body", "body": payload})
 
 
-def create_app(config_text: str | None = None, units: UnitSystem | None = None) -> FastAPI:
+def create_app(
+    config_text: str | None = None,
+    units: UnitSystem | None = None,
+    *,
+    compute_limit_s: float | None = None,
+    host: str | None = None,
+    body_timeout_s: float = BODY_TIMEOUT_S,
+) -> FastAPI:
     """The explorer app, starting from ``config_text`` (TOML) or the paper's example.
 
     ``units`` (``ecdsim app --units``) is the display unit system of a request that does
     not choose one; None leaves it to each config's ``[output] units``.
+    ``compute_limit_s``: the longest a computation may run (default
+    :data:`COMPUTE_LIMIT_S`); past it the request gets 503 and the computation is stopped.
+    ``host``: the address the server is bound to (``ecdsim app --host``); requests must
+    address it by that name, an IP address or localhost (:class:`HostCheck`).
+    ``body_timeout_s``: the longest a client may take to send a request's body (408).
     """
     start_text = config_text if config_text is not None else EXAMPLE_CONFIG.read_text("utf-8")
     source = "your config" if config_text is not None else "paper example (section 6)"
@@ -421,7 +641,8 @@ def create_app(config_text: str | None = None, units: UnitSystem | None = None) 
     # ServerErrorMiddleware, which re-raises after answering; uvicorn then closes the
     # connection, so a kept-alive client's next request could meet a reset.)
     app.add_middleware(InternalErrorAsJson)
-    app.add_middleware(BodyLimit, limit=MAX_BODY_BYTES)
+    app.add_middleware(BodyLimit, limit=MAX_BODY_BYTES, timeout_s=body_timeout_s)
+    app.add_middleware(HostCheck, names=server_names(host))  # outermost: checked first
 
     # Starlette's class: FastAPI's own refusals (400 for a body that is not JSON, 404,
     # 405) derive from it, and they too answer with the errors list.
@@ -465,32 +686,20 @@ def create_app(config_text: str | None = None, units: UnitSystem | None = None) 
             "units": describe(system),
         }
 
+    limit_s = COMPUTE_LIMIT_S if compute_limit_s is None else compute_limit_s
+
+    async def limited(job: Callable[..., Reply], args: tuple[Any, ...]) -> Response:
+        # Refused here, before pickling for the worker recurses through it; the worker's
+        # reader applies the exact limit (a request body holds the config one level down).
+        if nesting_depth(args, MAX_NESTING + 2) > MAX_NESTING + 2:
+            raise _refuse([f"config: nested too deeply (at most {MAX_NESTING} levels)"])
+        return await within_time_limit(job, args, limit_s)
+
     @app.post("/api/deploy", response_model=DeployResponse, responses=_LIMITED)
     async def deploy(body: DeployBody) -> Response:
         """Predict the deployment of a config, as `ecdsim deploy --json`, plus curves."""
-
-        def compute() -> Response:
-            config, text = load_body(body.config)
-            began = time.perf_counter()
-            prediction = _predict(config)
-            document = prediction.to_dict()
-            extra = curves(prediction, config, body.time_points, body.sweep_points)
-            elapsed = 1000.0 * (time.perf_counter() - began)
-            system = display_system(config, body.units, units)
-            document["display_units"] = system
-            for warning in document["warnings"]:
-                # The message stays SI (stable JSON); the page shows this one.
-                warning["display_message"] = convert_text(warning["message"], system)
-            payload = {
-                "prediction": document,
-                **extra,
-                "toml": text,
-                "compute_ms": elapsed,
-                **display_block(system, document, extra),
-            }
-            return Response(json.dumps(payload, allow_nan=False), media_type="application/json")
-
-        return await within_time_limit(compute)
+        args = (body.config, body.units, body.time_points, body.sweep_points, units)
+        return await limited(deploy_job, args)
 
     @app.post("/api/config/parse", response_model=ExampleResponse, responses=_ERRORS)
     def parse(body: TomlBody) -> dict[str, Any]:
@@ -530,19 +739,10 @@ def create_app(config_text: str | None = None, units: UnitSystem | None = None) 
     )
     async def report(body: ReportBody) -> Response:
         """The self-contained HTML report of the config (as `ecdsim report`)."""
-
-        def compute() -> Response:
-            config, text = load_body(body.config)
-            system = display_system(config, body.units, units)
-            html = render_html(config, _predict(config), text, system)
-            return HTMLResponse(
-                html, headers={"Content-Disposition": 'attachment; filename="ecdsim-report.html"'}
-            )
-
-        return await within_time_limit(compute)
+        return await limited(report_job, (body.config, body.units, units))
 
     # The bench fit (drop test) has its own module: ecdsim.webapp.fitapi.
-    from ecdsim.webapp.fitapi import ServerHelpers, add_fit_routes
+    from ecdsim.webapp.fitapi import add_fit_routes
 
-    add_fit_routes(app, _LIMITED, ServerHelpers(_refuse, load_body, within_time_limit))
+    add_fit_routes(app, _LIMITED, limited)
     return app
