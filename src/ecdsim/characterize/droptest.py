@@ -74,6 +74,7 @@ from ecdsim.characterize.linefit import (
     fit_line,
     summarise_line,
 )
+from ecdsim.characterize.noisecheck import Group, NoiseCheck, check_noise_model
 from ecdsim.characterize.stats import Estimate, linearised
 from ecdsim.characterize.templaws import (
     MISFIT_LEVEL,
@@ -483,6 +484,8 @@ class DropTestResult:
     gravity : g used [m/s**2]
     warnings : flags raised (roll-off, outliers, start-up correction, ...)
     noise : the noise model of the lines (a :data:`NOISE_MODELS` name)
+    noise_check : whether the residuals support that model rather than the other
+        (:mod:`ecdsim.characterize.noisecheck`); None where no line has residual scatter
     """
 
     table: Table
@@ -493,6 +496,7 @@ class DropTestResult:
     gravity: float
     warnings: tuple[FitWarning, ...] = field(default=())
     noise: str = "torque"
+    noise_check: NoiseCheck | None = None
 
     def to_dict(self, *, points_as_table: bool = False) -> dict[str, Any]:
         """The JSON document of ``ecdsim fit drop-test --json`` (docs/characterize.md).
@@ -507,6 +511,7 @@ class DropTestResult:
             "gravity_m_s2": self.gravity,
             "reference_temperature_C": self.reference_temperature,
             "noise_model": self.noise,
+            "noise_check": self.noise_check.to_dict() if self.noise_check else None,
             "temperatures": [fit.to_dict(points_as_table=points_as_table) for fit in self.fits],
             "failed_temperatures": [f.to_dict() for f in self.failed],
             "temperature_laws": self.laws.to_dict() if self.laws else None,
@@ -891,6 +896,7 @@ def reduce_drop_test(
     fits: list[TemperatureFit] = []
     failed: list[FailedTemperature] = []
     warnings: list[FitWarning] = [FitWarning("ignored_column", note) for note in table.notes]
+    groups: list[Group] = []  # the lines' residuals, for the noise model's check
     for temperature, members in temperature_groups(v["temperature"]):
         rows = table.rows[members]
         try:
@@ -907,6 +913,9 @@ def reduce_drop_test(
             failed.append(FailedTemperature(temperature, tuple(int(r) for r in rows), str(exc)))
             continue
         fits.append(fit)
+        group = _check_group(fit, v["angle"][members], v["time"][members])
+        if group is not None:
+            groups.append(group)
         warnings.extend(_flags(fit))
         if not has_inertia:
             warnings.extend(_uncorrected_transient(fit, v, members))
@@ -927,6 +936,11 @@ def reduce_drop_test(
                 "only one temperature could be fitted: no law over temperature",
             )
         )
+    other = next(name for name in NOISE_MODELS if name != model.name)
+    check = check_noise_model(model.name, other, groups)
+    finding = check.warning() if check is not None else None
+    if finding is not None:
+        warnings.append(finding)
     return DropTestResult(
         table=table,
         fits=tuple(fits),
@@ -936,7 +950,41 @@ def reduce_drop_test(
         gravity=gravity,
         warnings=tuple(warnings),
         noise=model.name,
+        noise_check=check,
     )
+
+
+def _check_group(fit: TemperatureFit, angle: FloatArray, time: FloatArray) -> Group | None:
+    """One line's residuals, linearised design and the other model's scatter pattern, for
+    :func:`~ecdsim.characterize.noisecheck.check_noise_model`; None for an exact line or one
+    without residual degrees of freedom.
+
+    The patterns come from ``d torque_model / d log t = BECD w t (1 - e**-(t/tau)) / (t -
+    lag)`` (``BECD w`` without inertia): a relative timing error moves a point's torque by
+    it, and a torque error moves ``log t`` by its inverse.
+    """
+    stats = fit.line.statistics
+    if stats.dof < 1 or stats.exact:
+        return None
+    damping = fit.line.slope.value
+    inertia = fit.inertia
+    corrected = fit.corrected
+    tau = _time_constant(damping, inertia)
+    moving = tau > 0.0
+    rate = np.where(moving, -np.expm1(-time / np.where(moving, tau, 1.0)), 1.0)
+    sensitivity = corrected * time * rate / steady_span(time, damping, inertia)
+    if fit.noise == "timing":
+        design = _log_drop_time(fit.torque, angle, fit.line.intercept.value, damping, inertia)[1]
+        exponent = -np.log(sensitivity)
+    else:
+        slope_column = corrected
+        if np.any(inertia > 0.0):
+            slope_column = corrected + damping * corrected**2 / angle * _lag_derivative(
+                time, damping, inertia
+            )
+        design = np.column_stack([np.ones_like(corrected), slope_column])
+        exponent = np.log(sensitivity)
+    return Group(stats.residuals, design, as_float(exponent))
 
 
 def law_input(estimate: Estimate, line: LineFit) -> Estimate:
