@@ -343,3 +343,18 @@ def test_a_failed_montecarlo_leaves_no_folder(tmp_path: Path) -> None:
     result = runner.invoke(app, _study(config, out, "--method", "dynamic"))
     assert result.exit_code == 2
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]
+
+
+def test_a_montecarlo_folder_is_said_once_the_run_stands_and_a_reports_is_not(
+    tmp_path: Path,
+) -> None:
+    config = write_config(tmp_path, QUANTITIES, "seed = 7")
+    out = tmp_path / "new" / "run"
+    result = runner.invoke(app, _study(config, out))
+    assert result.exit_code == 0, result.output
+    notes = [line for line in result.output.splitlines() if line.startswith("note: created")]
+    assert notes == [f"note: created the folder {out} (it did not exist)"]
+    # A report's Monte Carlo study runs in a temporary folder of its own: nothing to say.
+    report = runner.invoke(app, ["report", str(config), "-o", str(tmp_path / "r.html")])
+    assert report.exit_code == 0, report.output
+    assert "note: created" not in report.output

@@ -42,10 +42,11 @@ def on_folder_created(listener: Callable[[Path], None]) -> None:
         _folder_listeners.append(listener)
 
 
-def make_folder(folder: str | Path) -> list[Path]:
+def make_folder(folder: str | Path, *, announce: bool = True) -> list[Path]:
     """Create ``folder`` and any missing folder above it; the folders created, outermost
     first (empty if it existed). Listeners (:func:`on_folder_created`) hear of ``folder``
-    when anything was created."""
+    when anything was created, unless ``announce`` is False (a folder the caller says
+    itself, or a working folder of its own)."""
     path = Path(folder)
     missing: list[Path] = []
     probe = path
@@ -57,7 +58,7 @@ def make_folder(folder: str | Path) -> list[Path]:
             raise NotADirectoryError(errno.ENOTDIR, "is a file, not a folder", str(path))
         return []
     path.mkdir(parents=True, exist_ok=True)
-    for listener in list(_folder_listeners):
+    for listener in list(_folder_listeners) if announce else []:
         listener(path)
     return missing[::-1]
 

@@ -187,10 +187,13 @@ def montecarlo(
         soft_wrap=False,  # wrapped to the terminal's width (80 in a pipe)
     )
     resume_command = _resume_command(config, plan, folder, workers, scheduler)
+    new_folder = not folder.exists()  # said once the run stands (a failed one removes it)
     try:
         # The bar redraws itself: on a terminal only, never into a pipe or a log file.
         with _progress(console, show_progress and console.is_terminal) as update:
             report = run(plan, folder, executor, resume=resume, progress=update)
+        if new_folder:
+            console.print(f"note: created the folder {folder} (it did not exist)", highlight=False)
         for note in report.notes:
             console.print(f"note: {note}", highlight=False, soft_wrap=False)
         console.print(

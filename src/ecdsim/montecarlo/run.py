@@ -996,11 +996,12 @@ def _prepare(plan: Plan, out: Path, resume: bool, notes: list[str]) -> bool:
 
 
 def _make_folders(out: Path) -> list[Path]:
-    """Create the run's folder (announced to :func:`ecdsim.atomic.on_folder_created`'s
-    listeners) and its chunks folder; the folders that did not exist, outermost first."""
+    """Create the run's folder and its chunks folder; the folders that did not exist,
+    outermost first (the caller says so: ``ecdsim montecarlo`` once the run stands, and
+    a report's study in a temporary folder not at all)."""
     from ecdsim import atomic
 
-    made = atomic.make_folder(out)
+    made = atomic.make_folder(out, announce=False)
     chunks = out / store.CHUNKS
     if not chunks.exists():
         chunks.mkdir()
