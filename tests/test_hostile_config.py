@@ -206,3 +206,14 @@ def test_an_integrator_tolerance_it_cannot_meet_is_refused(rtol: str) -> None:
 @pytest.mark.parametrize("rtol", ["1e-13", "0.1"])
 def test_the_tolerance_bounds_are_accepted(rtol: str) -> None:
     parse_config(PAPER.replace("[analysis]", f"[analysis]\nrtol = {rtol}"))
+
+
+def test_the_library_sweep_design_applies_the_seed_rule_too() -> None:
+    from ecdsim.sweeps import SweepError, design, parse_vary
+
+    with pytest.raises(SweepError) as info:
+        design([parse_vary("gearbox.ratio=300:400:3")], 5, -1)
+    assert info.value.problems == [
+        "--seed -1: expected a whole number from 0 to 9223372036854775807 (2**63 - 1)"
+    ]
+    assert len(design([parse_vary("gearbox.ratio=300:400:3")], 5, 2**63 - 1)) == 5

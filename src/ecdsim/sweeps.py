@@ -169,6 +169,11 @@ def design(
         ]
     if latin < 1 or latin > MAX_POINTS:
         raise SweepError([f"--latin {latin}: expected 1 to {MAX_POINTS} points"])
+    from ecdsim.config.seeds import seed_problem  # the one rule for seeds
+
+    bad_seed = seed_problem(seed)
+    if bad_seed is not None:
+        raise SweepError([f"--seed {seed}: {bad_seed}"])
     rng = np.random.default_rng(seed)
     points: list[dict[str, tuple[object, float]]] = [{} for _ in range(latin)]
     for v in varies:
