@@ -789,6 +789,17 @@ def test_a_toml_integer_beyond_4300_digits_is_one_line(tmp_path: Path) -> None:
     response = client.post("/api/config/parse", json={"toml": text})
     assert response.status_code == 422
     assert response.json() == {"errors": [f"toml: {expected}"]}
+    # The sizing catalogue is read the same way (ecdsim size crashed too).
+    catalogue = (EXAMPLES_DIR / "catalogue.toml").read_text()
+    assert catalogue.splitlines()[27] == "ratios = [380]"
+    bad = tmp_path / "catalogue.toml"
+    bad.write_text(catalogue.replace("ratios = [380]", "ratios = [" + "1" * 4400 + "]", 1))
+    result = _run(["size", str(EXAMPLES_DIR / "sizing.toml"), "--catalog", str(bad)])
+    assert_clean_exit(result, bad)
+    assert result.stderr.strip() == (
+        f"error: {bad}: line 28: ratios = an integer of 4,400 digits; expected a number of "
+        "at most 4,300 digits (ecdsim accepts magnitudes up to 1e30)"
+    )
 
 
 def test_a_toml_integer_beyond_float64_is_refused_by_name(tmp_path: Path) -> None:

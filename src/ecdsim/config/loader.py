@@ -131,7 +131,7 @@ def _long_integer(text: str, error: ValueError) -> str:
         for match in _LONG_DIGITS.finditer(line):
             digits = len(match.group().replace("_", ""))
             if digits > limit:
-                key = line[: match.start()].strip().rstrip("=+-[,").strip() or "value"
+                key = line[: match.start()].rstrip(" \t=+-[,").strip() or "value"
                 return (
                     f"line {number}: {key[:MAX_QUOTED]} = an integer of {digits:,} digits; "
                     f"expected a number of at most {limit:,} digits (ecdsim accepts "

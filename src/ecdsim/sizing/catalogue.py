@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import csv
 import io
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
@@ -29,7 +28,7 @@ from ecdsim.config.fields import (
     PositiveNumber,
     PositiveTorque,
 )
-from ecdsim.config.loader import read_config_text
+from ecdsim.config.loader import parse_toml, read_config_text
 from ecdsim.config.schema import DamperSpec
 from ecdsim.config.sizing_schema import (
     Efficiency,
@@ -329,10 +328,7 @@ def build_catalogue(entries: list[tuple[str, str, dict[str, Any]]], source: str)
 
 def parse_toml_catalogue(text: str, source: str = "<string>") -> Catalogue:
     """A catalogue from TOML text: ``[[damper]]`` and ``[[gearbox]]`` arrays of tables."""
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError([f"not valid TOML: {exc}"], source) from None
+    raw = parse_toml(text, source)  # invalid TOML, deep nesting, a 4,300-digit integer
     unknown = sorted(set(raw) - {"title", "damper", "gearbox"})
     if unknown:
         raise ConfigError(
