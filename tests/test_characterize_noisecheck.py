@@ -156,3 +156,35 @@ def test_the_finding_is_in_the_output_the_json_and_the_explorer(
     assert [w for w in fit["warnings"] if w["code"] == "noise_model"] == [
         w for w in document["warnings"] if w["code"] == "noise_model"
     ]
+
+
+def test_a_subset_of_a_large_logs_rows_is_checked_exactly() -> None:
+    # Residuals of the full fit, restricted to rows S and projected off the span of D_S,
+    # have the covariance I - H_S that the simulation draws from (noisecheck._subset):
+    # checked here on the matrices, by hand.
+    rng = np.random.default_rng(SEED)
+    n = 40
+    design = np.column_stack([np.ones(n), rng.uniform(1.0, 5.0, n)])
+    hat = design @ np.linalg.solve(design.T @ design, design.T)
+    keep = noisecheck._subset(n, 9)
+    assert keep.size == 9
+    assert keep[0] == 0
+    assert keep[-1] == n - 1
+    sub = design[keep]
+    hat_s = sub @ np.linalg.solve(sub.T @ sub, sub.T)
+    off = np.eye(9) - hat_s
+    covariance = off @ (np.eye(n) - hat)[np.ix_(keep, keep)] @ off
+    assert np.allclose(covariance, off, atol=1e-12)  # round-off of 9x9 products
+
+
+def test_a_large_log_is_checked_on_a_bounded_number_of_rows(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(coverage, "MASSES", np.linspace(3.0, 9.0, 2000))  # 10,000 drops
+    table = coverage.campaign_table(np.random.default_rng(SEED), **KINDS["timing"])
+    result = reduce_drop_test(table, coverage.TRUTH.t_ref)
+    check = result.noise_check
+    assert check is not None
+    assert check.n_points <= noisecheck.MAX_POINTS + check.n_temperatures  # ceil per group
+    assert check.other_fits_better
+    assert check.p_value == pytest.approx(1.0 / (noisecheck.DRAWS + 1))

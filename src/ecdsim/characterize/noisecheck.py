@@ -24,8 +24,10 @@ squares under the alternative:
 (``RSS0_k = r^T r``; ``RSS1_k`` the weighted refit's residual sum of squares, weights
 ``exp(-x_i)``). Its distribution when the fitted model is right does not depend on the
 unknown scales: residuals are ``(I - H_k) g`` with g standard normal (H_k the hat matrix
-of ``D_k``), so it is simulated (:data:`DRAWS` draws, a fixed seed: the same answer every
-run) and the p-value is the share of simulated statistics at least as large, a Monte Carlo
+of ``D_k``), so it is simulated (:data:`DRAWS` draws with a fixed seed: the same answer
+every run; a log of more than :data:`MAX_POINTS` drops is checked on evenly spaced rows,
+exactly, see :func:`_subset`) and the p-value is the share of simulated statistics at
+least as large, a Monte Carlo
 test (Barnard 1963; Davison and Hinkley, *Bootstrap Methods*, 1997, section 4.2.5): it
 holds its level exactly for any number of drops, where the chi-square or normal
 approximations did not (with five drops per temperature a normal score test fired 12 %
@@ -55,6 +57,11 @@ DRAWS = 999
 """Simulated statistics per check (p-values in steps of 0.001)."""
 SEED = 20261127
 """The simulation's seed: a fit's check gives the same answer every run."""
+MAX_POINTS = 5_000
+"""The most residuals a check uses: a larger log is checked on evenly spaced rows of each
+temperature (:func:`_subset`), exactly (see there), at a bounded cost."""
+BLOCK_VALUES = 2_000_000
+"""Simulated residuals held at once (16 MB)."""
 
 
 @dataclass(frozen=True)
@@ -84,7 +91,8 @@ class NoiseCheck:
     log_likelihood_ratio : Lambda, the alternative's log likelihood over the fitted
         model's (positive: the residuals look more like the alternative's)
     p_value : the Monte Carlo p-value of Lambda under the fitted model
-    n_points : drops used (of temperatures with at least one residual degree of freedom)
+    n_points : drops used (of temperatures with at least one residual degree of freedom;
+        at most about MAX_POINTS)
     n_temperatures : temperatures used
     """
 
@@ -153,18 +161,35 @@ def _statistic(groups: list[tuple[FloatArray, FloatArray, FloatArray, FloatArray
     return total
 
 
+def _subset(n: int, m: int) -> np.ndarray[Any, np.dtype[np.intp]]:
+    """``m`` evenly spaced indices of ``n`` rows (all of them when m >= n).
+
+    A check on a subset S of a line's rows is as exact as on all: projected off the span
+    of the subset's own design rows D_S, the full fit's residuals r_S have the covariance
+    ``sigma**2 (I - H_S)`` the simulation draws from, since
+    ``(I - H_S) (I - D_S (D^T D)^-1 D_S^T) (I - H_S) = I - H_S`` (``(I - H_S) D_S = 0``).
+    """
+    if m >= n:
+        return np.arange(n)
+    return np.unique(np.round(np.linspace(0.0, n - 1.0, m)).astype(np.intp))
+
+
 def check_noise_model(fitted: str, other: str, lines: list[Group]) -> NoiseCheck | None:
     """Test the fitted noise model against the other one from its residuals (module
     docstring); None where no temperature has a residual degree of freedom (the caller
     leaves out exact fits: round-off says nothing about noise)."""
     groups = []
     n_points = 0
+    total = sum(np.size(line.residuals) for line in lines)
     for line in lines:
         r = np.asarray(line.residuals, dtype=float)
         d = np.asarray(line.design, dtype=float)
         x = np.asarray(line.exponent, dtype=float)
         if r.size <= d.shape[1] or not np.all(np.isfinite(r)) or not np.all(np.isfinite(x)):
             continue
+        if total > MAX_POINTS:
+            keep = _subset(r.size, max(d.shape[1] + 1, math.ceil(r.size * MAX_POINTS / total)))
+            r, d, x = r[keep], d[keep], x[keep]
         q = np.linalg.qr(d)[0]
         # Residuals of a least-squares fit are orthogonal to its design (to round-off, or
         # to the linearisation for the nonlinear fits): the part off its span is used,
@@ -182,13 +207,18 @@ def check_noise_model(fitted: str, other: str, lines: list[Group]) -> NoiseCheck
     if not groups:
         return None
     observed = float(_statistic(groups)[0])
+    draws = DRAWS
     rng = np.random.default_rng(SEED)
-    simulated_groups = []
-    for residuals, q, qw, weights in groups:
-        g = rng.standard_normal((residuals.shape[0], DRAWS))
-        simulated_groups.append((g - q @ (q.T @ g), q, qw, weights))
-    simulated = _statistic(simulated_groups)
-    p_value = (1.0 + float(np.sum(simulated >= observed))) / (DRAWS + 1.0)
+    at_least = 0
+    block = max(1, min(draws, BLOCK_VALUES // n_points))
+    for start in range(0, draws, block):
+        count = min(block, draws - start)
+        simulated_groups = []
+        for residuals, q, qw, weights in groups:
+            g = rng.standard_normal((residuals.shape[0], count))
+            simulated_groups.append((g - q @ (q.T @ g), q, qw, weights))
+        at_least += int(np.sum(_statistic(simulated_groups) >= observed))
+    p_value = (1.0 + at_least) / (draws + 1.0)
     return NoiseCheck(
         fitted=fitted,
         other=other,
