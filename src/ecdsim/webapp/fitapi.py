@@ -19,17 +19,19 @@ import re
 import tempfile
 import tomllib
 from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
-from fastapi import FastAPI
+from fastapi import FastAPI, HTTPException
 from fastapi.responses import Response
 from pydantic import BaseModel, ConfigDict, Field
 
 if TYPE_CHECKING:
     from ecdsim.characterize.droptest import DropTestResult
     from ecdsim.characterize.stats import Estimate
+    from ecdsim.config import Config
     from ecdsim.webapp.workers import Reply
 
 # A dropped file is read whole into the request: the body limit (1,000,000 bytes) bounds
@@ -198,11 +200,18 @@ def _parameter_file(
     return text, None
 
 
-def fit_drop_test_text(body: FitBody) -> dict[str, Any]:
-    """Fit the CSV text as ``ecdsim fit drop-test`` fits the file (HTTP 422 if unusable)."""
+def fit_drop_test_text(
+    body: FitBody,
+    load_body: Callable[[dict[str, Any]], tuple[Config, str]],
+    _refuse: Callable[[list[str]], HTTPException],
+) -> dict[str, Any]:
+    """Fit the CSV text as ``ecdsim fit drop-test`` fits the file (HTTP 422 if unusable).
+
+    ``load_body`` and ``_refuse`` are the server's (:class:`ServerHelpers`): this module
+    never imports the server that imports it.
+    """
     from ecdsim.characterize.droptest import fit_drop_test
     from ecdsim.config import ConfigError
-    from ecdsim.webapp.server import _refuse, load_body
 
     config_text: str | None = None
     units: str = body.units or "si"
@@ -237,15 +246,20 @@ def fit_drop_test_text(body: FitBody) -> dict[str, Any]:
     }
 
 
-def fit_job(body: dict[str, Any]) -> Reply:
+def fit_job(
+    body: dict[str, Any],
+    load_body: Callable[[dict[str, Any]], tuple[Config, str]],
+    refuse: Callable[[list[str]], HTTPException],
+) -> Reply:
     """``POST /api/fit/drop-test``'s computation (in a worker process, killed at the time
-    limit: :mod:`ecdsim.webapp.workers`); ``body`` is the request's validated fields."""
+    limit: :mod:`ecdsim.webapp.workers`); ``body`` is the request's validated fields, the
+    helpers the server's (pickled by reference, as the job itself)."""
     import json
 
-    from ecdsim.webapp.server import as_reply
+    from ecdsim.webapp.workers import as_reply
 
     def compute() -> Response:
-        payload = fit_drop_test_text(FitBody.model_validate(body))
+        payload = fit_drop_test_text(FitBody.model_validate(body), load_body, refuse)
         return Response(json.dumps(payload, allow_nan=False), media_type="application/json")
 
     return as_reply(compute)
@@ -254,11 +268,25 @@ def fit_job(body: dict[str, Any]) -> Reply:
 Limited = Callable[[Callable[..., "Reply"], tuple[Any, ...]], Awaitable[Response]]
 
 
-def add_fit_routes(app: FastAPI, errors: dict[int | str, dict[str, Any]], limited: Limited) -> None:
-    """Register ``POST /api/fit/drop-test`` on the explorer app; ``limited(job, args)`` runs
-    a job within the server's time limit (``ecdsim.webapp.server.within_time_limit``)."""
+@dataclass(frozen=True)
+class ServerHelpers:
+    """What the route borrows from the explorer's server (handed over by it, so that this
+    module never imports the server that imports it): its refusal, its config reader and
+    its time-limited runner of jobs."""
+
+    refuse: Callable[[list[str]], HTTPException]
+    load_body: Callable[[dict[str, Any]], tuple[Config, str]]
+    limited: Limited
+
+
+def add_fit_routes(
+    app: FastAPI, errors: dict[int | str, dict[str, Any]], server: ServerHelpers
+) -> None:
+    """Register ``POST /api/fit/drop-test`` on the explorer app; ``server.limited(job,
+    args)`` runs a job within the server's time limit."""
 
     @app.post("/api/fit/drop-test", response_model=FitResponse, responses=errors)
     async def fit_drop_test_endpoint(body: FitBody) -> Response:
         """Fit a drop-test CSV as `ecdsim fit drop-test --json`, with the Fig. 8 curves."""
-        return await limited(fit_job, (body.model_dump(),))
+        args = (body.model_dump(), server.load_body, server.refuse)
+        return await server.limited(fit_job, args)

@@ -36,7 +36,7 @@ from ecdsim.deployment import ModelDomainError, Prediction, predict
 from ecdsim.report.builder import predict_config, render_html
 from ecdsim.units_display import UnitSystem, check_system, convert_text, describe, key_units
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
-from ecdsim.webapp.workers import Busy, Reply, Timeout, WorkerDied, shared_pool
+from ecdsim.webapp.workers import Busy, Reply, Timeout, WorkerDied, as_reply, shared_pool
 
 _LOG = logging.getLogger(__name__)
 
@@ -189,7 +189,7 @@ async def within_time_limit(
     """
     import anyio
 
-    pool = shared_pool()
+    pool = shared_pool(preload=(__name__,))  # the workers import this module as they start
     try:
         reply = await anyio.to_thread.run_sync(pool.call, job, args, limit_s)
     except Timeout:
@@ -218,23 +218,6 @@ async def within_time_limit(
         _LOG.error("internal error in a computation:\n%s", reply.defect)
     return Response(
         reply.body, status_code=reply.status, media_type=reply.media_type, headers=reply.headers
-    )
-
-
-def as_reply(compute: Callable[[], Response]) -> Reply:
-    """Run ``compute`` (in a worker) and turn its response, or its refusal, into a Reply."""
-    try:
-        response = compute()
-    except HTTPException as exc:
-        raw: Any = exc.detail
-        detail = raw if isinstance(raw, list) else [str(raw)]
-        return Reply(exc.status_code, json.dumps({"errors": detail}).encode())
-    kept = {k: v for k, v in response.headers.items() if k.lower() == "content-disposition"}
-    return Reply(
-        response.status_code,
-        bytes(response.body),
-        response.media_type or "application/octet-stream",
-        kept,
     )
 
 
@@ -742,7 +725,7 @@ def create_app(
         return await limited(report_job, (body.config, body.units, units))
 
     # The bench fit (drop test) has its own module: ecdsim.webapp.fitapi.
-    from ecdsim.webapp.fitapi import add_fit_routes
+    from ecdsim.webapp.fitapi import ServerHelpers, add_fit_routes
 
-    add_fit_routes(app, _LIMITED, limited)
+    add_fit_routes(app, _LIMITED, ServerHelpers(_refuse, load_body, limited))
     return app

@@ -75,6 +75,28 @@ class WorkerDied(Exception):
     """The worker process ended while computing (killed from outside, out of memory)."""
 
 
+def as_reply(compute: Callable[[], Any]) -> Reply:
+    """Run ``compute`` (in a worker: it returns a Starlette ``Response`` or raises an
+    ``HTTPException``, a refusal) and turn the outcome into a :class:`Reply`."""
+    import json
+
+    from starlette.exceptions import HTTPException
+
+    try:
+        response = compute()
+    except HTTPException as exc:
+        raw: Any = exc.detail
+        detail = raw if isinstance(raw, list) else [str(raw)]
+        return Reply(exc.status_code, json.dumps({"errors": detail}).encode())
+    kept = {k: v for k, v in response.headers.items() if k.lower() == "content-disposition"}
+    return Reply(
+        response.status_code,
+        bytes(response.body),
+        response.media_type or "application/octet-stream",
+        kept,
+    )
+
+
 def pool_size() -> int:
     """Computations at once: one per CPU, 2 to 4 (two, so that one slow request never
     queues every other; at most four processes of some 150 MB each)."""
@@ -112,7 +134,9 @@ def _read_exactly(stream: IO[bytes], size: int) -> bytes:
 def serve() -> None:
     """A worker's loop (run as ``python -c``): take ``(job, args)`` frames from stdin,
     answer ``job(*args)`` on stdout, until stdin closes. The first frame is the server's
-    ``sys.path``, so that jobs import as they do there."""
+    ``sys.path``, so that jobs import as they do there, and the modules to import before
+    the first job (the server's own: what its jobs use)."""
+    import importlib
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the server's, which ends us
@@ -120,9 +144,9 @@ def serve() -> None:
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # stray prints must not corrupt frames
     requests = sys.stdin.buffer
     try:
-        sys.path[:] = _receive(requests)
-        import ecdsim.webapp.server  # noqa: F401  (what the jobs use, imported before timing)
-
+        sys.path[:], preload = _receive(requests)
+        for name in preload:  # imported before any request's time limit runs
+            importlib.import_module(name)
         _send(replies, "ready")
         while True:
             job, args = _receive(requests)
@@ -140,7 +164,7 @@ def serve() -> None:
 class _Worker:
     """One worker process and the server's ends of its pipes."""
 
-    def __init__(self) -> None:
+    def __init__(self, preload: tuple[str, ...]) -> None:
         self.process = subprocess.Popen(
             [sys.executable, "-c", "from ecdsim.webapp.workers import serve; serve()"],
             stdin=subprocess.PIPE,
@@ -157,7 +181,7 @@ class _Worker:
         timer.daemon = True
         timer.start()
         try:
-            _send(self.requests, list(sys.path))
+            _send(self.requests, (list(sys.path), list(preload)))
             if _receive(self.replies) != "ready":
                 raise EOFError
         except (EOFError, OSError) as exc:
@@ -183,8 +207,9 @@ class _Worker:
 class WorkerPool:
     """Worker processes for jobs, each job stopped at its deadline (module docstring)."""
 
-    def __init__(self, size: int) -> None:
+    def __init__(self, size: int, preload: tuple[str, ...] = ()) -> None:
         self.size = size
+        self.preload = preload
         self._slots = threading.BoundedSemaphore(size)
         self._idle: list[_Worker] = []
         self._lock = threading.Lock()
@@ -233,7 +258,7 @@ class WorkerPool:
                 if worker.alive():
                     return worker
                 worker.kill()
-        return _Worker()
+        return _Worker(self.preload)
 
     def _give_back(self, worker: _Worker) -> None:
         with self._lock:
@@ -251,14 +276,15 @@ _POOL: WorkerPool | None = None
 _POOL_LOCK = threading.Lock()
 
 
-def shared_pool() -> WorkerPool:
+def shared_pool(preload: tuple[str, ...] = ()) -> WorkerPool:
     """The process's one pool (every explorer app of the process shares it); its idle
-    workers are ended when the process exits."""
+    workers are ended when the process exits. ``preload``: the modules each worker
+    imports as it starts (fixed by the first call)."""
     global _POOL
     with _POOL_LOCK:
         if _POOL is None:
             import atexit
 
-            _POOL = WorkerPool(pool_size())
+            _POOL = WorkerPool(pool_size(), preload)
             atexit.register(_POOL.close)
         return _POOL
