@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,7 +41,13 @@ from ecdsim.config.fields import (
     Torque,
     quantity,
 )
-from ecdsim.config.loader import MAX_NESTING, error_lines, nesting_depth, read_config_text
+from ecdsim.config.loader import (
+    MAX_NESTING,
+    error_lines,
+    nesting_depth,
+    parse_toml,
+    read_config_text,
+)
 from ecdsim.config.schema import (
     DamperSpec,
     FrictionLawSpec,
@@ -598,14 +603,7 @@ def parse_wing_config(
 
     ``base``: the folder catalogue files are read from; ``read_catalogue``: reads one.
     """
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError([f"not valid TOML: {exc}"], source) from None
-    except RecursionError:
-        raise ConfigError(
-            [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"], source
-        ) from None
+    raw = parse_toml(text, source)  # invalid TOML, deep nesting, a 4,300-digit integer
     spec = validate_wing(raw, source)
     try:
         wing = build_wing(spec, base, read_catalogue)
