@@ -789,6 +789,15 @@ def test_a_toml_integer_beyond_4300_digits_is_one_line(tmp_path: Path) -> None:
     response = client.post("/api/config/parse", json={"toml": text})
     assert response.status_code == 422
     assert response.json() == {"errors": [f"toml: {expected}"]}
+    # A wing file is read the same way (its reader had its own copy of tomllib's call).
+    from ecdsim.config import ConfigError
+    from ecdsim.config.wing_schema import parse_wing_config
+
+    wing = (EXAMPLES_DIR / "wing_cc16_three_panel.toml").read_text()
+    assert wing.splitlines()[34] == "ratio = 380"
+    with pytest.raises(ConfigError) as info:
+        parse_wing_config(wing.replace("ratio = 380", "ratio = " + "1" * 4400, 1), "w.toml")
+    assert info.value.problems == [expected.replace("line 14:", "line 35:")]
     # The sizing catalogue is read the same way (ecdsim size crashed too).
     catalogue = (EXAMPLES_DIR / "catalogue.toml").read_text()
     assert catalogue.splitlines()[27] == "ratios = [380]"
