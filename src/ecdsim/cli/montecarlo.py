@@ -193,7 +193,11 @@ def montecarlo(
         with _progress(console, show_progress and console.is_terminal) as update:
             report = run(plan, folder, executor, resume=resume, progress=update)
         if new_folder:
-            console.print(f"note: created the folder {folder} (it did not exist)", highlight=False)
+            console.print(
+                f"note: created the folder {folder} (it did not exist)",
+                highlight=False,
+                soft_wrap=False,
+            )
         for note in report.notes:
             console.print(f"note: {note}", highlight=False, soft_wrap=False)
         console.print(
