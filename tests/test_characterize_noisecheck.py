@@ -36,6 +36,7 @@ from ecdsim.characterize import noisecheck
 from ecdsim.characterize.droptest import reduce_drop_test
 from ecdsim.cli.app import app
 from ecdsim.webapp.server import create_app
+from tests.conftest import messages
 
 SEED = 20261128
 KINDS = {"timing": {"timing_noise": coverage.TIMING_NOISE}, "torque": {"torque_noise": 0.02}}
@@ -123,7 +124,7 @@ def test_the_finding_is_in_the_output_the_json_and_the_explorer(
     runner = CliRunner()
     result = runner.invoke(app, ["fit", "drop-test", str(path)])
     assert result.exit_code == 0, result.output
-    (line,) = [w for w in result.stderr.splitlines() if "--noise timing better" in w]
+    (line,) = [w for w in messages(result.stderr) if "--noise timing better" in w]
     assert line.startswith(
         "warning: the residuals fit --noise timing better than --noise torque: their "
         "scatter grows with speed, as a relative timing error's does (likelihood ratio "

@@ -40,7 +40,7 @@ from ecdsim.montecarlo.stats import describe
 from ecdsim.physics.quasistatic import log_mean
 from ecdsim.webapp.server import create_app
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
-from tests.conftest import ROOT
+from tests.conftest import ROOT, messages
 
 EXAMPLES_DIR = ROOT / "examples"
 # ECDSIM_FUZZ_EXAMPLES=N: N random examples per target (make fuzz); unset: the seeded run.
@@ -839,7 +839,7 @@ def test_a_csv_cell_over_the_field_limit_is_a_bad_row(tmp_path: Path) -> None:
     assert_clean_exit(result, path)
     assert result.exit_code == 0
     row = len(lines) + 1
-    warning = next(w for w in result.stderr.splitlines() if f"row {row}," in w)
+    warning = next(w for w in messages(result.stderr) if f"row {row}," in w)
     assert "(140000 characters) is not a finite number; row excluded" in warning
     assert len(warning) < 400  # the cell is quoted briefly
     assert json.loads(result.stdout)["excluded_rows"] == [row]

@@ -258,8 +258,8 @@ def test_a_full_device_fails_in_one_line_and_stays_a_device(tmp_path: Path) -> N
         result, 2, f"error: --out {device}: cannot write (No space left on device)"
     )
     assert stat.S_ISCHR(device.stat().st_mode)
-    result = runner.invoke(app, [*SWEEP, "-o", str(tmp_path / "s.csv"), "--plot", str(device)])
-    assert_one_error_line(result, 2, f"error: --plot {device}: cannot write (No space left")
+    result = runner.invoke(app, ["report", str(PAPER_CONFIG), "-o", str(device)])
+    assert_one_error_line(result, 2, f"error: --output {device}: cannot write (No space left")
     assert stat.S_ISCHR(device.stat().st_mode)
 
 

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any, Literal, cast
 import numpy as np
 
 from ecdsim._types import FloatArray
-from ecdsim.atomic import write_with
+from ecdsim.atomic import make_folder, write_with
 from ecdsim.deployment import Prediction
 from ecdsim.methods import SOLVERS
 from ecdsim.units_display import Shown, UnitSystem
@@ -283,9 +283,14 @@ def level_colors(n: int) -> list[tuple[float, float, float, float]]:
 
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> Path:
-    """Save a figure atomically; the format follows the file's suffix (PNG, SVG, PDF)."""
+    """Save a figure atomically; the format follows the file's suffix (PNG, SVG, PDF).
+
+    Its folder is created without a note: plots go into the folder ``--plot DIR`` names
+    (creating it is what was asked), where a file option's missing folder is said
+    (``ecdsim.atomic.on_folder_created``)."""
     target = Path(path)
     fmt = target.suffix.lstrip(".") or "png"
+    make_folder(target.parent, announce=False)
     return write_with(target, lambda stream: fig.savefig(stream, format=fmt, dpi=dpi))
 
 

@@ -115,7 +115,8 @@ def note_created_folders() -> None:
 
 
 def _note_folder(folder: Path) -> None:
-    echo_wrapped(f"note: created the folder {folder} (it did not exist)")
+    # One line, not wrapped: the path stays whole (as the report's note always was).
+    typer.echo(f"note: created the folder {folder} (it did not exist)", err=True)
 
 
 def fail(problems: list[str]) -> NoReturn:

@@ -193,10 +193,10 @@ def montecarlo(
         with _progress(console, show_progress and console.is_terminal) as update:
             report = run(plan, folder, executor, resume=resume, progress=update)
         if new_folder:
-            console.print(
+            console.print(  # one line, the path whole, as the other commands' note
                 f"note: created the folder {folder} (it did not exist)",
                 highlight=False,
-                soft_wrap=False,
+                soft_wrap=True,
             )
         for note in report.notes:
             console.print(f"note: {note}", highlight=False, soft_wrap=False)
