@@ -798,6 +798,17 @@ def test_a_toml_integer_beyond_4300_digits_is_one_line(tmp_path: Path) -> None:
     with pytest.raises(ConfigError) as info:
         parse_wing_config(wing.replace("ratio = 380", "ratio = " + "1" * 4400, 1), "w.toml")
     assert info.value.problems == [expected.replace("line 14:", "line 35:")]
+    # A torque budget too (ecdsim margin crashed).
+    budget = (EXAMPLES_DIR / "torque_budget.toml").read_text()
+    factors = "factors = { known = 1.5, unknown = 3.0 }"
+    assert budget.splitlines()[9].startswith(factors)
+    bad_budget = tmp_path / "budget.toml"
+    bad_budget.write_text(budget.replace("known = 1.5", "known = " + "1" * 4400, 1))
+    result = _run(["margin", str(bad_budget)])
+    assert_clean_exit(result, bad_budget)
+    assert result.stderr.strip() == (
+        f"error: {bad_budget}: {expected.replace('line 14: ratio', 'line 10: known')}"
+    )
     # The sizing catalogue is read the same way (ecdsim size crashed too).
     catalogue = (EXAMPLES_DIR / "catalogue.toml").read_text()
     assert catalogue.splitlines()[27] == "ratios = [380]"
@@ -852,6 +863,18 @@ def test_a_csv_cell_over_the_field_limit_is_a_bad_row(tmp_path: Path) -> None:
     result = _run(["fit", "trace", str(trace), "--config", str(PAPER_FILE), "--json"])
     assert_clean_exit(result, trace)
     assert result.exit_code == 0
+
+
+def test_a_csv_catalogue_cell_over_the_field_limit_is_one_line(tmp_path: Path) -> None:
+    # ecdsim size --catalog with a CSV catalogue crashed (_csv.Error) like the fit readers.
+    catalogue = tmp_path / "catalogue.csv"
+    catalogue.write_text("kind,name,ratios\ngearbox,x," + "1" * 140_000 + "\n")
+    result = _run(["size", str(EXAMPLES_DIR / "sizing.toml"), "--catalog", str(catalogue)])
+    assert_clean_exit(result, catalogue)
+    assert result.exit_code == 2
+    assert result.stderr.strip() == (
+        f"error: {catalogue}: row 2: not valid CSV (field larger than field limit (131072))"
+    )
 
 
 @pytest.mark.parametrize("where", ["header", "quoted"])

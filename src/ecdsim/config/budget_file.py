@@ -6,7 +6,6 @@ loader (which imports the whole schema).
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,7 +14,13 @@ from pydantic import ValidationError
 
 from ecdsim.config.budget_schema import BudgetFileSpec, WrittenUnit, written_unit
 from ecdsim.config.errors import ConfigError
-from ecdsim.config.loader import MAX_NESTING, _message, nesting_depth, read_config_text
+from ecdsim.config.loader import (
+    MAX_NESTING,
+    _message,
+    nesting_depth,
+    parse_toml,
+    read_config_text,
+)
 from ecdsim.config.units import TORQUE
 
 
@@ -47,14 +52,7 @@ def is_budget_document(raw: dict[str, Any]) -> bool:
 def read_toml(path: Path) -> dict[str, Any]:
     """A TOML file's document; :class:`ConfigError` if unreadable or not TOML."""
     text = read_config_text(path, "budget or config file")
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError([f"not valid TOML: {exc}"], str(path)) from None
-    except RecursionError:
-        raise ConfigError(
-            [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"], str(path)
-        ) from None
+    raw = parse_toml(text, str(path))  # invalid TOML, deep nesting, a 4,300-digit integer
     if nesting_depth(raw) > MAX_NESTING:
         raise ConfigError(
             [f"nested too deeply (at most {MAX_NESTING} levels of tables and lists)"], str(path)

@@ -101,6 +101,8 @@ TOO_DEEP = f"nested too deeply (at most {MAX_NESTING} levels of tables and lists
 
 # A digit run (underscores allowed, as TOML writes 1_000) longer than Python converts.
 _LONG_DIGITS = re.compile(r"[0-9][0-9_]*")
+# A (bare or dotted) key followed by '=': the last one before a value names it.
+_KEY_BEFORE_EQUALS = re.compile(r"([A-Za-z0-9_.\-]+)\s*=")
 
 
 def parse_toml(text: str, source: str = "<string>") -> dict[str, Any]:
@@ -131,7 +133,8 @@ def _long_integer(text: str, error: ValueError) -> str:
         for match in _LONG_DIGITS.finditer(line):
             digits = len(match.group().replace("_", ""))
             if digits > limit:
-                key = line[: match.start()].rstrip(" \t=+-[,").strip() or "value"
+                keys = _KEY_BEFORE_EQUALS.findall(line[: match.start()])
+                key = keys[-1] if keys else "value"
                 return (
                     f"line {number}: {key[:MAX_QUOTED]} = an integer of {digits:,} digits; "
                     f"expected a number of at most {limit:,} digits (ecdsim accepts "

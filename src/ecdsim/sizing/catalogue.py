@@ -386,7 +386,10 @@ def parse_csv_catalogue(text: str, source: str = "<string>") -> Catalogue:
     given by ``lubrication_slope`` and ``lubrication_at_0C`` (linear law only).
     """
     reader = csv.reader(io.StringIO(text))
-    rows = [row for row in reader if any(c.strip() for c in row)]
+    try:
+        rows = [row for row in reader if any(c.strip() for c in row)]
+    except csv.Error as exc:  # a cell over the csv module's limit (131,072 characters)
+        raise ConfigError([f"row {reader.line_num}: not valid CSV ({exc})"], source) from None
     if not rows:
         raise ConfigError(["the CSV catalogue is empty"], source)
     headers = [_header(h) for h in rows[0]]
