@@ -959,3 +959,128 @@ def test_a_drop_far_from_its_steady_speed_is_fitted(tmp_path: Path) -> None:
         fit = fit_temperature(25.0, np.arange(5), torque, angles, times, inertia, noise=noise)
         assert fit.line.slope.value == pytest.approx(b, rel=1e-9)
         assert fit.line.intercept.value == pytest.approx(f, rel=1e-12)  # first order: ulps
+
+
+# --- the Python API: odd arguments raise ecdsim's own errors (issue 23 item 4) ----------
+
+# What a notebook user may pass where a key, a method, a temperature or a unit system
+# goes: the crashers the fuzz campaign found (AttributeError, TypeError, bare KeyError,
+# RecursionError, OverflowError) and their neighbours.
+api_keys = st.one_of(
+    st.sampled_from(["gearbox.ratio", "load.start_torque", "damper", "analysis.temperatures"]),
+    st.text(max_size=20),
+    st.integers(-3, 3),
+    st.none(),
+    st.tuples(st.text(max_size=5)),
+)
+api_names = st.one_of(
+    st.sampled_from(["exact", "paper", "dynamic", "rk4", "EXACT", "", "imperial", "si", "us"]),
+    st.text(max_size=10),
+    st.lists(st.sampled_from(["exact", "paper"]), max_size=2),
+    st.lists(st.lists(st.sampled_from(["exact"]), max_size=1), max_size=2),
+    odd_numbers,
+    st.none(),
+)
+
+
+def _api_call_raises_only_ecdsim_errors(call: Callable[[], object]) -> None:
+    """``call`` returns, or raises one of ecdsim's own errors: ValueErrors whose message
+    names the value. Anything else (AttributeError, TypeError, KeyError, RecursionError,
+    OverflowError, a NumPy error) is a crash of the API and fails the test."""
+    error: ValueError | None = None
+    try:
+        call()
+    except ValueError as exc:
+        error = exc
+    if error is not None:
+        assert type(error).__module__.startswith("ecdsim."), repr(error)
+        assert str(error).strip(), "an ecdsim error names its problem"
+
+
+@fuzz_settings(25)
+@given(overrides=st.dictionaries(api_keys, odd_values, max_size=3))
+def test_api_odd_overrides_raise_ecdsim_errors(overrides: dict[Any, Any]) -> None:
+    import ecdsim
+
+    _api_call_raises_only_ecdsim_errors(
+        lambda: ecdsim.deploy(PAPER_FILE, 25, "exact", overrides=overrides)
+    )
+
+
+@fuzz_settings(25)
+@given(temperatures=st.one_of(odd_values, api_names), methods=api_names)
+def test_api_odd_temperatures_and_methods_raise_ecdsim_errors(
+    temperatures: Any, methods: Any
+) -> None:
+    import ecdsim
+
+    _api_call_raises_only_ecdsim_errors(lambda: ecdsim.deploy(PAPER_FILE, temperatures, methods))
+
+
+@fuzz_settings(15)
+@given(method=api_names, units=api_names)
+def test_api_odd_result_arguments_raise_ecdsim_errors(method: Any, units: Any) -> None:
+    import ecdsim
+
+    result = _API_RESULT.setdefault("paper", ecdsim.deploy(PAPER_FILE, 25, "exact"))
+    _api_call_raises_only_ecdsim_errors(lambda: result.deployment_time(method))
+    _api_call_raises_only_ecdsim_errors(lambda: result.to_dataframe())
+    if not isinstance(units, str) or units not in ("si", "us"):
+        # A valid system draws figures; the fuzz checks only the refusals.
+        _api_call_raises_only_ecdsim_errors(lambda: result.plot(units=units))
+
+
+_API_RESULT: dict[str, Any] = {}
+
+
+def _deep(levels: int) -> dict[str, Any]:
+    top: dict[str, Any] = {}
+    node = top
+    for _ in range(levels):
+        node["a"] = {}
+        node = node["a"]
+    return top
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        # The crashers of the fuzz campaign, kept as the corpus of the API targets.
+        pytest.param(lambda e: e.load(PAPER_FILE, overrides={1: 2}), id="overrides-int-key"),
+        pytest.param(lambda e: e.deploy(PAPER_FILE, 25, [["exact"]]), id="methods-nested-list"),
+        pytest.param(
+            lambda e: e.deploy(PAPER_FILE, 25, "exact").deployment_time("rk4"), id="method-rk4"
+        ),
+        pytest.param(
+            lambda e: e.deploy(PAPER_FILE, 25, "exact").plot(units="imperial"), id="units-imperial"
+        ),
+        pytest.param(lambda e: e.load(_deep(5000)), id="mapping-5000-deep"),
+        pytest.param(
+            lambda e: e.load(PAPER_FILE, overrides={"gearbox.ratio": 10**400}), id="int-10e400"
+        ),
+        pytest.param(
+            lambda e: e.load(PAPER_FILE, overrides={"load": _deep(5000)}), id="override-deep"
+        ),
+        # Found by the API targets above: float(10**400) overflowed in the temperatures.
+        pytest.param(lambda e: e.deploy(PAPER_FILE, 10**400, "exact"), id="temperature-10e400"),
+    ],
+)
+def test_api_crashers_raise_ecdsim_errors(call: Callable[[Any], object]) -> None:
+    import ecdsim
+
+    # ecdsim's errors are ValueErrors (ConfigError and its kin, UnitSystemError) whose
+    # message is one line naming the value and the choices.
+    with pytest.raises(ValueError, match=r".") as info:
+        call(ecdsim)
+    assert type(info.value).__module__.startswith("ecdsim.")
+    assert "\n" not in str(info.value).strip()
+
+
+def test_montecarlo_open_of_a_manifest_that_is_a_list_is_one_line(tmp_path: Path) -> None:
+    # A manifest of `[]` raised AttributeError in montecarlo.open (issue 23 item 4).
+    import ecdsim.montecarlo
+
+    (tmp_path / "manifest.json").write_text("[]")
+    with pytest.raises(ecdsim.montecarlo.NotAStudy, match=r"manifest") as info:
+        ecdsim.montecarlo.open(tmp_path)
+    assert "\n" not in str(info.value)

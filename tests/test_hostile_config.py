@@ -228,3 +228,13 @@ def test_the_library_sweep_design_applies_the_seed_rule_too() -> None:
         "--seed -1: expected a whole number from 0 to 9223372036854775807 (2**63 - 1)"
     ]
     assert len(design([parse_vary("gearbox.ratio=300:400:3")], 5, 2**63 - 1)) == 5
+
+
+def test_the_api_reads_a_file_with_a_4400_digit_integer_as_one_line(tmp_path: Path) -> None:
+    # ecdsim.load read files with tomllib directly: int() refused the digit run with a bare
+    # ValueError naming no line. It now reads through the loader's parse_toml, as the CLI.
+    path = tmp_path / "long.toml"
+    path.write_text(PAPER.replace("ratio = 380", "ratio = " + "3" * 4400, 1))
+    (line,) = _api_problems(path)
+    assert "an integer of 4,400 digits" in line
+    assert "ratio" in line

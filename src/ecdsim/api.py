@@ -198,9 +198,7 @@ def _document(
 
     A loaded :class:`Config` gives the document of the file it was read from.
     """
-    import tomllib
-
-    from ecdsim.config.loader import read_config_text
+    from ecdsim.config.loader import parse_toml, read_config_text
     from ecdsim.config.overrides import apply_overrides
 
     if isinstance(config_or_path, Config):
@@ -225,10 +223,7 @@ def _document(
     elif isinstance(config_or_path, str | os.PathLike):
         path = Path(config_or_path)
         source = str(path)
-        try:
-            raw = tomllib.loads(read_config_text(path))
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError([f"not valid TOML: {exc}"], source) from None
+        raw = parse_toml(read_config_text(path), source)
     else:
         raise ConfigError(
             [
@@ -330,7 +325,10 @@ def _temperatures(values: object) -> tuple[float, ...]:
     if _is_quantity(values):
         quantity: Any = values
         unit = str(quantity.units)
-        items = [f"{float(cast(Any, m))!r} {unit}" for m in _iterate(quantity.magnitude)]
+        try:
+            items = [f"{float(cast(Any, m))!r} {unit}" for m in _iterate(quantity.magnitude)]
+        except (TypeError, ValueError, OverflowError):
+            raise ConfigError([f"temperatures: {quoted(values)} is not a temperature"]) from None
     else:
         items = list(_iterate(values))
     if not items:
@@ -339,14 +337,16 @@ def _temperatures(values: object) -> tuple[float, ...]:
     problems = []
     for item in items:
         text = item
-        if not isinstance(item, bool) and isinstance(item, numbers.Real):
-            text = f"{float(item)!r} degC"
-        elif _is_quantity(item):
-            quantity = item
-            text = f"{float(quantity.magnitude)!r} {quantity.units}"
-        elif isinstance(item, str) and not any(c.isalpha() for c in item):
-            text = f"{item} degC"
         try:
+            # float() of an integer beyond float64 (10**400) raises OverflowError: a
+            # value that is no temperature, refused below like any other.
+            if not isinstance(item, bool) and isinstance(item, numbers.Real):
+                text = f"{float(item)!r} degC"
+            elif _is_quantity(item):
+                quantity = item
+                text = f"{float(quantity.magnitude)!r} {quantity.units}"
+            elif isinstance(item, str) and not any(c.isalpha() for c in item):
+                text = f"{item} degC"
             out.append(parse_temperature(text))
         except QuantityError as exc:
             problems.append(f"temperatures: {exc}")
