@@ -22,6 +22,7 @@ import ecdsim
 from ecdsim.api import MissingDependencyError
 from ecdsim.cli.app import app
 from ecdsim.config import ConfigError
+from ecdsim.invocation import pip_install
 from tests import hand
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -119,7 +120,7 @@ def test_to_dataframe_without_pandas_names_the_extra(monkeypatch: pytest.MonkeyP
     with pytest.raises(MissingDependencyError) as caught:
         result.to_dataframe()
     message = str(caught.value)
-    assert "pip install 'ecdsim[montecarlo]'" in message
+    assert message.endswith(f"install it with: {pip_install('montecarlo')}")  # ecdsim.invocation
     assert "\n" not in message
 
 

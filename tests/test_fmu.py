@@ -34,9 +34,9 @@ from typer.testing import CliRunner
 
 import ecdsim
 from ecdsim.cli.app import app
-from ecdsim.cli.invocation import pip_install
 from ecdsim.fmu.model import DamperModel
 from ecdsim.fmu.native import compiler
+from ecdsim.invocation import pip_install
 from ecdsim.physics import damper_laws, thermal
 from tests import hand
 from tests.conftest import require

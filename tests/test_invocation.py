@@ -2,7 +2,7 @@
 
 After `make demo` ecdsim is `.venv/bin/ecdsim`, not on the PATH, and the checkout is
 installed in development mode: the demo's "then:" line and the FMU export's install hint
-name the commands of this installation (ecdsim.cli.invocation), not `ecdsim` and an
+name the commands of this installation (ecdsim.invocation), not `ecdsim` and an
 install from the package index.
 """
 
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from ecdsim.cli import invocation
+from ecdsim import invocation
 from tests.conftest import ROOT
 
 SCRIPT = Path(sys.executable).parent / "ecdsim"  # the console script beside this Python

@@ -31,6 +31,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
             "ecdsim._version",
             "ecdsim.atomic",
             "ecdsim.formatting",
+            "ecdsim.invocation",
             "ecdsim.jsonrows",
             "ecdsim.tidy",
             "ecdsim.units_display",

@@ -3,6 +3,7 @@ until the load is edited, and the file carries no float noise."""
 
 from __future__ import annotations
 
+import html
 import json
 import re
 import tomllib
@@ -81,3 +82,117 @@ def test_report_sweep_and_repeat_flag_it_too(fitted: Path, tmp_path: Path) -> No
     clean = runner.invoke(app, ["report", str(_edited(fitted)), "-o", str(tmp_path / "c.html")])
     assert 'id="placeholder-load"' not in (tmp_path / "c.html").read_text(encoding="utf-8")
     assert "PLACEHOLDER" not in clean.stderr
+
+
+# ----------------------------------------------------------------- the notebook API
+
+
+def test_the_notebook_api_flags_it_as_the_command_line_does(fitted: Path) -> None:
+    """load, deploy, sweep and size warn with the command line's text, pointing at the
+    caller's line; the results' repr, HTML table and to_dict() carry the flag."""
+    import ecdsim
+    from ecdsim.config.placeholder import TITLE, PlaceholderLoadWarning, warning_text
+
+    expected = warning_text(str(fitted))
+    cli = runner.invoke(app, ["deploy", str(fitted), "--json"])
+    assert f"warning: {expected}" in messages(cli.stderr)  # the command line's line
+    with pytest.warns(PlaceholderLoadWarning) as caught:
+        ecdsim.load(fitted)
+    assert [str(w.message) for w in caught] == [expected]
+    assert caught[0].filename == __file__  # the user's line, not ecdsim's
+    with pytest.warns(PlaceholderLoadWarning) as caught:
+        result = ecdsim.deploy(fitted)
+    assert [str(w.message) for w in caught] == [expected]
+    assert caught[0].filename == __file__
+    assert result.placeholder_load is True
+    assert f"'{result.config.system.name}' ({TITLE})" in repr(result)
+    page = result._repr_html_()
+    assert page.startswith('<p role="alert"')
+    assert html.escape(expected) in page.split("<table>")[0]
+    document = result.to_dict()
+    assert document["placeholder_load"] is True
+    # the very document of `ecdsim deploy --json`
+    assert json.loads(json.dumps(document, allow_nan=False)) == json.loads(cli.stdout)
+
+    with pytest.warns(PlaceholderLoadWarning) as caught:
+        swept = ecdsim.sweep(fitted, {"gearbox.ratio": [1, 2]}, temperatures=25, methods="exact")
+    assert caught[0].filename == __file__
+    assert swept.placeholder_load is True
+    assert TITLE in repr(swept)
+    assert swept._repr_html_().startswith('<p role="alert"')
+
+
+def test_size_flags_a_placeholder_load_and_a_real_load_is_silent() -> None:
+    import ecdsim
+    from ecdsim.config.placeholder import TITLE, PlaceholderLoadWarning
+
+    sizing = ROOT / "examples" / "sizing.toml"
+    catalogue = ROOT / "examples" / "catalogue.toml"
+    with pytest.warns(PlaceholderLoadWarning):
+        sized = ecdsim.size(sizing, catalogue, overrides={"load.placeholder": True})
+    assert sized.placeholder_load is True
+    assert repr(sized).startswith(f"<SizeResults ({TITLE}) ")
+    assert sized._repr_html_().startswith('<p role="alert"')
+    # The same file with a real load: no warning (the suite turns any into an error).
+    real = ecdsim.size(sizing, catalogue)
+    assert real.placeholder_load is False
+    assert "PLACEHOLDER" not in repr(real) + real._repr_html_()
+
+
+def test_an_edited_load_is_not_flagged_by_the_api(fitted: Path) -> None:
+    import ecdsim
+
+    for clean in (
+        ecdsim.deploy(_edited(fitted)),
+        # an override can drop the mark as deleting the line does
+        ecdsim.deploy(fitted, overrides={"load.placeholder": None}),
+    ):
+        assert clean.placeholder_load is False
+        assert "PLACEHOLDER" not in repr(clean) + clean._repr_html_()
+        assert "placeholder_load" not in clean.to_dict()
+    assert "PLACEHOLDER" not in repr(ecdsim.sweep(_edited(fitted), {"gearbox.ratio": [1]}))
+
+
+# ----------------------------------------------------------------- the FMU export
+
+
+def _description(fmu: Path) -> str:
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    with zipfile.ZipFile(fmu) as archive:
+        root = ET.fromstring(archive.read("modelDescription.xml"))
+    return root.get("description", "")
+
+
+def test_export_fmu_flags_it(fitted: Path, tmp_path: Path) -> None:
+    from ecdsim.config.placeholder import warning_text
+    from ecdsim.fmu import PLACEHOLDER_STOP_TIME
+
+    out = tmp_path / "damper.fmu"
+    result = runner.invoke(app, ["export-fmu", str(fitted), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    # the line every command prints for this file
+    assert messages(result.stderr) == [f"warning: {warning_text(str(fitted))}"]
+    assert _description(out).endswith(f"(ecdsim; needs no Python); {PLACEHOLDER_STOP_TIME}")
+    edited = runner.invoke(app, ["export-fmu", str(_edited(fitted)), "-o", str(out)])
+    assert edited.exit_code == 0, edited.output
+    assert edited.stderr == ""
+    assert _description(out).endswith("(ecdsim; needs no Python)")
+
+
+def test_build_fmu_warns_and_the_deployment_fmu_says_so(fitted: Path, tmp_path: Path) -> None:
+    from ecdsim.config.placeholder import TITLE, PlaceholderLoadWarning, warning_text
+    from ecdsim.fmu import build_fmu
+
+    # The deployment FMU runs the dynamic method, which needs the load's inertia.
+    text = fitted.read_text(encoding="utf-8").replace(
+        "[load]\n", '[load]\ninertia = "0.5 kg*m^2"\n'
+    )
+    dynamic = tmp_path / "fitted_dynamic.toml"
+    dynamic.write_text(text, encoding="utf-8")
+    with pytest.warns(PlaceholderLoadWarning) as caught:
+        built = build_fmu(dynamic, tmp_path / "hinge.fmu", deployment=True)
+    assert [str(w.message) for w in caught] == [warning_text(str(dynamic))]
+    assert caught[0].filename == __file__
+    assert _description(built).startswith(f"{TITLE}. Spring-driven deployment with an eddy")

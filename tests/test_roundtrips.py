@@ -10,7 +10,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ecdsim.cli.app import app
-from ecdsim.cli.invocation import ecdsim_command
+from ecdsim.invocation import ecdsim_command
 from tests.conftest import PAPER_CONFIG, ROOT
 
 runner = CliRunner()

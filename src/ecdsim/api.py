@@ -97,9 +97,10 @@ def _pandas() -> Any:
     try:
         import pandas
     except ImportError:
+        from ecdsim.invocation import install_hint
+
         raise MissingDependencyError(
-            "to_dataframe() needs pandas, which is not installed; "
-            "install it with: pip install 'ecdsim[montecarlo]'"
+            f"to_dataframe() needs pandas, which is not installed; {install_hint('montecarlo')}"
         ) from None
     return pandas
 
@@ -112,6 +113,10 @@ class _Table:
     def rows(self) -> list[dict[str, Any]]:
         """One dict per row, SI values, units in the column names."""
         raise NotImplementedError
+
+    def _flag(self) -> str | None:
+        """The placeholder-load warning of the config behind the rows, if it has one."""
+        return None
 
     def to_dataframe(self) -> Any:
         """The rows as a pandas DataFrame (needs pandas: ``pip install 'ecdsim[montecarlo]'``).
@@ -137,10 +142,37 @@ class _Table:
             if len(rows) > HTML_ROWS
             else ""
         )
+        flag = self._flag()
+        # The report's banner: a stand-in load makes no row the mechanism's.
+        banner = (
+            ""
+            if flag is None
+            else f'<p role="alert" style="{BANNER_STYLE}">{html.escape(flag)}</p>'
+        )
         return (
-            f"<table><caption>{html.escape(self.caption)}</caption>"
+            f"{banner}<table><caption>{html.escape(self.caption)}</caption>"
             f"<thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>{more}"
         )
+
+
+BANNER_STYLE = (
+    "background: #fdecea; color: #000; border-left: 6px solid #b00020; "
+    "padding: .4em .8em; font-weight: 600"
+)
+
+
+def _placeholder_flag(config: Config) -> str | None:
+    """The placeholder-load warning text of ``config``, or None (a real load)."""
+    from ecdsim.config.placeholder import is_placeholder, warning_text
+
+    return warning_text(config.source) if is_placeholder(config) else None
+
+
+def _marked(name: str, flag: str | None) -> str:
+    """A result's name in its repr, with the placeholder title when its load is one."""
+    from ecdsim.config.placeholder import TITLE
+
+    return f"{name!r}" if flag is None else f"{name!r} ({TITLE})"
 
 
 def _nan(value: float | None) -> float:
@@ -161,8 +193,20 @@ def load(config_or_path: ConfigLike, overrides: Mapping[str, object] | None = No
 
     ``overrides`` maps dotted config keys to values (quantity strings, pint quantities,
     or plain SI numbers); a loaded :class:`Config` cannot take overrides (pass its path).
-    Raises :class:`ConfigError`.
+    Raises :class:`ConfigError`. A config whose ``[load]`` is a marked placeholder (``ecdsim
+    fit drop-test -o`` without ``--config``) gives a
+    :class:`~ecdsim.config.placeholder.PlaceholderLoadWarning`, as :func:`deploy`,
+    :func:`size` and :func:`sweep` do.
     """
+    from ecdsim.config import placeholder
+
+    config = _load(config_or_path, overrides)
+    placeholder.warn(config)
+    return config
+
+
+def _load(config_or_path: ConfigLike, overrides: Mapping[str, object] | None) -> Config:
+    """:func:`load` without the placeholder warning (each study warns for its own call)."""
     import hashlib
     import json
 
@@ -413,6 +457,27 @@ class DeployResults(_Table):
         """Findings: stalls, linear range exceeded, tables extrapolated, ..."""
         return list(self.prediction.warnings)
 
+    @property
+    def placeholder_load(self) -> bool:
+        """True when the config's ``[load]`` is a marked placeholder: no deployment here
+        is the mechanism's (the repr, the HTML table and :meth:`to_dict` say so too)."""
+        return self._flag() is not None
+
+    def _flag(self) -> str | None:
+        return _placeholder_flag(self.config)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document of ``ecdsim deploy --json`` (docs/json.md): SI,
+        ``display_units`` ``"si"``, and ``"placeholder_load": true`` when the config's
+        load is a marked placeholder."""
+        from ecdsim.config.placeholder import JSON_KEY
+
+        document = self.prediction.to_dict()
+        document["display_units"] = "si"
+        if self.placeholder_load:
+            document[JSON_KEY] = True
+        return document
+
     def rows(self) -> list[dict[str, Any]]:
         """One row per (temperature, method), SI, units in the column names.
 
@@ -569,8 +634,9 @@ def _short_repr(result: DeployResults) -> str:
         times = ", ".join(_seconds(float(cast(Any, t))) for t in _iterate(solution.deployment_time))
         parts.append(f"{name} [{times}]")
     count = len(prediction.warnings)
+    name = _marked(result.config.system.name, result._flag())
     return (
-        f"<DeployResults {result.config.system.name!r} at [{temps}] degC: deployment time "
+        f"<DeployResults {name} at [{temps}] degC: deployment time "
         f"{'; '.join(parts)}; {count} warning{'s' if count != 1 else ''}>"
     )
 
@@ -602,9 +668,11 @@ def deploy(
     >>> round(r.deployment_time()[25.0], 2)
     26.86
     """
+    from ecdsim.config import placeholder
     from ecdsim.deployment import predict, with_flight
 
-    config = load(config_or_path, overrides)
+    config = _load(config_or_path, overrides)
+    placeholder.warn(config)
     temps = config.temperatures if temperatures is None else _temperatures(temperatures)
     chosen = config.methods if methods is None else _methods(methods)
     dynamics = config.spec.dynamics()
@@ -762,13 +830,24 @@ class SizeResults(_Table):
     intervals : exact feasible gear-ratio intervals of the best candidate (or None)
     requirements : what was required
     load : the load the candidates were sized for
+    placeholder : the warning when that load is a marked placeholder, else None
     """
 
     search: SearchResult
     intervals: RatioIntervals | None
     requirements: Requirements
     load: Load
+    placeholder: str | None = None
     caption = "sizing: candidates against the requirements, best first"
+
+    @property
+    def placeholder_load(self) -> bool:
+        """True when the load sized for is a marked placeholder (no candidate's times are
+        the mechanism's; ``placeholder`` holds the warning)."""
+        return self.placeholder is not None
+
+    def _flag(self) -> str | None:
+        return self.placeholder
 
     def __repr__(self) -> str:
         """One line: how many candidates, how many pass, the best one."""
@@ -781,7 +860,10 @@ class SizeResults(_Table):
             else f"best {best.candidate.damper.name!r} + {best.candidate.gearbox.name!r} at "
             f"ratio {best.candidate.ratio:g} ({'passes' if best.passed else 'fails'})"
         )
-        return f"<SizeResults {len(candidates)} candidates, {passed} pass; {shown}>"
+        from ecdsim.config.placeholder import TITLE
+
+        flag = "" if self.placeholder is None else f" ({TITLE})"
+        return f"<SizeResults{flag} {len(candidates)} candidates, {passed} pass; {shown}>"
 
     def rows(self) -> list[dict[str, Any]]:
         """One row per (candidate, temperature): rank, pass, margin and the exact results."""
@@ -851,12 +933,14 @@ def size(
     The exact gear-ratio intervals are computed for the best-ranked valid candidate.
     Raises :class:`ConfigError` for a config without ``[requirements]`` or a bad catalogue.
     """
+    from ecdsim.config import placeholder
     from ecdsim.sizing.catalogue import load_catalogue
     from ecdsim.sizing.ratio import ratio_intervals
     from ecdsim.sizing.requirements import Requirements
     from ecdsim.sizing.search import search
 
-    config = load(config_or_path, overrides)
+    config = _load(config_or_path, overrides)
+    placeholder.warn(config)
     if config.spec.requirements is None:
         raise ConfigError(["requirements: missing; size needs a [requirements] section"])
     requirements = Requirements.from_spec(config.spec.requirements)
@@ -873,7 +957,7 @@ def size(
         intervals = ratio_intervals(
             found.damper(best.damper.name), found.gearbox(best.gearbox.name), load_, requirements
         )
-    return SizeResults(result, intervals, requirements, load_)
+    return SizeResults(result, intervals, requirements, load_, _placeholder_flag(config))
 
 
 # ----------------------------------------------------------------------------- sweep
@@ -899,6 +983,14 @@ class SweepResults(_Table):
         return f"{self.result.title}: sweep of {', '.join(v.key for v in self.result.varies)}"
 
     @property
+    def placeholder_load(self) -> bool:
+        """True when the base config's ``[load]`` is a marked placeholder."""
+        return self._flag() is not None
+
+    def _flag(self) -> str | None:
+        return _placeholder_flag(self.config)
+
+    @property
     def errors(self) -> list[tuple[int, str]]:
         """``(point, message)`` of the points the model could not evaluate."""
         return list(self.result.errors)
@@ -909,7 +1001,8 @@ class SweepResults(_Table):
         keys = ", ".join(v.column for v in self.result.varies)
         errors = len(self.result.errors)
         return (
-            f"<SweepResults {self.result.title!r}: {points} points of [{keys}], "
+            f"<SweepResults {_marked(self.result.title, self._flag())}: {points} points of "
+            f"[{keys}], "
             f"{len(self.result.rows)} rows, {errors} point error{'s' if errors != 1 else ''}>"
         )
 
@@ -962,9 +1055,11 @@ def sweep(
     >>> s.to_dataframe()[["gearbox.ratio", "deployment_time_s"]].round(2).values.tolist()
     [[300.0, 15.26], [400.0, 30.53]]
     """
+    from ecdsim.config import placeholder
     from ecdsim.sweeps import SweepError, design, parse_vary, run_sweep
 
-    config = load(config_or_path, overrides)
+    config = _load(config_or_path, overrides)
+    placeholder.warn(config)
     temps = config.temperatures if temperatures is None else _temperatures(temperatures)
     chosen = config.methods if methods is None else _methods(methods)
     specs = _vary_specs(vary)

@@ -325,8 +325,10 @@ class SweepResult:
         try:
             import pyarrow.parquet as pq
         except ImportError:
+            from ecdsim.invocation import install_hint
+
             raise ModuleNotFoundError(
-                "Parquet output needs pyarrow; install it with: pip install 'ecdsim[montecarlo]'"
+                f"Parquet output needs pyarrow; {install_hint('montecarlo')}"
             ) from None
         table = parquet_table(self.to_dataframe(), self.metadata())
         return atomic.write_with(target, lambda handle: pq.write_table(table, handle))

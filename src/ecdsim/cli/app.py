@@ -241,7 +241,7 @@ def demo(
         fail([f"--out {out}: cannot write ({exc.strerror or exc})"])
     # Two lines, so that they fit 80 columns with the default folder (issue 14 item 2). The
     # command as it runs here: after make demo, .venv/bin/ecdsim is not on the PATH.
-    from ecdsim.cli.invocation import ecdsim_command
+    from ecdsim.invocation import ecdsim_command
 
     command = ecdsim_command()
     typer.echo(f"{loaded.system.name}\nconfig: {config}\nedit it, then: {command} deploy {config}")

@@ -240,21 +240,20 @@ def load_run(
 
 
 def is_placeholder(config: Config) -> bool:
-    """True when the config's ``[load]`` is marked ``placeholder = true`` (written by
-    ``ecdsim fit drop-test -o`` without ``--config``)."""
-    return bool(getattr(config.spec.load, "placeholder", False))
+    """True when the config's ``[load]`` is a marked placeholder (the one check of
+    :mod:`ecdsim.config.placeholder`, which every output of such a config asks)."""
+    from ecdsim.config.placeholder import is_placeholder as marked
+
+    return marked(config)
 
 
 def warn_placeholder(config: Config) -> None:
     """A ``warning:`` on stderr when the config's load is a placeholder: every command
     that reads such a file says so until the line is deleted (issue 26 item 2)."""
+    from ecdsim.config.placeholder import warning_text
+
     if is_placeholder(config):
-        echo_wrapped(
-            f"warning: {config.source}: PLACEHOLDER LOAD ([load] placeholder = true): the "
-            "spring and travel are stand-ins, so no deployment result here is your "
-            "mechanism's; enter its spring torques and travel in [load], then delete the "
-            "placeholder line"
-        )
+        echo_wrapped(f"warning: {warning_text(config.source)}")
 
 
 def predict_run(config: Config) -> Prediction:

@@ -10,7 +10,7 @@ from typing import Annotated
 
 import typer
 
-from ecdsim.cli.common import fail
+from ecdsim.cli.common import echo_wrapped, fail
 
 EPILOG = (
     "Example: [bold]ecdsim export-fmu examples/paper_cc16_dynamic.toml -o damper.fmu[/bold]"
@@ -55,23 +55,36 @@ def export_fmu(
     co-simulation, in C; inputs shaft speed and ambient temperature; outputs damper
     torque, frictions, damper temperature), or with --deployment the whole hinge
     (co-simulation, in Python)."""
+    import warnings
+
     from ecdsim.config import ConfigError
+    from ecdsim.config.placeholder import PlaceholderLoadWarning
     from ecdsim.fmu import FmuCompilerError, FmuDependencyError, FmuNameError, build_fmu
 
     target = out or Path("deployment.fmu" if deployment else "damper.fmu")
     if target.suffix.lower() != ".fmu":
         fail([f"--out {target}: expected a file name ending .fmu"])
     try:
-        written = build_fmu(config, target, deployment=deployment, name=name)
+        # A placeholder load: the library's warning becomes the line every command prints.
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", PlaceholderLoadWarning)
+            written = build_fmu(config, target, deployment=deployment, name=name)
     except ConfigError as exc:
         fail(str(exc).splitlines())
     except FmuDependencyError as exc:
-        from ecdsim.cli.invocation import pip_install
-
-        # The install command for this environment: from a checkout, the checkout itself.
-        fail([str(exc).replace("pip install 'ecdsim[fmu]'", pip_install("fmu"))])
+        fail([str(exc)])
     except (FmuNameError, FmuCompilerError) as exc:
         fail([str(exc)])
     except OSError as exc:
         fail([f"--out {target}: cannot write ({exc.strerror or exc})"])
+    for caught_warning in caught:
+        if issubclass(caught_warning.category, PlaceholderLoadWarning):
+            echo_wrapped(f"warning: {caught_warning.message}")
+        else:  # any other warning as Python would have shown it
+            warnings.showwarning(
+                caught_warning.message,
+                caught_warning.category,
+                caught_warning.filename,
+                caught_warning.lineno,
+            )
     typer.echo(f"wrote {written}")

@@ -242,11 +242,11 @@ def precompile() -> None:
     try:
         _numba.load()
     except ImportError:
-        from ecdsim.cli.invocation import pip_install
+        from ecdsim.invocation import install_hint
 
         typer.echo(
             "numba is not installed: ecdsim runs its NumPy paths (the dynamic method about "
-            f"1,000 times slower); install it with: {pip_install('numba')}",
+            f"1,000 times slower); {install_hint('numba')}",
             err=True,
         )
         raise typer.Exit(1) from None

@@ -7,6 +7,8 @@ import math
 from typing import Any
 
 from ecdsim.cli import display
+from ecdsim.config.placeholder import JSON_KEY as PLACEHOLDER_KEY
+from ecdsim.config.placeholder import TITLE as PLACEHOLDER_TITLE
 from ecdsim.deployment import Prediction
 from ecdsim.formatting import describe_method, format_number
 from ecdsim.methods import SOLVERS
@@ -19,7 +21,7 @@ def to_json(prediction: Prediction, units: UnitSystem = "si", placeholder: bool 
     document = prediction.to_dict()
     document["display_units"] = units
     if placeholder:
-        document["placeholder_load"] = True
+        document[PLACEHOLDER_KEY] = True
     return json.dumps(document, indent=2, sort_keys=True, allow_nan=False)
 
 
@@ -33,9 +35,6 @@ def _percent(fraction: float | None) -> str:
 
 def _fmt(value: float | None, digits: int = 4) -> str:
     return format_number(value, digits, signed_inf=False)
-
-
-PLACEHOLDER_TITLE = "PLACEHOLDER LOAD: not your mechanism's deployment"
 
 
 def print_tables(

@@ -114,10 +114,12 @@ def explore(
 
         from ecdsim.webapp.server import create_app, exposure_warning
     except ImportError as exc:
+        from ecdsim.invocation import install_hint
+
         fail(
             [
                 f"ecdsim app needs the optional 'app' extra (missing module {exc.name!r}); "
-                "install it with: pip install 'ecdsim[app]'"
+                f"{install_hint('app')}"
             ]
         )
     text = None

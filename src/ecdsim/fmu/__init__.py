@@ -14,6 +14,12 @@
 
 Each export has its own model identifier (``name``, or one derived from the file name
 and the config), so that several FMUs load side by side.
+
+A config whose ``[load]`` is a marked placeholder (``ecdsim fit drop-test -o`` without
+``--config``) is exported, with a
+:class:`~ecdsim.config.placeholder.PlaceholderLoadWarning` and the FMU's description
+saying so (the deployment FMU's whole motion, the damper FMU's default stop time are the
+stand-in load's).
 """
 
 from __future__ import annotations
@@ -117,6 +123,11 @@ _DEPLOYMENT_UNITS = {
     "speed": "rad/s",
 }
 _STATUS_TYPE = "ecdsim.DeploymentStatus"
+# The damper FMU's description for a placeholder config: only its stop time is the load's.
+PLACEHOLDER_STOP_TIME = (
+    "the config's [load] is a marked placeholder, so the default experiment's stop time is "
+    "a stand-in load's"
+)
 
 
 class FmuDependencyError(ImportError):
@@ -245,16 +256,19 @@ def build_fmu(
     """Build the FMU of the config at ``config_path`` into ``out`` (atomically); its path.
 
     ``name`` is the model identifier (default: derived from ``out`` and the config; see
-    :func:`model_identifier`). Raises :class:`~ecdsim.config.ConfigError` for a bad
+    :func:`model_identifier`). A placeholder load gives a
+    :class:`~ecdsim.config.placeholder.PlaceholderLoadWarning` and is named in the FMU's
+    description. Raises :class:`~ecdsim.config.ConfigError` for a bad
     config (or, with ``deployment``, one without ``[load] inertia``, which the dynamic
     method needs), :class:`FmuNameError` for a bad name, :class:`FmuCompilerError`
     without a working C compiler (the damper FMU) and :class:`FmuDependencyError`
     without pythonfmu (the deployment FMU).
     """
     from ecdsim import __version__, atomic
-    from ecdsim.api import load
+    from ecdsim.config import load_config, placeholder
 
-    config = load(config_path)
+    config = load_config(Path(config_path))
+    placeholder.warn(config)
     _check(config, deployment)
     target = Path(out)
     config_text = Path(config_path).read_bytes()
@@ -275,7 +289,8 @@ def build_fmu(
             _stop_time(config, deployment=False),
             config_text,
             f"Eddy current damper and gearbox at the slow shaft, from {Path(config_path).name} "
-            "(ecdsim; needs no Python)",
+            "(ecdsim; needs no Python)"
+            + (f"; {PLACEHOLDER_STOP_TIME}" if placeholder.is_placeholder(config) else ""),
         )
     return atomic.write_with(target, lambda handle: handle.write(data))
 
@@ -283,13 +298,16 @@ def build_fmu(
 def _deployment_fmu(config: Config, config_path: Path, identifier: str, guid: str) -> bytes:
     """The deployment FMU (pythonfmu) as the bytes of its zip archive."""
     from ecdsim import __version__
+    from ecdsim.config import placeholder
 
     try:
         from pythonfmu.builder import FmuBuilder
     except ImportError:
+        from ecdsim.invocation import install_hint
+
         raise FmuDependencyError(
             "the deployment FMU is built with pythonfmu, which is not installed; "
-            "install it with: pip install 'ecdsim[fmu]'"
+            f"{install_hint('fmu')}"
         ) from None
     from ecdsim.fmu.slaves import CONFIG_FILE
 
@@ -314,17 +332,24 @@ def _deployment_fmu(config: Config, config_path: Path, identifier: str, guid: st
             sys.modules.pop(identifier, None)
             if str(source) in sys.path:
                 sys.path.remove(str(source))
-        return _finish_deployment(built, guid, _stop_time(config, deployment=True))
+        return _finish_deployment(
+            built,
+            guid,
+            _stop_time(config, deployment=True),
+            placeholder.is_placeholder(config),
+        )
 
 
-def _finish_deployment(built: Path, guid: str, stop_time: float) -> bytes:
+def _finish_deployment(built: Path, guid: str, stop_time: float, stand_in: bool) -> bytes:
     """pythonfmu's FMU with what its modelDescription.xml lacks for FMI 2.0 hosts.
 
     Units, the status enumeration, a DefaultExperiment past the slowest deployment, the
     InitialUnknowns (every output: all are calculated at initialisation), ecdsim's
-    version and a GUID of this export.
+    version and a GUID of this export; with ``stand_in`` (a placeholder load), the
+    description starts with the placeholder's title.
     """
     from ecdsim import __version__
+    from ecdsim.config.placeholder import TITLE
     from ecdsim.fmu.model import STATUS_DESCRIPTIONS, STATUS_NAMES
     from ecdsim.fmu.native import UNITS, _units_element
 
@@ -335,6 +360,8 @@ def _finish_deployment(built: Path, guid: str, stop_time: float) -> bytes:
     root.set("version", __version__)
     root.set("generationTool", f"ecdsim {__version__} with {root.get('generationTool', '')}")
     root.attrib.pop("generationDateAndTime", None)
+    if stand_in:
+        root.set("description", f"{TITLE}. {root.get('description', '')}".rstrip(". "))
     variables = root.find("ModelVariables")
     assert variables is not None
     outputs = []

@@ -27,11 +27,14 @@ CONFIG_FILE = "ecdsim_config.toml"
 
 
 def _config(resources: str | None, overrides: dict[str, object] | None = None) -> Any:
-    from ecdsim.api import load
+    # Without the notebook API's placeholder-load warning: the export warned once and the
+    # FMU's description says so, while this runs at every instantiation (pythonfmu's
+    # builder makes one too), where the warning would repeat with a temporary path.
+    from ecdsim.api import _load
 
     if resources is None:
         raise RuntimeError("the FMU has no resources folder (its config is kept there)")
-    return load(Path(resources) / CONFIG_FILE, overrides)
+    return _load(Path(resources) / CONFIG_FILE, overrides)
 
 
 def _parameter(slave: Fmi2Slave, name: str, description: str) -> None:

@@ -10,7 +10,7 @@ Layout (docs/montecarlo.md)::
 
 Every chunk file carries, in its Parquet key-value metadata, the hash of the study's
 identity and its own index, so that a resumed run accepts only chunks of the same study.
-pyarrow is imported lazily: it is an optional dependency (``pip install ecdsim[montecarlo]``).
+pyarrow is imported lazily: it is an optional dependency (the ``montecarlo`` extra).
 """
 
 from __future__ import annotations
@@ -43,12 +43,14 @@ def require(module: str) -> Any:
     """Import an optional module, or raise MissingDependency naming the extra to install."""
     import importlib
 
+    from ecdsim.invocation import install_hint
+
     try:
         return importlib.import_module(module)
     except ImportError:
         raise MissingDependency(
             f"the Monte Carlo needs {module.split('.')[0]}, which is not installed; "
-            "install it with: pip install 'ecdsim[montecarlo]'"
+            f"{install_hint('montecarlo')}"
         ) from None
 
 

@@ -23,6 +23,7 @@ from pydantic import BaseModel
 from ecdsim._version import __version__
 from ecdsim.atomic import write_text
 from ecdsim.config.errors import ConfigError
+from ecdsim.config.placeholder import is_placeholder
 from ecdsim.config.units import Kind
 from ecdsim.deployment import Prediction, predict, with_flight
 from ecdsim.formatting import describe_method, format_number
@@ -638,7 +639,7 @@ def build_context(
         "dynamic": _dynamic_section(prediction, document, u),
         "methods": [(m, _described(m)) for m in document["methods"]],
         "units_name": "SI" if units == "si" else "US customary",
-        "placeholder": bool(getattr(config.spec.load, "placeholder", False)),
+        "placeholder": is_placeholder(config),
         "figures": _figures(prediction, units),
         "u": u,
         "t_unit": u.unit("temperature"),

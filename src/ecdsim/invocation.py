@@ -4,7 +4,9 @@
 PATH, and a checkout is installed in development mode (``pip install -e``): a hint that
 says ``ecdsim deploy ...`` or ``pip install 'ecdsim[fmu]'`` would run another program, or
 install from the package index instead of the checkout. These functions name the command
-that works here.
+that works here. A foundation module (it imports nothing of ecdsim), so that every layer
+that reports a missing optional package (Monte Carlo, sweeps, the notebook API, the FMU,
+the command line) says it with :func:`install_hint`.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import shutil
 import sys
 from pathlib import Path
 
-__all__ = ["ecdsim_command", "pip_install"]
+__all__ = ["ecdsim_command", "install_hint", "pip_install"]
 
 
 def _shown(path: Path) -> str:
@@ -54,7 +56,7 @@ def checkout() -> Path | None:
     A checkout has ``pyproject.toml`` two folders above the package (``src/ecdsim``);
     an installed wheel's package sits in ``site-packages``, which has none.
     """
-    root = Path(__file__).resolve().parents[3]
+    root = Path(__file__).resolve().parents[2]
     project = root / "pyproject.toml"
     if (root / "src" / "ecdsim").is_dir() and project.is_file():
         return root
@@ -74,3 +76,9 @@ def pip_install(extra: str) -> str:
     if target.startswith(".." + os.sep + ".." + os.sep + ".."):
         target = str(root)
     return f"{pip} -e '{target}[{extra}]'"
+
+
+def install_hint(extra: str) -> str:
+    """``"install it with: <command>"``, the end of every message about a missing
+    optional package, with :func:`pip_install`'s command for ``extra``."""
+    return f"install it with: {pip_install(extra)}"
