@@ -739,22 +739,56 @@ class FitResults(_Table):
         """The temperature laws as ``ecdsim fit drop-test --json`` gives them (or None)."""
         return None if self.result.laws is None else self.result.laws.to_dict()
 
-    def plot(self) -> list[Figure]:
-        """Torque against speed with the fitted lines (paper Fig. 8), and BECD, FECD over T."""
-        from ecdsim.characterize.plots import plot_line_residuals, plot_parameters
-        from ecdsim.characterize.plots import plot_torque_speed as fit_lines
+    @overload
+    def plot(self, units: UnitSystem = "si", *, ax: None = None, kind: str = ...) -> list[Figure]:
+        pass
 
+    @overload
+    def plot(self, units: UnitSystem = "si", *, ax: Axes, kind: str = ...) -> Axes:
+        pass
+
+    def plot(
+        self, units: UnitSystem = "si", *, ax: Axes | None = None, kind: str = "torque_speed"
+    ) -> list[Figure] | Axes:
+        """Torque against speed with the fitted lines (paper Fig. 8), BECD and FECD over T
+        with their laws, and the lines' residuals.
+
+        Without ``ax``: a list of the three figures (the second with both parameters).
+        With ``ax`` (a matplotlib Axes): draws one plot there, ``kind`` =
+        ``"torque_speed"``, ``"damping_rate"`` (BECD over T), ``"friction"`` (FECD over T)
+        or ``"residuals"``, and returns ``ax``. ``units``: ``"si"`` or ``"us"``.
+        """
+        from ecdsim.characterize.plots import (
+            plot_line_residuals,
+            plot_parameter,
+            plot_parameters,
+        )
+        from ecdsim.characterize.plots import plot_torque_speed as fit_lines
+        from ecdsim.units_display import check_system
+
+        system = check_system(units, "units")
         fits = self.result.fits
+        temperatures = [f.temperature for f in fits]
+        damping = [f.line.slope for f in fits]
+        friction = [f.line.intercept for f in fits]
+        if ax is not None:
+            chosen = _choose("kind", kind, list(FIT_PLOT_KINDS))
+            if chosen == "torque_speed":
+                fit_lines(self.result, system, ax=ax)
+            elif chosen == "residuals":
+                plot_line_residuals(self.result, system, ax=ax)
+            else:
+                values = damping if chosen == "damping_rate" else friction
+                plot_parameter(chosen, temperatures, values, self.result.laws, system, ax=ax)
+            return ax
         return [
-            fit_lines(self.result),
-            plot_parameters(
-                [f.temperature for f in fits],
-                [f.line.slope for f in fits],
-                [f.line.intercept for f in fits],
-                self.result.laws,
-            ),
-            plot_line_residuals(self.result),
+            fit_lines(self.result, system),
+            plot_parameters(temperatures, damping, friction, self.result.laws, system),
+            plot_line_residuals(self.result, system),
         ]
+
+
+FIT_PLOT_KINDS = ("torque_speed", "damping_rate", "friction", "residuals")
 
 
 def fit(
@@ -893,13 +927,48 @@ class SizeResults(_Table):
                 )
         return rows
 
-    def plot(self, top: int = 5) -> list[Figure]:
-        """Deployment time over temperature of the ``top`` candidates, and ratio margins."""
+    @overload
+    def plot(
+        self, top: int = 5, units: UnitSystem = "si", *, ax: None = None, kind: str = ...
+    ) -> list[Figure]:
+        pass
+
+    @overload
+    def plot(self, top: int = 5, units: UnitSystem = "si", *, ax: Axes, kind: str = ...) -> Axes:
+        pass
+
+    def plot(
+        self,
+        top: int = 5,
+        units: UnitSystem = "si",
+        *,
+        ax: Axes | None = None,
+        kind: str = "times",
+    ) -> list[Figure] | Axes:
+        """Deployment time over temperature of the ``top`` candidates, and ratio margins.
+
+        Without ``ax``: a list of figures, the times and (when a candidate is valid) the
+        best one's margins against the gear ratio. With ``ax`` (a matplotlib Axes): draws
+        one plot there, ``kind`` = ``"times"`` or ``"margins"``, and returns ``ax``.
+        ``units``: ``"si"`` or ``"us"`` (the temperatures of the times plot).
+        """
         import numpy as np
 
         from ecdsim.sizing.plots import plot_candidate_times, plot_ratio_margins
         from ecdsim.sizing.search import deployment_time_curves
+        from ecdsim.units_display import check_system
 
+        system = check_system(units, "units")
+        chosen = _choose("kind", kind, list(SIZE_PLOT_KINDS)) if ax is not None else None
+        if isinstance(top, bool) or not isinstance(top, int) or top < 1:
+            raise ConfigError([f"top = {top!r}: expected a number of candidates >= 1"])
+        if chosen == "margins":
+            if self.intervals is None:
+                raise ConfigError(
+                    ["kind: 'margins' needs a valid candidate, and no candidate is valid"]
+                )
+            plot_ratio_margins(self.intervals, ax=ax)
+            return cast("Axes", ax)
         valid = [c for c in self.search.candidates if c.error is None][:top]
         temps = np.linspace(
             min(self.requirements.temperatures), max(self.requirements.temperatures), 57
@@ -909,10 +978,16 @@ class SizeResults(_Table):
             if valid
             else np.zeros((0, temps.size))
         )
-        figures = [plot_candidate_times(valid, temps, times, self.requirements)]
+        if ax is not None:
+            plot_candidate_times(valid, temps, times, self.requirements, system, ax=ax)
+            return ax
+        figures = [plot_candidate_times(valid, temps, times, self.requirements, system)]
         if self.intervals is not None:
             figures.append(plot_ratio_margins(self.intervals))
         return figures
+
+
+SIZE_PLOT_KINDS = ("times", "margins")
 
 
 def _at(values: Any, i: int) -> Any:
@@ -1022,14 +1097,73 @@ class SweepResults(_Table):
         metadata) if ``path`` ends .parquet, else CSV, as ``ecdsim sweep -o``."""
         return self.result.write(Path(path))
 
-    def plot(self, output: str = "deployment_time_s", method: str | None = None) -> Figure:
-        """``output`` against each varied key, a colour per temperature (``--plot``)."""
+    @overload
+    def plot(
+        self,
+        output: str = "deployment_time_s",
+        method: str | None = None,
+        *,
+        units: UnitSystem = "si",
+        ax: None = None,
+        panel: float | str | None = None,
+    ) -> Figure:
+        pass
+
+    @overload
+    def plot(
+        self,
+        output: str = "deployment_time_s",
+        method: str | None = None,
+        *,
+        units: UnitSystem = "si",
+        ax: Axes,
+        panel: float | str | None = None,
+    ) -> Axes:
+        pass
+
+    def plot(
+        self,
+        output: str = "deployment_time_s",
+        method: str | None = None,
+        *,
+        units: UnitSystem = "si",
+        ax: Axes | None = None,
+        panel: float | str | None = None,
+    ) -> Figure | Axes:
+        """``output`` against the varied keys by ``method`` (``ecdsim sweep --plot``).
+
+        Without ``ax``: the figure (a panel per temperature for two or more keys; points
+        against each key for a Latin hypercube). With ``ax`` (a matplotlib Axes): draws
+        one panel there, titled, its legend inside, and returns ``ax``; ``panel`` chooses
+        it, one of :meth:`panels` (a temperature [degC], or a varied key; default the
+        first). ``units``: ``"si"`` or ``"us"``.
+        """
+        from ecdsim.units_display import check_system
+
+        system = check_system(units, "units")
         varied = {v.column for v in self.result.varies}
         columns = [c for c in self.result.columns if c not in varied]
         _choose("output", output, columns)
         if method is not None:
             _choose("method", method, list(self.result.methods))
-        return self.result.plot(output, method)
+        if panel is not None:
+            choices = self.panels(method)
+            if panel not in choices or isinstance(panel, bool):
+                from ecdsim.config.units import quoted
+
+                raise UnknownNameError([f"panel: {quoted(panel)} is not one of {choices}"])
+        if ax is None:
+            return self.result.plot(output, method, system, panel=panel)
+        self.result.plot(output, method, system, ax=ax, panel=panel)
+        return ax
+
+    def panels(self, method: str | None = None) -> list[float | str]:
+        """The panels :meth:`plot` can draw on one Axes: the temperatures [degC] of a
+        sweep of two or more keys, or the varied keys of a Latin hypercube; [] when the
+        figure is one panel."""
+        if method is not None:
+            _choose("method", method, list(self.result.methods))
+        return self.result.panels(method)
 
 
 def sweep(

@@ -49,11 +49,12 @@ def _figure(width: float = 7.5, height: float = 4.8) -> Figure:
     return Figure(figsize=(width, height), layout="constrained")
 
 
-def _target(ax: Axes | None) -> tuple[Figure, Axes]:
-    """The figure and axes to draw on: the caller's ``ax`` (and its figure), or new ones."""
+def target(ax: Axes | None, width: float = 7.5, height: float = 4.8) -> tuple[Figure, Axes]:
+    """The figure and axes to draw on: the caller's ``ax`` (and its figure), or a new
+    figure of ``width`` x ``height`` inches with one axes (every plot that takes ``ax=``)."""
     if ax is not None:
         return cast("Figure", ax.figure), ax
-    fig = _figure()
+    fig = _figure(width, height)
     return fig, fig.add_subplot()
 
 
@@ -99,7 +100,7 @@ def _plot_against_time(
     """One line per (method, temperature) of a trajectory field against time (on ``ax``
     if given, else on a new figure)."""
     u = Shown(units)
-    fig, ax = _target(ax)
+    fig, ax = target(ax)
     times = np.linspace(0.0, time_span(prediction), n_points)
     temps = np.ravel(prediction.temperatures)
     colors = temperature_colors(temps)
@@ -195,7 +196,7 @@ def plot_torque_speed(
     start speed of the exact solution, and the legend says so.
     """
     u = Shown(units, digits=3)
-    fig, ax = _target(ax)
+    fig, ax = target(ax)
     ecd = prediction.ecd
     temps = np.ravel(prediction.temperatures)
     damping = np.ravel(np.broadcast_to(ecd.ecd_damping_rate, prediction.temperatures.shape))

@@ -31,6 +31,7 @@ import numpy as np
 from ecdsim.config.units import NUMBER_PATTERN
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
     from numpy.typing import NDArray
 
@@ -340,6 +341,8 @@ class SweepResult:
         units: UnitSystem = "si",
         *,
         output: str | None = None,
+        ax: Axes | None = None,
+        panel: float | str | None = None,
     ) -> Figure:
         """``column`` of the sweep against its varied keys, by one method.
 
@@ -352,31 +355,57 @@ class SweepResult:
         or cannot start) has no deployment: it is marked by a cross at the top of its
         panel, in its line's colour, never dropped. ``output`` is the old name of
         ``column`` (before issue 26).
-        """
-        from ecdsim.plotting import most_exact
 
+        ``ax`` (a matplotlib Axes): draw one panel there, titled and with its legend inside
+        it, and return its figure; ``panel`` chooses which (one of :meth:`panels`: a
+        temperature [degC] or a varied key; default the first). ``panel`` without ``ax``
+        draws that panel alone on a new figure.
+        """
         column = output if output is not None else column
-        chosen = method or most_exact(self.methods)
-        rows = [r for r in self.rows if r.get("method") == chosen]
-        if chosen not in self.methods or not rows:
-            raise KeyError(f"{chosen!r} is not a method of this sweep; ran: {list(self.methods)}")
+        chosen, rows = self._method_rows(method)
         if column not in self.columns:
             known = [c for c in self.columns if c not in {v.column for v in self.varies}]
             raise KeyError(f"{column!r} is not an output of this sweep; known: {known}")
+        choices = self.panels(chosen)
+        if panel is not None and panel not in choices:
+            raise KeyError(f"{panel!r} is not a panel of this plot; panels: {choices}")
         lines = _line_plan(self.varies, rows)
+        if ax is not None or panel is not None:
+            return self._one_panel(rows, column, chosen, units, lines, ax, panel)
         if lines is None:
             return self._scatter(rows, column, chosen, units)
         return self._lines(rows, column, chosen, units, *lines)
 
+    def panels(self, method: str | None = None) -> list[float | str]:
+        """The panels of :meth:`plot`'s figure by ``method``: the temperatures [degC] of a
+        sweep of two or more keys (a panel per temperature), or the varied keys of points
+        drawn against each key (a Latin hypercube of two or more keys); [] for a figure of
+        one panel."""
+        _, rows = self._method_rows(method)
+        lines = _line_plan(self.varies, rows)
+        if lines is None:
+            return [v.key for v in self.varies] if len(self.varies) > 1 else []
+        return sorted({float(r["temperature_C"]) for r in rows}) if lines[1] else []
+
+    def _method_rows(self, method: str | None) -> tuple[str, list[dict[str, Any]]]:
+        """The method plotted (``method``, else the most exact run) and its rows."""
+        from ecdsim.plotting import most_exact
+
+        chosen = method or most_exact(self.methods)
+        rows = [r for r in self.rows if r.get("method") == chosen]
+        if chosen not in self.methods or not rows:
+            raise KeyError(f"{chosen!r} is not a method of this sweep; ran: {list(self.methods)}")
+        return chosen, rows
+
     def _frame(
-        self, column: str, method: str, units: UnitSystem, how: str, fig: Figure
+        self, column: str, method: str, units: UnitSystem, how: str, inches: float
     ) -> tuple[str, str]:
-        """The figure's title, wrapped to the figure's width, and the y label (``column``
-        with its display unit)."""
+        """The title, wrapped to ``inches`` (the figure's or one axes' width), and the y
+        label (``column`` with its display unit)."""
         from ecdsim.plotting import plot_title
 
         what = f"{_label(column, units)} by the {method} method, {how}".rstrip(", ")
-        width = int(12 * fig.get_figwidth())  # characters of the title's font per line
+        width = max(int(12 * inches), 30)  # characters of the title's font per line
         return plot_title(self.title, what, width=width), _label(column, units)
 
     def _lines(
@@ -388,20 +417,13 @@ class SweepResult:
         x_vary: Vary,
         others: list[Vary],
     ) -> Figure:
-        from ecdsim.plotting import _figure, level_colors, temperature_colors
+        from ecdsim.plotting import _figure
         from ecdsim.units_display import Shown
 
-        u = Shown(units)
         temps = sorted({float(r["temperature_C"]) for r in rows})
         # One key: one panel, a line per temperature in its colour. More keys: a panel per
         # temperature, a line per level of the others.
         panels: list[float | None] = list(temps) if others else [None]
-        if others:
-            groups = sorted({tuple(r[v.column] for v in others) for r in rows})
-            colors = level_colors(len(groups))
-        else:
-            groups = [(t,) for t in temps]
-            colors = temperature_colors(temps)
         n = len(panels)
         cols = min(n, 3)
         fig = _figure(width=max(6.0, 4.3 * cols), height=4.8 if n <= 3 else 8.4)
@@ -412,44 +434,22 @@ class SweepResult:
                 (n + cols - 1) // cols, cols, k + 1, sharey=axes[0] if axes else None
             )
             axes.append(ax)
-            for row, (group, color) in enumerate(zip(groups, colors, strict=True)):
-                if others:
-                    mine = [
-                        r
-                        for r in rows
-                        if float(r["temperature_C"]) == panel
-                        and tuple(r[v.column] for v in others) == group
-                    ]
-                    label = _group_label(others, group, units)
-                else:
-                    mine = [r for r in rows if float(r["temperature_C"]) == group[0]]
-                    label = u.text(group[0], "temperature")
-                x, y, stalled = _series(mine, x_vary, column, units)
-                ax.plot(x, np.where(stalled, np.nan, y), "o-", color=color, ms=3.5, label=label)
-                if np.any(stalled):
-                    _mark_stalls(ax, x[stalled], color, row)
-                    stalls_drawn = True
+            stalls_drawn |= _line_panel(ax, rows, column, units, x_vary, others, panel)
             if panel is not None:
-                ax.set_title(f"T = {u.text(panel, 'temperature')}", fontsize="medium")
-            ax.set_xlabel(_vary_label(x_vary, units))
+                ax.set_title(f"T = {Shown(units).text(panel, 'temperature')}", fontsize="medium")
             if k % cols == 0:
                 ax.set_ylabel(_label(column, units))
-            ax.grid(True, alpha=0.3)
-        _legend(fig, axes[0], others, stalls_drawn)
-        how = f"one line per {' and '.join(v.key for v in others)}" if others else ""
-        title, _ = self._frame(column, method, units, how, fig)
+        handles, labels, title = _legend_entries(axes[0], others, stalls_drawn)
+        _figure_legend(fig, handles, labels, title)
+        title, _ = self._frame(column, method, units, _how(others), fig.get_figwidth())
         fig.suptitle(title)
         return fig
 
     def _scatter(
         self, rows: list[dict[str, Any]], column: str, method: str, units: UnitSystem
     ) -> Figure:
-        from ecdsim.plotting import _figure, temperature_colors
-        from ecdsim.units_display import Shown
+        from ecdsim.plotting import _figure
 
-        u = Shown(units)
-        temps = sorted({float(r["temperature_C"]) for r in rows})
-        colors = temperature_colors(temps)
         n = len(self.varies)
         cols = min(n, 3)
         fig = _figure(width=max(5.5, 4.3 * cols), height=4.6 if n <= 3 else 8.4)
@@ -460,30 +460,128 @@ class SweepResult:
                 (n + cols - 1) // cols, cols, k + 1, sharey=axes[0] if axes else None
             )
             axes.append(ax)
-            for row, (temp, color) in enumerate(zip(temps, colors, strict=True)):
-                mine = [r for r in rows if float(r["temperature_C"]) == temp]
-                x, y, stalled = _series(mine, vary, column, units)
-                label = u.text(temp, "temperature")
-                ax.plot(
-                    x,
-                    np.where(stalled, np.nan, y),
-                    "o",
-                    color=color,
-                    ms=3.5,
-                    alpha=0.8,
-                    label=label,
-                )
-                if np.any(stalled):
-                    _mark_stalls(ax, x[stalled], color, row)
-                    stalls_drawn = True
-            ax.set_xlabel(_vary_label(vary, units))
+            stalls_drawn |= _scatter_panel(ax, rows, column, units, vary)
             if k % cols == 0:
                 ax.set_ylabel(_label(column, units))
-            ax.grid(True, alpha=0.3)
-        _legend(fig, axes[0], [], stalls_drawn, title="temperature")
-        title, _ = self._frame(column, method, units, "every point", fig)
+        handles, labels, _ = _legend_entries(axes[0], [], stalls_drawn)
+        _figure_legend(fig, handles, labels, "temperature")
+        title, _ = self._frame(column, method, units, "every point", fig.get_figwidth())
         fig.suptitle(title)
         return fig
+
+    def _one_panel(
+        self,
+        rows: list[dict[str, Any]],
+        column: str,
+        method: str,
+        units: UnitSystem,
+        lines: tuple[Vary, list[Vary]] | None,
+        ax: Axes | None,
+        panel: float | str | None,
+    ) -> Figure:
+        """One panel of the figure on ``ax`` (or a new figure), titled, its legend inside."""
+        from ecdsim.plotting import target
+        from ecdsim.units_display import Shown
+
+        fig, ax = target(ax)
+        choices = self.panels(method)
+        chosen = panel if panel is not None else (choices[0] if choices else None)
+        if lines is None:
+            vary = next((v for v in self.varies if v.key == chosen), self.varies[0])
+            stalls = _scatter_panel(ax, rows, column, units, vary)
+            others: list[Vary] = []
+            how = "every point"
+            legend_title = "temperature"
+        else:
+            x_vary, others = lines
+            temperature = float(chosen) if chosen is not None else None
+            stalls = _line_panel(ax, rows, column, units, x_vary, others, temperature)
+            how = _how(others)
+            if temperature is not None:
+                how += f", T = {Shown(units).text(temperature, 'temperature')}"
+            legend_title = None
+        ax.set_ylabel(_label(column, units))
+        handles, labels, title = _legend_entries(ax, others, stalls)
+        ax.legend(handles, labels, title=legend_title or title, fontsize="small")
+        inches = fig.get_figwidth() * ax.get_position().width  # the axes' own width
+        heading, _ = self._frame(column, method, units, how, inches)
+        ax.set_title(heading, fontsize="medium")
+        return fig
+
+
+def _how(others: list[Vary]) -> str:
+    """What the lines of a panel are, for its title."""
+    return f"one line per {' and '.join(v.key for v in others)}" if others else ""
+
+
+def _line_panel(
+    ax: Any,
+    rows: list[dict[str, Any]],
+    column: str,
+    units: UnitSystem,
+    x_vary: Vary,
+    others: list[Vary],
+    panel: float | None,
+) -> bool:
+    """One panel of a full factorial sweep: ``column`` against ``x_vary``, a line per
+    temperature (one key), or at temperature ``panel`` a line per level of ``others``.
+    True when it marks a point that does not deploy."""
+    from ecdsim.plotting import level_colors, temperature_colors
+    from ecdsim.units_display import Shown
+
+    u = Shown(units)
+    temps = sorted({float(r["temperature_C"]) for r in rows})
+    if others:
+        groups = sorted({tuple(r[v.column] for v in others) for r in rows})
+        colors = level_colors(len(groups))
+    else:
+        groups = [(t,) for t in temps]
+        colors = temperature_colors(temps)
+    stalls_drawn = False
+    for row, (group, color) in enumerate(zip(groups, colors, strict=True)):
+        if others:
+            mine = [
+                r
+                for r in rows
+                if float(r["temperature_C"]) == panel
+                and tuple(r[v.column] for v in others) == group
+            ]
+            label = _group_label(others, group, units)
+        else:
+            mine = [r for r in rows if float(r["temperature_C"]) == group[0]]
+            label = u.text(group[0], "temperature")
+        x, y, stalled = _series(mine, x_vary, column, units)
+        ax.plot(x, np.where(stalled, np.nan, y), "o-", color=color, ms=3.5, label=label)
+        if np.any(stalled):
+            _mark_stalls(ax, x[stalled], color, row)
+            stalls_drawn = True
+    ax.set_xlabel(_vary_label(x_vary, units))
+    ax.grid(True, alpha=0.3)
+    return stalls_drawn
+
+
+def _scatter_panel(
+    ax: Any, rows: list[dict[str, Any]], column: str, units: UnitSystem, vary: Vary
+) -> bool:
+    """One panel of points: ``column`` against ``vary``, a colour per temperature. True
+    when it marks a point that does not deploy."""
+    from ecdsim.plotting import temperature_colors
+    from ecdsim.units_display import Shown
+
+    u = Shown(units)
+    temps = sorted({float(r["temperature_C"]) for r in rows})
+    stalls_drawn = False
+    for row, (temp, color) in enumerate(zip(temps, temperature_colors(temps), strict=True)):
+        mine = [r for r in rows if float(r["temperature_C"]) == temp]
+        x, y, stalled = _series(mine, vary, column, units)
+        label = u.text(temp, "temperature")
+        ax.plot(x, np.where(stalled, np.nan, y), "o", color=color, ms=3.5, alpha=0.8, label=label)
+        if np.any(stalled):
+            _mark_stalls(ax, x[stalled], color, row)
+            stalls_drawn = True
+    ax.set_xlabel(_vary_label(vary, units))
+    ax.grid(True, alpha=0.3)
+    return stalls_drawn
 
 
 PARQUET_KEY = b"ecdsim"
@@ -569,16 +667,20 @@ def _mark_stalls(ax: Any, x: FloatArray, color: Any, row: int = 0) -> None:
     )
 
 
-def _legend(fig: Any, ax: Any, others: list[Vary], stalls: bool, title: str | None = None) -> None:
-    """One legend for the figure, below the panels: the lines, then what a cross means."""
+def _legend_entries(ax: Any, others: list[Vary], stalls: bool) -> tuple[list[Any], list[str], str]:
+    """The legend of a sweep plot: the lines, then what a cross means; and its title."""
     from matplotlib.lines import Line2D
 
     handles, labels = ax.get_legend_handles_labels()
     if stalls:
         handles.append(Line2D([], [], marker="x", ls="", color="0.2", ms=8, mew=2))
         labels.append("x at the top: stalls (no deployment)")
-    if title is None:
-        title = ", ".join(v.key for v in others) if others else "temperature"
+    title = ", ".join(v.key for v in others) if others else "temperature"
+    return handles, labels, title
+
+
+def _figure_legend(fig: Any, handles: list[Any], labels: list[str], title: str) -> None:
+    """One legend for the figure, below the panels."""
     fig.legend(
         handles,
         labels,

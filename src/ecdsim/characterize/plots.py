@@ -3,12 +3,14 @@
 * :func:`plot_torque_speed`: torque against speed with the fitted line per temperature
   (the paper's Figure 8), outliers ringed;
 * :func:`plot_parameters`: BECD and FECD against temperature with 95 % intervals and the
-  fitted laws with their 95 % confidence bands;
+  fitted laws with their 95 % confidence bands (:func:`plot_parameter`: one of the two);
 * :func:`plot_line_residuals` and :func:`plot_trace_residuals`: residuals;
 * :func:`plot_traces`: recorded and fitted deployments.
 
-Each takes the display unit system (``units``, "si" or "us"; :mod:`ecdsim.units_display`).
-matplotlib is imported inside the functions (Agg canvas, no display needed).
+Each takes the display unit system (``units``, "si" or "us"; :mod:`ecdsim.units_display`);
+those of one axes also ``ax``, a matplotlib Axes to draw on instead of a new figure (the
+notebook API's ``plot(ax=...)``). matplotlib is imported inside the functions (Agg
+canvas, no display needed).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from ecdsim.characterize.droptest import DropTestResult
 from ecdsim.characterize.stats import Estimate
 from ecdsim.characterize.templaws import TemperatureLaws
 from ecdsim.characterize.tracefit import TraceResult, model_angle
-from ecdsim.plotting import save_figure, temperature_colors
+from ecdsim.plotting import save_figure, target, temperature_colors
 from ecdsim.units_display import Shown, UnitSystem
 
 if TYPE_CHECKING:
@@ -49,11 +51,13 @@ def _finish(ax: Axes, title: str, xlabel: str, ylabel: str) -> None:
         ax.legend(fontsize="small")
 
 
-def plot_torque_speed(result: DropTestResult, units: UnitSystem = "si") -> Figure:
-    """Drive torque against (corrected) speed with each temperature's line (paper Fig. 8)."""
+def plot_torque_speed(
+    result: DropTestResult, units: UnitSystem = "si", ax: Axes | None = None
+) -> Figure:
+    """Drive torque against (corrected) speed with each temperature's line (paper Fig. 8),
+    on ``ax`` if given (its figure is returned), else on a new figure."""
     u = Shown(units)
-    fig = _figure()
-    ax = fig.add_subplot()
+    fig, ax = target(ax)
     colors = temperature_colors([f.temperature for f in result.fits])
     top = max((float(np.max(f.corrected)) for f in result.fits), default=1.0) * 1.1
     speeds = np.linspace(0.0, top, 50)
@@ -116,50 +120,74 @@ def plot_parameters(
     laws : the laws over temperature, or None
     units : the display unit system
     """
-    u = Shown(units)
     fig = _figure(7.5, 7.0)
     top, bottom = fig.subplots(2, 1, sharex=True)
-    t = np.asarray(temperatures, dtype=float)
-    span = max(float(np.ptp(t)), 1.0)
-    grid = np.linspace(float(np.min(t)) - 0.1 * span, float(np.max(t)) + 0.1 * span, 100)
-    _error_bars(top, t, damping, u, "damping_rate")
-    _error_bars(bottom, t, friction, u, "torque")
-    x = u.values(grid, "temperature")
-    if laws is not None:
-        for name, fit in laws.damping.items():
-            y = u.values(fit(grid), "damping_rate")
-            line = top.plot(x, y, _LAW_STYLES.get(name, ":"), label=f"{name} law")[0]
-            band = fit.band(grid)
-            if band is not None:
-                shown = [u.values(edge, "damping_rate") for edge in band]
-                top.fill_between(x, *shown, color=line.get_color(), alpha=0.15)
-        if laws.friction is not None:
-            y = u.values(laws.friction(grid), "torque")
-            line = bottom.plot(x, y, "-", label="line")[0]
-            band = laws.friction.band(grid)
-            if band is not None:
-                shown = [u.values(edge, "torque") for edge in band]
-                bottom.fill_between(x, *shown, color=line.get_color(), alpha=0.15)
-    _finish(
-        top,
-        "Damping rate against temperature (95 % intervals)",
-        "",
-        u.head("BECD", "damping_rate"),
-    )
-    _finish(
-        bottom,
-        "Friction against temperature",
-        u.head("temperature", "temperature"),
-        u.head("FECD", "torque"),
-    )
+    _parameter_panel(top, "damping_rate", temperatures, damping, laws, Shown(units), False)
+    _parameter_panel(bottom, "friction", temperatures, friction, laws, Shown(units), True)
     return fig
 
 
-def plot_line_residuals(result: DropTestResult, units: UnitSystem = "si") -> Figure:
-    """Residual torque of each drop-test point against its speed, per temperature."""
+# Each parameter's panel: its title, its symbol and the kind of its values.
+PARAMETERS = {
+    "damping_rate": ("Damping rate against temperature (95 % intervals)", "BECD", "damping_rate"),
+    "friction": ("Friction against temperature", "FECD", "torque"),
+}
+
+
+def plot_parameter(
+    quantity: str,
+    temperatures: Sequence[float],
+    values: Sequence[Estimate],
+    laws: TemperatureLaws | None,
+    units: UnitSystem = "si",
+    ax: Axes | None = None,
+) -> Figure:
+    """One panel of :func:`plot_parameters`: ``quantity`` (``"damping_rate"``, BECD
+    [N*m*s/rad], or ``"friction"``, FECD [N*m]) against temperature with its 95 %
+    intervals, law and band, on ``ax`` if given, else on a new figure."""
+    fig, ax = target(ax)
+    _parameter_panel(ax, quantity, temperatures, values, laws, Shown(units), True)
+    return fig
+
+
+def _parameter_panel(
+    ax: Axes,
+    quantity: str,
+    temperatures: Sequence[float],
+    values: Sequence[Estimate],
+    laws: TemperatureLaws | None,
+    u: Shown,
+    xlabel: bool,
+) -> None:
+    title, symbol, kind = PARAMETERS[quantity]
+    t = np.asarray(temperatures, dtype=float)
+    span = max(float(np.ptp(t)), 1.0)
+    grid = np.linspace(float(np.min(t)) - 0.1 * span, float(np.max(t)) + 0.1 * span, 100)
+    _error_bars(ax, t, values, u, kind)
+    x = u.values(grid, "temperature")
+    curves = []
+    if laws is not None and quantity == "damping_rate":
+        curves = [
+            (f, _LAW_STYLES.get(name, ":"), f"{name} law") for name, f in laws.damping.items()
+        ]
+    elif laws is not None and laws.friction is not None:
+        curves = [(laws.friction, "-", "line")]
+    for law, style, label in curves:
+        line = ax.plot(x, u.values(law(grid), kind), style, label=label)[0]
+        band = law.band(grid)
+        if band is not None:
+            low, high = (u.values(edge, kind) for edge in band)
+            ax.fill_between(x, low, high, color=line.get_color(), alpha=0.15)
+    _finish(ax, title, u.head("temperature", "temperature") if xlabel else "", u.head(symbol, kind))
+
+
+def plot_line_residuals(
+    result: DropTestResult, units: UnitSystem = "si", ax: Axes | None = None
+) -> Figure:
+    """Residual torque of each drop-test point against its speed, per temperature (on
+    ``ax`` if given, else on a new figure)."""
     u = Shown(units)
-    fig = _figure()
-    ax = fig.add_subplot()
+    fig, ax = target(ax)
     temps = [fit.temperature for fit in result.fits]
     for fit, color in zip(result.fits, temperature_colors(temps), strict=True):
         # Points, not a line: residuals are independent scatter, and a line joining them

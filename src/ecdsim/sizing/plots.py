@@ -1,6 +1,8 @@
 """Sizing figures: deployment time against temperature, margins against gear ratio, and the
 ECD against a fluid damper. Each function returns a matplotlib Figure and never shows it;
-matplotlib is imported lazily (see :mod:`ecdsim.plotting`).
+those of one axes draw on a given matplotlib Axes (``ax``) instead of a new figure if
+asked (the notebook API's ``plot(ax=...)``). matplotlib is imported lazily (see
+:mod:`ecdsim.plotting`).
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ecdsim._types import FloatArray
-from ecdsim.plotting import save_figure
+from ecdsim.plotting import save_figure, target
 from ecdsim.sizing.fluid import FluidComparison
 from ecdsim.sizing.ratio import RatioIntervals
 from ecdsim.sizing.requirements import Requirements
@@ -52,15 +54,16 @@ def plot_candidate_times(
     times: FloatArray,
     requirements: Requirements,
     units: UnitSystem = "si",
+    ax: Axes | None = None,
 ) -> Figure:
     """Deployment time against temperature for the given candidates, with the window.
 
     ``times`` has shape (len(results), len(temperatures)) [s]; +inf (stall) is not drawn.
-    Illustrative (invented) catalogue entries are labelled so in the legend.
+    Illustrative (invented) catalogue entries are labelled so in the legend. On ``ax`` if
+    given (its figure is returned), else on a new figure.
     """
     u = Shown(units)
-    fig = _figure()
-    ax = fig.add_subplot()
+    fig, ax = target(ax)
     shown_t = u.values(np.asarray(temperatures, dtype=float), "temperature")
     for result, row in zip(results, np.atleast_2d(times), strict=True):
         shown = np.where(np.isfinite(row), row, np.nan)
@@ -95,7 +98,7 @@ def binding_checks(intervals: RatioIntervals) -> list[str]:
 
 
 def plot_ratio_margins(
-    intervals: RatioIntervals, labels: Mapping[str, str] | None = None
+    intervals: RatioIntervals, labels: Mapping[str, str] | None = None, ax: Axes | None = None
 ) -> Figure:
     """The margin (worst over temperature) of each requirement that binds, against N.
 
@@ -104,6 +107,8 @@ def plot_ratio_margins(
     ones met at every scanned ratio are named in a note. The feasible interval is shaded
     and in the legend with its ends (exact roots, docs/sizing.md); the gearbox's
     catalogued ratios are dashed grey lines, marked whether they meet every requirement.
+    On ``ax`` if given (its figure is returned; the axes' own legend below it), else on a
+    new figure (the figure's legend below the axes).
     """
     import textwrap
 
@@ -113,8 +118,8 @@ def plot_ratio_margins(
     from ecdsim.sizing.report import PLAIN_NAMES, interval_text
 
     words = dict(PLAIN_NAMES, **(labels or {}))
-    fig = _figure(8.0, 5.4)
-    ax = fig.add_subplot()
+    given = ax is not None
+    fig, ax = target(ax, 8.0, 5.4)
     binding = binding_checks(intervals)
     # The requirements at the feasible interval's ends: bold, and said so in the legend.
     ends = {i.low_limited_by for i in intervals.intervals}
@@ -175,7 +180,22 @@ def plot_ratio_margins(
         handles.append(Patch(color="none"))
         said = f"met at every N from {low:g} to {high:g}, not drawn: " + "; ".join(always)
         texts.append("\n".join(textwrap.wrap(said, 48)))
-    fig.legend(handles, texts, loc="outside lower center", ncols=2, fontsize="small")
+    if given:  # the caller's axes may share its figure: the legend belongs to them, below
+        from matplotlib.transforms import offset_copy
+
+        ax.legend(
+            handles,
+            texts,
+            loc="upper center",
+            # below the tick labels and the axis label (about 40 points), whatever the
+            # axes' height
+            bbox_to_anchor=(0.5, 0.0),
+            bbox_transform=offset_copy(ax.transAxes, fig=fig, y=-40.0, units="points"),
+            ncols=2,
+            fontsize="x-small",
+        )
+    else:
+        fig.legend(handles, texts, loc="outside lower center", ncols=2, fontsize="small")
     return fig
 
 
