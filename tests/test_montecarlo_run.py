@@ -9,15 +9,17 @@ seconds that worker processes take. One CLI test runs real worker processes.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import json
 import logging
 import os
+import select
 import shlex
 import signal
 import subprocess
 import sys
-import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -48,7 +50,7 @@ from ecdsim.montecarlo.run import (
 )
 from ecdsim.montecarlo.store import MANIFEST, SUMMARY, ChunkReader, chunk_path, read_manifest
 from tests import hand
-from tests.conftest import SavedFigures
+from tests.conftest import ROOT, SavedFigures
 from tests.test_montecarlo_config import PAPER_TEXT, write_config
 
 runner = CliRunner()
@@ -107,45 +109,61 @@ def study(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     return config, out
 
 
-def start_cli(args: list[str], cwd: Path) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [sys.executable, "-m", "ecdsim", *args],
+# A guard against a hang, never a verdict: a run held at its gate waits for the test's
+# signal, so nothing here depends on how fast the machine is; a test still waiting after
+# this long has found a hang (a run that neither reaches its gate nor ends).
+HANG_GUARD_S = 1800.0
+
+
+@contextlib.contextmanager
+def held_run(
+    args: list[str], cwd: Path, chunks: int, *, group: bool = False
+) -> Iterator[subprocess.Popen[str]]:
+    """``ecdsim ARGS`` in a process whose Monte Carlo run holds after ``chunks`` chunks are
+    on disk (tests/montecarlo_gate.py); yields once it holds there. On the way out the
+    process is reaped and its pipe closed whatever happened (killed with its process
+    group, ``group``, if it still runs), so that no test leaves an open pipe behind."""
+    read_end, write_end = os.pipe()
+    process = subprocess.Popen(
+        [sys.executable, "-m", "tests.montecarlo_gate", str(write_end), str(chunks), *args],
         cwd=cwd,
+        env={**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "src")])},
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
+        pass_fds=(write_end,),
+        start_new_session=group,  # its own process group, as under a terminal
         preexec_fn=as_under_a_terminal,
     )
+    os.close(write_end)
+    try:
+        ready, _, _ = select.select([read_end], [], [], HANG_GUARD_S)
+        if not ready:
+            pytest.fail(f"the run neither held after {chunks} chunks nor ended in {HANG_GUARD_S} s")
+        if os.read(read_end, 1) != b"!":  # the pipe closed: the run ended before its gate
+            _, stderr = process.communicate()
+            pytest.fail(f"the run ended before it could be interrupted: {stderr}")
+        yield process
+    finally:
+        os.close(read_end)
+        if process.poll() is None:
+            if group:
+                os.killpg(process.pid, signal.SIGKILL)
+            else:
+                process.kill()
+        if process.stderr is not None and not process.stderr.closed:
+            process.communicate()  # reaps it and closes its stderr pipe
 
 
 def as_under_a_terminal() -> None:
-    """In the study's process before it starts: Ctrl-C as a terminal delivers it, and the
-    lowest CPU priority.
+    """In the study's process before it starts: Ctrl-C as a terminal delivers it.
 
     SIGINT is set to its default and unblocked: a test run started in the background
     (``make test &``, a CI runner) inherits SIGINT ignored, and the study would then
-    finish as if never interrupted. The priority: two compute threads on two cores finish
-    200 small chunks in under a second, and the watcher that interrupts the run must not
-    be starved of the CPU meanwhile. Its workers (Dask) inherit both.
+    finish as if never interrupted. Its workers (Dask) inherit it.
     """
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-    os.nice(19)
-
-
-def interrupt_after(process: subprocess.Popen[str], out: Path, chunks: int, sig: int) -> str:
-    """Send ``sig`` once ``chunks`` chunk files exist; return the process's stderr."""
-    deadline = time.monotonic() + 120.0
-    while len(chunk_files(out)) < chunks:
-        if process.poll() is not None:
-            pytest.fail(f"the run ended before it could be interrupted: {process.stderr}")
-        if time.monotonic() > deadline:
-            process.kill()
-            pytest.fail("the run wrote no chunks within two minutes")
-        time.sleep(0.002)
-    process.send_signal(sig)
-    _, stderr = process.communicate(timeout=60)
-    return stderr
 
 
 def test_resume_after_sigkill_is_identical_to_an_uninterrupted_run(
@@ -153,10 +171,12 @@ def test_resume_after_sigkill_is_identical_to_an_uninterrupted_run(
 ) -> None:
     config, reference = study
     out = tmp_path / "killed"
-    process = start_cli(study_args(config, out), tmp_path)
-    interrupt_after(process, out, 3, signal.SIGKILL)
+    with held_run(study_args(config, out), tmp_path, 3) as process:
+        process.kill()
+        process.communicate()
     assert process.returncode == -signal.SIGKILL
     on_disk = len(chunk_files(out))
+    # Held after 3; the writer may have installed a chunk or two queued behind them.
     assert 3 <= on_disk < CHUNKS, "the kill must land in the middle of the run"
     assert read_manifest(out) is not None
     result = runner.invoke(app, study_args(config, out, "--resume"))
@@ -172,8 +192,9 @@ def test_ctrl_c_stops_cleanly_and_prints_the_resume_command(
 ) -> None:
     config, reference = study
     out = tmp_path / "interrupted"
-    process = start_cli(study_args(config, out), tmp_path)
-    stderr = interrupt_after(process, out, 2, signal.SIGINT)
+    with held_run(study_args(config, out), tmp_path, 2) as process:
+        process.send_signal(signal.SIGINT)
+        _, stderr = process.communicate()
     assert process.returncode == 130, stderr
     assert "Traceback" not in stderr
     assert "interrupted:" in stderr
@@ -196,25 +217,10 @@ def test_ctrl_c_in_a_terminal_stops_a_dask_run_cleanly(
     # A terminal's Ctrl-C reaches the whole process group, worker processes included.
     config, reference = study
     out = tmp_path / "dask"
-    process = subprocess.Popen(
-        [sys.executable, "-m", "ecdsim", *study_args(config, out, "--workers", "2")],
-        cwd=tmp_path,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,  # its own process group, as under a terminal
-        preexec_fn=as_under_a_terminal,
-    )
-    deadline = time.monotonic() + 120.0
-    while len(chunk_files(out)) < 3:
-        if process.poll() is not None:
-            pytest.fail(f"the run ended before it could be interrupted: {process.stderr}")
-        if time.monotonic() > deadline:
-            process.kill()
-            pytest.fail("the run wrote no chunks within two minutes")
-        time.sleep(0.002)
-    os.killpg(process.pid, signal.SIGINT)
-    _, stderr = process.communicate(timeout=60)
+    args = study_args(config, out, "--workers", "2")
+    with held_run(args, tmp_path, 3, group=True) as process:
+        os.killpg(process.pid, signal.SIGINT)
+        _, stderr = process.communicate()
     assert process.returncode == 130, stderr
     assert "Traceback" not in stderr  # the workers leave Ctrl-C to the client
     assert "interrupted:" in stderr
@@ -680,7 +686,8 @@ def test_queued_writes_stop_at_a_failed_one(
 
     def write(plan: Any, out: Path, result: Any) -> Path:
         if result.index == 1:
-            ahead.wait(timeout=10.0)
+            # a guard against a hang only: the event comes as soon as chunk 4 is computed
+            ahead.wait(timeout=HANG_GUARD_S)
         if result.index == 2:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         written: Path = original_write(plan, out, result)
