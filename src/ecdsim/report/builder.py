@@ -108,7 +108,8 @@ def input_rows(
             if shown is not None and kind is not None:
                 yield key, shown.num(float(value), kind), shown.unit(kind)
                 continue
-            yield key, fmt(float(value)), unit
+            # An integer field (a seed, a count) exactly: 6 digits made seed 20240611 2.02406e+07.
+            yield key, str(value) if isinstance(value, int) else fmt(value), unit
         elif shown is not None and isinstance(value, list | tuple):
             yield _shown_list(key, value, info.annotation, shown)
         else:
