@@ -550,11 +550,7 @@ def _line_panel(
         else:
             mine = [r for r in rows if float(r["temperature_C"]) == group[0]]
             label = u.text(group[0], "temperature")
-        x, y, stalled = _series(mine, x_vary, column, units)
-        ax.plot(x, np.where(stalled, np.nan, y), "o-", color=color, ms=3.5, label=label)
-        if np.any(stalled):
-            _mark_stalls(ax, x[stalled], color, row)
-            stalls_drawn = True
+        stalls_drawn |= _draw(ax, mine, x_vary, column, units, color, row, label, "o-")
     ax.set_xlabel(_vary_label(x_vary, units))
     ax.grid(True, alpha=0.3)
     return stalls_drawn
@@ -573,15 +569,33 @@ def _scatter_panel(
     stalls_drawn = False
     for row, (temp, color) in enumerate(zip(temps, temperature_colors(temps), strict=True)):
         mine = [r for r in rows if float(r["temperature_C"]) == temp]
-        x, y, stalled = _series(mine, vary, column, units)
         label = u.text(temp, "temperature")
-        ax.plot(x, np.where(stalled, np.nan, y), "o", color=color, ms=3.5, alpha=0.8, label=label)
-        if np.any(stalled):
-            _mark_stalls(ax, x[stalled], color, row)
-            stalls_drawn = True
+        stalls_drawn |= _draw(ax, mine, vary, column, units, color, row, label, "o", alpha=0.8)
     ax.set_xlabel(_vary_label(vary, units))
     ax.grid(True, alpha=0.3)
     return stalls_drawn
+
+
+def _draw(
+    ax: Any,
+    rows: list[dict[str, Any]],
+    vary: Vary,
+    column: str,
+    units: UnitSystem,
+    color: Any,
+    row: int,
+    label: str,
+    style: str,
+    **options: Any,
+) -> bool:
+    """``column`` of ``rows`` against ``vary`` in ``style`` and ``color``, the points that
+    do not deploy crossed at the top (the ``row``-th line's height); True if any is."""
+    x, y, stalled = _series(rows, vary, column, units)
+    ax.plot(x, np.where(stalled, np.nan, y), style, color=color, ms=3.5, label=label, **options)
+    if np.any(stalled):
+        _mark_stalls(ax, x[stalled], color, row)
+        return True
+    return False
 
 
 PARQUET_KEY = b"ecdsim"
