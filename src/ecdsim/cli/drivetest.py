@@ -132,11 +132,9 @@ def drive_test(
 ) -> None:
     """Spring law, friction against angle and available torque from a drive test."""
     display.configure(wide=wide, plain=plain)
-    import json
 
     from ecdsim.characterize.driveexport import SPRING_FORMS, drive_test_config_text
     from ecdsim.characterize.drivetest import fit_drive_test
-    from ecdsim.characterize.export import ExportError, provenance, write_parameter_file
     from ecdsim.config import ConfigError
 
     if spring not in SPRING_FORMS:
@@ -160,39 +158,21 @@ def drive_test(
     if not result.curves:
         fail([*bad, *(f"not reduced: {t:g} degC: {why}" for t, _, why in result.failed),
               "no temperature could be reduced"])  # fmt: skip
-    written: list[str] = []
-    if output is not None:
-        lines = provenance("ecdsim fit drive-test", result.table.source, result.table.sha256)
-        try:
-            text = drive_test_config_text(
-                result, lines, spring, user_text, config.name if config else ""
-            )
-            written.append(str(write_parameter_file(output, text)))
-        except ExportError as exc:
-            fail([f"-o {output}: {exc}"])
-        except OSError as exc:
-            fail([f"-o {output}: cannot write ({exc.strerror or exc})"])
-    if plot is not None:
-        from ecdsim.characterize.qualplots import write_drive_test_plots
+    from ecdsim.characterize.qualplots import write_drive_test_plots
+    from ecdsim.cli.benchfit import finish_bench_fit
 
-        try:
-            written += [str(p) for p in write_drive_test_plots(result, plot, u_system)]
-        except OSError as exc:
-            fail([f"--plot {plot}: cannot write plots ({exc.strerror or exc})"])
-    if as_json:
-        document = result.to_dict()
-        document["parameter_file"] = written[0] if output is not None else None
-        document["display_units"] = u_system
-        typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))
-    else:
-        from ecdsim.units_display import Shown
-
-        _print(result, Shown(u_system))
-    for line in bad[:20]:
-        typer.echo(f"warning: {line}", err=True)
-    for t, _, why in result.failed:
-        typer.echo(f"error: not reduced: {t:g} degC: {why}", err=True)
-    for warning in result.warnings:
-        typer.echo(f"warning: {warning.message}", err=True)
-    for path in written:
-        typer.echo(f"wrote {path}", err=as_json)
+    finish_bench_fit(
+        result,
+        command="ecdsim fit drive-test",
+        output=output,
+        parameter_text=lambda lines: drive_test_config_text(
+            result, lines, spring, user_text, config.name if config else ""
+        ),
+        plot=plot,
+        write_plots=write_drive_test_plots,
+        as_json=as_json,
+        u_system=u_system,
+        print_table=_print,
+        bad=bad,
+        not_done="not reduced",
+    )
