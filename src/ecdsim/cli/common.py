@@ -126,6 +126,21 @@ def fail(problems: list[str]) -> NoReturn:
     raise typer.Exit(USER_ERROR)
 
 
+def os_error_line(option: str, path: Path | str, exc: OSError) -> str:
+    """The one line for an OSError met while a command writes ``path`` (given by
+    ``option``): "cannot write", except where the system ran out of memory (ENOMEM, e.g.
+    a large mapping refused), which is not a writing problem and is said as such.
+
+    >>> os_error_line("--out", "run", OSError(12, "Cannot allocate memory"))
+    '--out run: out of memory (Cannot allocate memory)'
+    """
+    import errno
+
+    if exc.errno == errno.ENOMEM:
+        return f"{option} {path}: out of memory ({exc.strerror or exc})"
+    return f"{option} {path}: cannot write ({exc.strerror or exc})"
+
+
 UnitsOpt = Annotated[
     str | None,
     typer.Option(

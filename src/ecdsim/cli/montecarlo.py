@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from ecdsim.cli import display
-from ecdsim.cli.common import UnitsOpt, fail, load_run, units_option
+from ecdsim.cli.common import UnitsOpt, fail, load_run, os_error_line, units_option
 from ecdsim.cli.display import PlainOpt, WideOpt
 from ecdsim.formatting import format_number
 from ecdsim.units_display import Shown, UnitSystem
@@ -227,7 +227,11 @@ def montecarlo(
     except ModelDomainError as exc:
         fail([f"{plan.config_source}: {exc}"])
     except OSError as exc:
-        fail([f"--out {folder}: cannot write ({exc.strerror or exc})"])
+        fail([os_error_line("--out", folder, exc)])
+    except MemoryError:
+        # Checked before the run (ecdsim.montecarlo.budget), but memory is shared: other
+        # programs may take it meanwhile.
+        fail([f"--samples {samples}: out of memory while running or summarising the study"])
     if as_json:
         document = {**summary, "display_units": u.system}
         typer.echo(json.dumps(document, indent=2, sort_keys=True, allow_nan=False))

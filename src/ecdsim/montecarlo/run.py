@@ -227,7 +227,9 @@ def build_plan(
     """A plan from a configuration; arguments given here override its ``[tolerances]``.
 
     Without a seed (here or in the config) a resumed run takes the manifest's seed and a
-    new run draws a fresh one (recorded in the manifest and the summary).
+    new run draws a fresh one (recorded in the manifest and the summary). A study that
+    needs more memory, or (with ``out``) more disk, than this machine has is refused
+    (:mod:`ecdsim.montecarlo.budget`).
     Raises :class:`ecdsim.config.ConfigError` or :class:`RunError` on bad input.
     """
     from ecdsim.config.seeds import seed_problem
@@ -267,7 +269,7 @@ def build_plan(
             chosen_seed = int(manifest["identity"]["seed"])
     if chosen_seed is None:
         chosen_seed = sampling.new_seed()
-    return Plan(
+    plan = Plan(
         system=config.system,
         tolerances=tolerances,
         temperatures=temps,
@@ -283,6 +285,14 @@ def build_plan(
         dynamics=config.spec.dynamics(),
         **_margin_settings(config),
     )
+    # Refused here, before a folder is made or a chunk computed, rather than failing
+    # hours later (or at once, deep in an allocation) for want of memory or disk.
+    from ecdsim.montecarlo import budget
+
+    too_large = budget.problems(plan, out, resume)
+    if too_large:
+        raise RunError(too_large)
+    return plan
 
 
 def _margin_settings(config: Config) -> dict[str, Any]:
