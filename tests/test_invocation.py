@@ -112,3 +112,25 @@ def test_export_fmu_without_pythonfmu_names_this_checkouts_install(tmp_path: Pat
     assert "pythonfmu, which is not installed" in line
     assert line.endswith(" -m pip install -e '.[fmu]'"), line
     assert not out.exists()
+
+
+def test_export_fmus_help_names_the_same_install_as_its_error(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from typer.testing import CliRunner
+
+    from ecdsim.cli.app import app
+    from ecdsim.cli.display import with_install_commands
+
+    monkeypatch.chdir(ROOT)
+    wide = {"COLUMNS": "250", "TERMINAL_WIDTH": "250"}  # the command on one line
+    shown = CliRunner().invoke(app, ["export-fmu", "--help"], env=wide).output
+    # The checkout's own command, as the error above says it; not the package index.
+    assert f"pythonfmu to build ({invocation.pip_install('fmu')})" in shown
+    assert invocation.pip_install("fmu").endswith(" -m pip install -e '.[fmu]'")
+    assert "'ecdsim[fmu]'" not in shown
+    # From an installed wheel: the package index, its brackets escaped for rich markup.
+    monkeypatch.setattr(invocation, "checkout", lambda: None)
+    filled = with_install_commands("build ({install:fmu})")
+    assert filled.startswith("build (")
+    assert filled.endswith(" -m pip install 'ecdsim\\[fmu]')")

@@ -356,11 +356,45 @@ def _quiet_flags(params: list[_click.Parameter]) -> None:
             param.display_type_rich = _no_type  # type: ignore[method-assign]
 
 
+# ``{install:EXTRA}`` in a command's epilog: the command that installs ``ecdsim[EXTRA]``
+# here (:func:`with_install_commands`).
+_INSTALL = re.compile(r"\{install:([a-z]+)\}")
+
+
+def with_install_commands(epilog: str) -> str:
+    """``epilog`` with each ``{install:EXTRA}`` replaced by this installation's command
+    for ``ecdsim[EXTRA]`` (ecdsim.invocation.pip_install: ``.venv/bin/python -m pip
+    install -e '.[fmu]'`` in a checkout), escaped for rich markup.
+
+    Filled in only when the help is shown, so that naming the command costs start-up
+    nothing (it looks up the PATH and the working folder).
+    """
+    if "{install:" not in epilog:
+        return epilog
+    from rich.markup import escape
+
+    from ecdsim.invocation import pip_install
+
+    return _INSTALL.sub(lambda found: escape(pip_install(found.group(1))), epilog)
+
+
 class HelpCommand(TyperCommand):
     """A command whose --help shows no ``<bool>`` after flags (``--json``, ``--help``),
-    run with the garbage collector on (:meth:`invoke`)."""
+    run with the garbage collector on (:meth:`invoke`), and whose epilog may name an
+    install command (:func:`with_install_commands`)."""
 
     collect = True  # turn the garbage collector on again as the command starts
+
+    def format_help(self, ctx: _click.Context, formatter: _click.HelpFormatter) -> None:
+        """The help, the epilog's install commands filled in for this installation (the
+        placeholder kept, so that help shown again from another folder is right too)."""
+        written = self.epilog
+        try:
+            if written:
+                self.epilog = with_install_commands(written)
+            super().format_help(ctx, formatter)
+        finally:
+            self.epilog = written
 
     def get_params(self, ctx: _click.Context) -> list[_click.Parameter]:
         """The parameters, flags with an empty metavar."""

@@ -15,9 +15,9 @@ from ecdsim.cli.common import echo_wrapped, fail
 EPILOG = (
     "Example: [bold]ecdsim export-fmu examples/paper_cc16_dynamic.toml -o damper.fmu[/bold]"
     "\n\nThe damper FMU is compiled with the system's C compiler (cc) and needs no Python "
-    "to run; the deployment FMU needs pythonfmu to build (pip install 'ecdsim\\[fmu]') "
+    "to run; the deployment FMU needs pythonfmu to build ({install:fmu}) "
     "and a Python with this ecdsim to run (docs/fmu.md)."
-)
+)  # {install:fmu}: this installation's command, filled in when the help is shown
 
 
 def export_fmu(
