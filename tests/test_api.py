@@ -167,7 +167,7 @@ def test_fit_matches_the_cli() -> None:
         assert [
             row["damping_rate_ci95_low_Nms_per_rad"],
             row["damping_rate_ci95_high_Nms_per_rad"],
-        ] == pytest.approx(t["damping_rate_ci95"], 1e-12)
+        ] == pytest.approx(t["damping_rate_ci95_Nms_per_rad"], 1e-12)
     assert len(result.plot()) == 3
     with pytest.raises(ConfigError, match=r"noise: 'loud' is not one of \['torque', 'timing'\]"):
         ecdsim.fit(csv, noise="loud")

@@ -122,7 +122,7 @@ def test_json_output(tmp_path: Path) -> None:
     bend = chord / inverse[25.0] - 1.0
     assert bend == pytest.approx(0.0884, abs=1e-4)
     widths = [
-        (e["damping_rate_ci95"][1] - e["damping_rate_ci95"][0]) / 2 / e["damping_rate_Nms_per_rad"]
+        (e["damping_rate_ci95_Nms_per_rad"][1] - e["damping_rate_ci95_Nms_per_rad"][0]) / 2 / e["damping_rate_Nms_per_rad"]
         for e in document["temperatures"]
     ]
     assert bend > 8.0 * max(widths)
@@ -324,9 +324,9 @@ def test_trace_command(tmp_path: Path, saved_figures: SavedFigures) -> None:
     document = json.loads(runner.invoke(app, [*args, "--json", "--fit-spring"]).stdout)
     assert document["mode"] == "spring"
     assert (
-        document["spring"]["start_torque_ci95"][0]
+        document["spring"]["start_torque_ci95_Nm"][0]
         < 3.73
-        < document["spring"]["start_torque_ci95"][1]
+        < document["spring"]["start_torque_ci95_Nm"][1]
     )
     missing = runner.invoke(app, ["fit", "trace", str(TRACE)])
     assert missing.exit_code == USER_ERROR  # --config is required

@@ -180,9 +180,9 @@ def test_json_document_has_the_issue_keys(tmp_path: Path) -> None:
     for key in (
         "temperature_C",
         "damping_rate_Nms_per_rad",
-        "damping_rate_ci95",
+        "damping_rate_ci95_Nms_per_rad",
         "friction_Nm",
-        "friction_ci95",
+        "friction_ci95_Nm",
         "r_squared",
         "n_points",
         "roll_off",
@@ -191,7 +191,7 @@ def test_json_document_has_the_issue_keys(tmp_path: Path) -> None:
     ):
         assert key in entry
     assert entry["n_points"] == len(MASSES)
-    assert len(entry["damping_rate_ci95"]) == 2
+    assert len(entry["damping_rate_ci95_Nms_per_rad"]) == 2
     laws = document["temperature_laws"]
     assert set(laws["damping_rate"]) == {"linear", "resistivity"}
     assert "better" in laws["comparison"]

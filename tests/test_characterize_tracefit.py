@@ -222,9 +222,9 @@ def test_json_document(tmp_path: Path) -> None:
     for key in (
         "temperature_C",
         "damping_rate_Nms_per_rad",
-        "damping_rate_ci95",
+        "damping_rate_ci95_Nms_per_rad",
         "friction_Nm",
-        "friction_ci95",
+        "friction_ci95_Nm",
         "total_friction_Nm",
         "r_squared",
         "n_points",

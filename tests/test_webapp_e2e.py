@@ -530,6 +530,16 @@ def test_fit_from_the_bench(server: str, page: Any, tmp_path: Path) -> None:
     for i, fitted in enumerate(cli_fit["temperatures"]):
         for key in ("damping_rate_Nms_per_rad", "friction_Nm"):
             assert float(shown[f"{i}:{key}"]) == pytest.approx(fitted[key], rel=CELL_REL)
+    # Each estimate's 95 % interval beside it, read from its key in the fit's JSON (the
+    # cells after BECD and FECD; 4 significant digits: half a unit in the 4th).
+    rows: list[list[str]] = page.evaluate(
+        """() => [...document.querySelectorAll('#fit-table tbody tr')]
+              .map(tr => [...tr.querySelectorAll('td')].map(td => td.textContent))"""
+    )
+    for row, fitted in zip(rows, cli_fit["temperatures"], strict=True):
+        for cell, key in ((row[2], "damping_rate_ci95_Nms_per_rad"), (row[4], "friction_ci95_Nm")):
+            bounds = [float(bound) for bound in cell.strip("[]").split(", ")]
+            assert bounds == pytest.approx(fitted[key], rel=5.1e-4)
     b_ref = page.inner_text('#fit-laws td[data-law="b_ref"]')
     linear = cli_fit["temperature_laws"]["damping_rate"]["linear"]
     assert float(b_ref) == pytest.approx(linear["damping_rate_ref_Nms_per_rad"], rel=CELL_REL)

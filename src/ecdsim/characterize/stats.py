@@ -167,17 +167,18 @@ class Estimate:
         return list(self.ci95) if self.ci95 is not None else None
 
     def to_dict(self, key: str, unit: str = "") -> dict[str, Any]:
-        """``{key+unit: value, key_se+unit: ..., key_ci95: [low, high] | None}`` for JSON.
+        """``{key+unit: value, key_se+unit: ..., key_ci95+unit: [low, high] | None}`` for JSON.
 
-        ``unit`` is a key suffix naming the unit, e.g. ``"_Nm"``; the interval's key has none.
+        ``unit`` is a key suffix naming the unit, e.g. ``"_Nm"``; every key ends in it, the
+        interval's too (docs/json.md: a name holding a number with a unit ends in it).
 
         >>> Estimate(2.0, 0.5, (1.0, 3.0)).to_dict("friction", "_Nm")
-        {'friction_Nm': 2.0, 'friction_se_Nm': 0.5, 'friction_ci95': [1.0, 3.0]}
+        {'friction_Nm': 2.0, 'friction_se_Nm': 0.5, 'friction_ci95_Nm': [1.0, 3.0]}
         """
         return {
             f"{key}{unit}": self.value,
             f"{key}_se{unit}": self.standard_error,
-            f"{key}_ci95": self.interval(),
+            f"{key}_ci95{unit}": self.interval(),
         }
 
 

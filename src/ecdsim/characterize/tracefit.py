@@ -218,7 +218,7 @@ class TraceFit:
             **self.damping_rate.to_dict("damping_rate", "_Nms_per_rad"),
             **self.friction.to_dict("friction", "_Nm"),
             "total_friction_Nm": self.total_friction.value,
-            "total_friction_ci95": self.total_friction.interval(),
+            "total_friction_ci95_Nm": self.total_friction.interval(),
             "system_friction_Nm": self.system_friction,
             "residual_std_rad": self.statistics.residual_std,
             "dof": self.statistics.dof,
@@ -251,9 +251,9 @@ class SpringFit:
         ts, te = self.start_torque, self.end_torque
         return {
             "start_torque_Nm": ts.value,
-            "start_torque_ci95": ts.interval(),
+            "start_torque_ci95_Nm": ts.interval(),
             "end_torque_Nm": te.value,
-            "end_torque_ci95": te.interval(),
+            "end_torque_ci95_Nm": te.interval(),
             "reference_temperature_C": self.reference_temperature,
             "n_points": self.statistics.n_points,
             "residual_std_rad": self.statistics.residual_std,

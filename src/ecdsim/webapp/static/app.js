@@ -864,9 +864,9 @@ function renderFit() {
   document.querySelector("#fit-table tbody").innerHTML = body.fit.temperatures.map((t, i) =>
     `<tr><th scope="row" class="num">${sig(show("temperature", t.temperature_C))}</th><td class="num">${t.n_points}</td>` +
     `<td class="num" data-fit="${i}" data-key="damping_rate_Nms_per_rad">${sig(show("damping_rate", t.damping_rate_Nms_per_rad))}</td>` +
-    `<td class="num">${ci({ value: t.damping_rate_Nms_per_rad, ci95: t.damping_rate_ci95 }, "damping_rate")}</td>` +
+    `<td class="num">${ci({ value: t.damping_rate_Nms_per_rad, ci95: t.damping_rate_ci95_Nms_per_rad }, "damping_rate")}</td>` +
     `<td class="num" data-fit="${i}" data-key="friction_Nm">${sig(show("torque", t.friction_Nm))}</td>` +
-    `<td class="num">${ci({ value: t.friction_Nm, ci95: t.friction_ci95 }, "torque")}</td></tr>`).join("");
+    `<td class="num">${ci({ value: t.friction_Nm, ci95: t.friction_ci95_Nm }, "torque")}</td></tr>`).join("");
   const laws = body.fit.temperature_laws;
   const lawRows = [];
   if (laws) {
