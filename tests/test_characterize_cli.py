@@ -122,7 +122,9 @@ def test_json_output(tmp_path: Path) -> None:
     bend = chord / inverse[25.0] - 1.0
     assert bend == pytest.approx(0.0884, abs=1e-4)
     widths = [
-        (e["damping_rate_ci95_Nms_per_rad"][1] - e["damping_rate_ci95_Nms_per_rad"][0]) / 2 / e["damping_rate_Nms_per_rad"]
+        (e["damping_rate_ci95_Nms_per_rad"][1] - e["damping_rate_ci95_Nms_per_rad"][0])
+        / 2
+        / e["damping_rate_Nms_per_rad"]
         for e in document["temperatures"]
     ]
     assert bend > 8.0 * max(widths)

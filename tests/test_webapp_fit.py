@@ -115,7 +115,9 @@ def test_curves_are_the_fit() -> None:
         f = temperature["friction_Nm"]
         top = line["line_speed_rad_s"][1]
         assert line["line_torque_Nm"] == pytest.approx([f, f + b * top], rel=1e-12)
-        assert line["damping_rate_Nms_per_rad"]["ci95"] == temperature["damping_rate_ci95_Nms_per_rad"]
+        assert (
+            line["damping_rate_Nms_per_rad"]["ci95"] == temperature["damping_rate_ci95_Nms_per_rad"]
+        )
     laws = fit["temperature_laws"]
     grid = curves["laws"]["temperature_C"]
     # Grid: 10 % beyond the tested range (-40 to 100 degC: span 140 K) on both sides.
