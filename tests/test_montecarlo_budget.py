@@ -19,6 +19,7 @@ from typer.testing import CliRunner
 from ecdsim.cli.app import app
 from ecdsim.config import load_config
 from ecdsim.montecarlo import RunError, budget, build_plan, store
+from ecdsim.montecarlo.run import CHUNKS_IN_FLIGHT
 from tests.conftest import ROOT
 
 EXAMPLE = ROOT / "examples" / "paper_cc16_tolerances.toml"
@@ -30,7 +31,8 @@ def test_the_estimate_is_the_hand_count_of_bytes() -> None:
     # margin column), chunks of 65,536.
     plan = build_plan(load_config(EXAMPLE), 200_000, seed=1)
     assert (plan.tolerances.dimension, len(plan.temperatures), plan.chunks) == (8, 3, 4)
-    needs = budget.estimate(plan)
+    assert CHUNKS_IN_FLIGHT == 6  # 2 chunks computed at once, 4 waiting to be written
+    needs = budget.estimate(plan, CHUNKS_IN_FLIGHT)
     # Memory per sample: time and speed (float64, 8 bytes each) and the stall flag (1)
     # at 3 temperatures held whole, and a float and a flag for each of the 2
     # temperatures summarised at once: 3 * 17 + 2 * 9 = 69.
@@ -65,7 +67,7 @@ def test_the_disk_estimate_is_the_size_of_the_files_a_run_writes(tmp_path: Path)
     # The per-chunk constants were measured at another chunk size and bin count, and
     # rounded (module budget): 2 % covers them; a wrong count of columns or of the tag's
     # copies would be off by far more (a float column is 8 % of these files, the tag 60 %).
-    assert budget.estimate(plan).disk_bytes == pytest.approx(written, rel=0.02)
+    assert budget.estimate(plan, CHUNKS_IN_FLIGHT).disk_bytes == pytest.approx(written, rel=0.02)
 
 
 def test_an_absurd_sample_count_is_refused_before_anything_starts(tmp_path: Path) -> None:

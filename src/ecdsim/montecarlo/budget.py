@@ -35,12 +35,33 @@ import os
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Protocol
 
-from ecdsim.montecarlo.columns import bin_count
+from ecdsim.montecarlo.columns import SUMMARY_THREADS, bin_count
 
-if TYPE_CHECKING:
-    from ecdsim.montecarlo.run import Plan
+
+class _Tolerances(Protocol):
+    @property
+    def dimension(self) -> int: ...
+
+
+class _Study(Protocol):
+    """What the estimate reads of a :class:`ecdsim.montecarlo.run.Plan` (a protocol, so
+    that this module imports nothing of the run, which calls it)."""
+
+    @property
+    def samples(self) -> int: ...
+    @property
+    def chunk_size(self) -> int: ...
+    @property
+    def chunks(self) -> int: ...
+    @property
+    def temperatures(self) -> tuple[float, ...]: ...
+    @property
+    def outputs(self) -> tuple[str, ...]: ...
+    @property
+    def tolerances(self) -> _Tolerances: ...
+
 
 FLOAT = 8  # bytes of a float64 (and of the int64 sample index)
 FLAG = 1  # bytes of a NumPy bool in memory
@@ -92,11 +113,9 @@ def tag_bytes(dimension: int, temperatures: int, samples: int) -> int:
     return _base64(FLOAT * sums) + _base64(FLOAT * moments) + TAG_FIXED
 
 
-def estimate(plan: Plan) -> Needs:
-    """The memory and disk the plan needs (module docstring)."""
-    from ecdsim.montecarlo.run import IN_PROCESS_THREADS, WRITE_QUEUE
-    from ecdsim.montecarlo.stats import SUMMARY_THREADS
-
+def estimate(plan: _Study, chunks_in_flight: int) -> Needs:
+    """The memory and disk the plan needs (module docstring), with up to
+    ``chunks_in_flight`` chunks in memory at once (computed or waiting to be written)."""
     temperatures = len(plan.temperatures)
     d = plan.tolerances.dimension
     floats = len(plan.outputs) - 1  # every output but the stall flag is a float
@@ -105,7 +124,7 @@ def estimate(plan: Plan) -> Needs:
     memory_per_sample = held + working
     file_per_sample = FLOAT * (1 + d + temperatures * floats) + temperatures / 8
     tag = tag_bytes(d, temperatures, plan.samples)
-    in_flight = (IN_PROCESS_THREADS + WRITE_QUEUE) * math.ceil(plan.chunk_size * file_per_sample)
+    in_flight = chunks_in_flight * math.ceil(plan.chunk_size * file_per_sample)
     memory_per_chunk = tag + TAG_OBJECTS
     disk_per_chunk = tag + _base64(tag) + FILE_FIXED
     return Needs(
@@ -185,10 +204,13 @@ def size_text(count: float) -> str:
     return f"{count:.0f} bytes"
 
 
-def problems(plan: Plan, out: Path | None, resume: bool = False) -> list[str]:
+def problems(
+    plan: _Study, chunks_in_flight: int, out: Path | None, resume: bool = False
+) -> list[str]:
     """One line for each of memory and disk the plan needs more of than this machine
-    has (empty if it fits, or where the machine does not say)."""
-    needs = estimate(plan)
+    has (empty if it fits, or where the machine does not say); ``chunks_in_flight`` as
+    for :func:`estimate`."""
+    needs = estimate(plan, chunks_in_flight)
     found: list[str] = []
     start = f"--samples {plan.samples}"
     memory = available_memory()

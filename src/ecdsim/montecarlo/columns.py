@@ -3,7 +3,7 @@
 A module of its own so that :mod:`ecdsim.montecarlo.run` (which writes the columns),
 :mod:`ecdsim.montecarlo.streaming` (which reduces them chunk by chunk) and
 :mod:`ecdsim.montecarlo.stats` (which reads them back) share these without importing
-one another in a loop.
+one another in a loop; :mod:`ecdsim.montecarlo.budget` too.
 """
 
 from __future__ import annotations
@@ -16,6 +16,9 @@ from ecdsim._types import FloatArray
 
 # Most equal-probability bins of the first-order sensitivity estimator (a uint8 label).
 MAX_BINS = 64
+# Temperatures the summary works on at once (stats.summarize), each with its own
+# temporaries: shared with the memory estimate (ecdsim.montecarlo.budget).
+SUMMARY_THREADS = 2
 
 
 def output_column(output: str, temperature: float) -> str:

@@ -65,6 +65,9 @@ FORK_MIN_CHUNKS = 8
 # the computation only when this many are behind. Each holds its chunk's columns
 # (about 9 MB at 65,536 samples).
 WRITE_QUEUE = 4
+# Chunks held in memory at once, computed or waiting to be written (the memory estimate,
+# ecdsim.montecarlo.budget).
+CHUNKS_IN_FLIGHT = IN_PROCESS_THREADS + WRITE_QUEUE
 
 OUTPUTS = {
     "deployment_time_s": "deployment_time",
@@ -289,7 +292,7 @@ def build_plan(
     # hours later (or at once, deep in an allocation) for want of memory or disk.
     from ecdsim.montecarlo import budget
 
-    too_large = budget.problems(plan, out, resume)
+    too_large = budget.problems(plan, CHUNKS_IN_FLIGHT, out, resume)
     if too_large:
         raise RunError(too_large)
     return plan

@@ -46,9 +46,10 @@ from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim._version import __version__
 from ecdsim.montecarlo import repeatability, streaming
 
-# bin_count, bin_labels and MAX_BINS live in columns (shared with streaming) and are
-# re-exported here, where the estimators that use them are.
+# bin_count, bin_labels, MAX_BINS and SUMMARY_THREADS live in columns (shared with
+# streaming and budget) and are re-exported here, where the estimators that use them are.
 from ecdsim.montecarlo.columns import MAX_BINS as MAX_BINS
+from ecdsim.montecarlo.columns import SUMMARY_THREADS as SUMMARY_THREADS
 from ecdsim.montecarlo.columns import bin_count as bin_count
 from ecdsim.montecarlo.columns import bin_labels as bin_labels
 from ecdsim.montecarlo.columns import output_column
@@ -68,7 +69,6 @@ if TYPE_CHECKING:
 
 PERCENTILES: dict[str, float] = {"P1": 0.01, "P5": 0.05, "P50": 0.50, "P95": 0.95, "P99": 0.99}
 REGRESSION_BLOCK = 1_000_000
-SUMMARY_THREADS = 2  # temperatures summarised at once (summarize)
 
 
 def _number(value: float) -> float | None:
