@@ -1,5 +1,5 @@
 """Compliant backlash (issue 16 item 3): the load and the damper side coupled by an elastic
-mesh with lost motion (Modelica's ElastoBacklash), against hand solutions, a tight scipy
+mesh with lost motion (Modelica's ElastoBacklash2), against hand solutions, a tight scipy
 Radau integration of the same equations written here, and the rigid limit.
 """
 
@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from ecdsim.config import load_config
+from ecdsim.config import load_config, parse_config
 from ecdsim.config.errors import ConfigError
 from ecdsim.deployment import ModelDomainError, predict
 from ecdsim.dynamics import DynamicParameters, Thermal
 from ecdsim.dynamics.result import DynamicResult
 from ecdsim.montecarlo.apply import NotTolerable, Parameters, apply, nominal
-from ecdsim.physics.mechanics import elasto_backlash_torque
+from ecdsim.physics.mechanics import mesh_torque
 from tests.dynamics_reference import assert_energy_closes, toy_system
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "paper_cc16_dynamic.toml"
@@ -52,8 +52,12 @@ def _speeds(result: DynamicResult, kind: str) -> list[float]:
 def test_contact_torque_by_hand() -> None:
     # c = 100, d = 2, b = 0.02 (flanks at +-0.01): inside the gap nothing; past the forward
     # flank c (0.03 - 0.01) + d w; the damping cannot make it pull (limited at 0).
-    tau = elasto_backlash_torque(
-        [0.005, 0.03, 0.03, -0.03, -0.03], [5.0, 0.5, -5.0, 5.0, -0.5], 0.02, 100.0, 2.0
+    tau = mesh_torque(
+        np.array([0.005, 0.03, 0.03, -0.03, -0.03]),
+        np.array([5.0, 0.5, -5.0, 5.0, -0.5]),
+        0.01,
+        100.0,
+        2.0,
     )
     assert tau.tolist() == pytest.approx([0.0, 3.0, 0.0, 0.0, -3.0], abs=1e-15)
 
@@ -716,3 +720,85 @@ def test_deploy_shows_the_mesh_torques(tmp_path: Path) -> None:
     assert 0.0 < latched < peak
     assert f"{peak:.4g}" in table.output
     assert f"{latched:.4g}" in table.output
+
+
+def _example(stiffness: float, damping: float, rtol: float = 1e-8) -> DynamicResult:
+    """The dynamic example at 25 degC with a 0.25 deg lost motion and a compliant mesh."""
+    text = EXAMPLE.read_text().replace(
+        'lost_motion = "0 deg"',
+        f'lost_motion = "0.25 deg"\nstiffness = "{stiffness!r} N*m/rad"\n'
+        f'mesh_damping = "{damping!r} N*m*s/rad"',
+        1,
+    )
+    config = parse_config(text.replace("[analysis]", f"[analysis]\nrtol = {rtol!r}", 1))
+    found = predict(config.system, [25.0], ["dynamic"], dynamics=config.spec.dynamics())
+    result = found.solutions["dynamic"].result  # type: ignore[attr-defined]
+    assert isinstance(result, DynamicResult)
+    return result
+
+
+# The dynamic example at 25 degC (T_ref: Eq. 1's factor 1): BECD = N^2 (BD + BG) and
+# FECD = N (FD + FG + FL_T) (Eq. 2-4), the spring 3.73 -> 1.58 N*m over 1.57 rad, the
+# system friction FS_T, the load and the reflected rotor.
+N, BD = 380.0, 1.3e-4
+BECD = N * N * 1.26 * BD
+FECD = N * (7.9e-4 + 4.5e-4 + (-2.12e-6 * 25.0 + 2.2e-4))
+FS25 = -0.0044 * 25.0 + 0.58
+J_LOAD, J_DAMPER = 5.0, 2e-7 * N * N
+LOST = math.radians(0.25)
+
+
+def test_the_latch_mesh_torque_is_taken_at_the_latch() -> None:
+    # Issue 23 item 8: a stiff undamped mesh (1e8 N*m/rad). At the latch the damper side
+    # runs pressed against the load's flank: the mesh carries its damping and friction,
+    # BECD w + FECD at the latch speed w (by hand, Eq. 2-4), less the rotor's inertia
+    # torque J_D w' (3e-5 of it here). Before, the value came from the first step after
+    # the latch: 0.414 N*m at rtol 1e-8, 0.893 at 1e-10.
+    results = [_example(1e8, 0.0), _example(1e8, 0.0, rtol=1e-10)]
+    for result in results:
+        assert result.status_names() == ["latched"]
+        speed = _speeds(result, "latch")[0]
+        assert result.latch_mesh_torque is not None
+        latched = float(result.latch_mesh_torque[0])
+        assert latched == pytest.approx(BECD * speed + FECD, rel=1e-4)
+    torques = [float(r.latch_mesh_torque[0]) for r in results]  # type: ignore[index]
+    assert torques[0] == pytest.approx(torques[1], rel=1e-6)
+
+
+def test_the_contact_jump_is_the_peak_mesh_torque() -> None:
+    # Issue 23 item 8: a critically damped 1e8 N*m/rad mesh, d = 2 sqrt(c J_L J_D / (J_L +
+    # J_D)). The load crosses the lost motion alone from rest: by hand (a linear spring,
+    # constant friction), v0^2 = 2 / J_L ((T0 - FS) b + slope b^2 / 2). At contact the
+    # mesh torque jumps to d v0 and then falls (critically damped: its rate at contact is
+    # (c - d^2 / J) v0 = -3 c v0 < 0), so d v0 is the peak (before: 252.07 against 255.52
+    # N*m, the jump missed between steps).
+    c = 1e8
+    d = 2.0 * math.sqrt(c * J_LOAD * J_DAMPER / (J_LOAD + J_DAMPER))
+    slope = (1.58 - 3.73) / 1.57
+    v0 = math.sqrt(2.0 / J_LOAD * ((3.73 - FS25) * LOST + 0.5 * slope * LOST * LOST))
+    result = _example(c, d)
+    assert result.max_mesh_torque is not None
+    assert float(result.max_mesh_torque[0]) == pytest.approx(d * v0, rel=1e-9)
+
+
+def test_a_mesh_that_would_ring_too_long_is_refused_in_one_line(tmp_path: Path) -> None:
+    # Issue 23 item 8: stiffness 1e12 N*m/rad undamped ran 15 s and ended "horizon" at
+    # 0.14 s. Its mode (5.9e6 rad/s) decays only through the damper's damping (410 1/s):
+    # 14,000 rad per e-fold, above MAX_MESH_RING. One line, exit status 2.
+    from typer.testing import CliRunner
+
+    from ecdsim.cli.app import app
+
+    path = tmp_path / "stiff.toml"
+    path.write_text(
+        EXAMPLE.read_text().replace(
+            'lost_motion = "0 deg"',
+            'lost_motion = "0.25 deg"\nstiffness = "1e12 N*m/rad"\nmesh_damping = "0 N*m*s/rad"',
+            1,
+        )
+    )
+    result = CliRunner().invoke(app, ["deploy", str(path), "--method", "dynamic", "-T", "25"])
+    assert result.exit_code == 2
+    assert result.stderr.count("\n") == 1
+    assert "gearbox.stiffness" in result.stderr
+    assert "1.44e+04 rad per e-fold" in result.stderr

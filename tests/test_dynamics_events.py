@@ -13,9 +13,9 @@ Two rules of the event loop (docs/dynamics.md, "The solver"):
 
 Each motion here is solved in closed form (linear damping at ambient) and integrated
 (the damper heats, with a damping law independent of temperature, c = 0, so the motion
-is the same linear one): by the single-case path, the vectorised loop with the compiled
-kernel, the NumPy RODAS4 (``ECDSIM_NUMBA=0``) and scipy's Radau. The reference values
-are the hand solutions written in each test.
+is the same linear one): by the kernel compiled, the same kernel as plain Python
+(``ECDSIM_NUMBA=0``) and with scipy's Radau as its stepper. The reference values are
+the hand solutions written in each test.
 """
 
 from __future__ import annotations
@@ -28,24 +28,15 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ecdsim.deployment import build_problem
-from ecdsim.dynamics import (
-    DynamicParameters,
-    DynamicProblem,
-    DynamicResult,
-    Rolloff,
-    Thermal,
-    integrate,
-    linear,
-    single,
-)
-from ecdsim.dynamics.damping import LinearEddy
+from ecdsim.dynamics import DynamicParameters, DynamicProblem, DynamicResult, Rolloff, Thermal
+from ecdsim.dynamics.kernel.build import backend
 from ecdsim.dynamics.problem import dynamic_problem
 from ecdsim.dynamics.result import STATUSES
 from ecdsim.dynamics.solver import solve_dynamic
 from ecdsim.model import DeploymentSystem
 from tests.dynamics_reference import assert_energy_closes, toy_system
 
-PATHS = ["closed form", "single", "vectorised", "numpy", "Radau"]
+PATHS = ["closed form", "compiled", "python", "Radau"]
 # The integrated paths' own error: rtol 1e-8 (the default) per segment, the events on the
 # step's interpolant; over a few segments the times and angles stay within 1e-7 relative
 # of the exact values (measured: up to 5e-10 in time and 6e-9 in angle, RODAS4 and Radau).
@@ -73,15 +64,11 @@ def _solve(
     what the integrated paths solve."""
     if path != "closed form":
         params = heated if heated is not None else replace(params, thermal=Thermal(0.05))
-    if path == "numpy":
-        monkeypatch.setenv("ECDSIM_NUMBA", "0")
     if path == "Radau":
         params = replace(params, integrator="Radau")
-    monkeypatch.setattr(single, "ENABLED", path == "single")
     problem = _problem(system, params)
-    assert single.eligible(problem) == (path == "single")
     assert problem.nonlinear == (path != "closed form")
-    result = solve_dynamic(problem)
+    result = solve_dynamic(problem, kernel=backend("python") if path == "python" else None)
     assert_energy_closes(result)
     return result
 
@@ -310,34 +297,7 @@ def test_a_backward_launch_on_the_start_stop_stops_at_once(
     assert float(result.energy.impact_loss.ravel()[0]) == 0.5 * J_STOP * 1.0**2
 
 
-def _swing_under_gravity() -> integrate.NonlinearSegments:
-    """One segment, J = 1 kg*m^2, B = 0.05 N*m*s/rad (N = 1, linear law at ambient), a
-    constant drive a = 0.5 N*m against gravity W sin(x), W = 1 N*m, from rest at x = 0."""
-    one = np.ones(1)
-    return integrate.NonlinearSegments(
-        inertia=one,
-        stiffness=0.0 * one,
-        drive=0.5 * one,
-        speed0=0.0 * one,
-        length=3.0 * one,
-        cap=np.full(1, np.inf),
-        state0=0.0 * one,
-        ambient=25.0 * one,
-        ratio=one,
-        gearbox_damping=0.0 * one,
-        heat_capacity=np.full(1, np.inf),
-        thermal_resistance=np.full(1, np.inf),
-        linear_damping=0.05 * one,
-        eddy=LinearEddy(0.05 * one, 25.0 * one, 0.0 * one),
-        case=np.zeros(1, dtype=np.intp),
-        thermal=False,
-        gravity_amplitude=one,
-        gravity_phase=0.0 * one,
-        gravity_direction=one,
-    )
-
-
-@pytest.mark.parametrize("path", ["compiled", "numpy", "Radau"])
+@pytest.mark.parametrize("path", INTEGRATED_PATHS)
 def test_a_swing_against_gravity_turns_round(path: str, monkeypatch: pytest.MonkeyPatch) -> None:
     # Under gravity every segment may creep (the sine moves the equilibrium), so the rule
     # matters on every turnaround: here the load swings past sin x = a/W (0.524 rad) and
@@ -356,12 +316,24 @@ def test_a_swing_against_gravity_turns_round(path: str, monkeypatch: pytest.Monk
     )
     t_turn, x_turn = float(ref.t_events[0][0]), float(ref.y_events[0][0][0])
     assert math.sin(x_turn) > 0.5  # past the equilibrium: gravity sends it back
-    if path == "numpy":
-        monkeypatch.setenv("ECDSIM_NUMBA", "0")
-    method = "Radau" if path == "Radau" else "RODAS4"
-    out = integrate.advance_nonlinear(_swing_under_gravity(), 1e-10, method, False)
-    assert int(out.kind[0]) == linear.ZERO
+    # J = 1 kg*m^2, B = 0.05 N*m*s/rad, a constant drive of 0.5 N*m over 3 rad (no
+    # friction), gravity W sin(phi) with W = 1 N*m, from rest at 0.
+    system = toy_system(0.05, 0.0, 0.5, 0.5, 3.0)
+    # The swing then decays over some fifty periods; the run stops soon after the turn.
+    params = DynamicParameters(
+        1.0,
+        rtol=1e-10,
+        integrator="Radau" if path == "Radau" else "RODAS4",
+        stop_time=1.5 * t_turn,
+    )
+    problem = replace(
+        _problem(system, params), gravity_amplitude=np.ones(1), gravity_angle=np.zeros(1)
+    )
+    result = solve_dynamic(problem, kernel=backend("python") if path == "python" else None)
+    names = result.events.names()
+    assert names[:3] == ["release", "breakaway", "zero_speed"]
     # 1e-7: the integrator at rtol 1e-10 (the event on its interpolant), the reference at
     # 1e-12
-    assert float(out.duration[0]) == pytest.approx(t_turn, rel=1e-7)
-    assert float(out.x[0]) == pytest.approx(x_turn, rel=1e-7)
+    assert float(result.events.time[2]) == pytest.approx(t_turn, rel=1e-7)
+    assert float(result.events.angle[2]) == pytest.approx(x_turn, rel=1e-7)
+    assert_energy_closes(result)

@@ -32,7 +32,7 @@ from ecdsim.dynamics import DynamicParameters, DynamicResult, Rolloff, Thermal
 from ecdsim.dynamics.damping import KlossEddy, LinearEddy
 from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.model import DeploymentSystem, TabulatedSpring
-from ecdsim.physics import rolloff, thermal
+from ecdsim.physics import eddy, rolloff, thermal
 from tests import hand
 from tests.conftest import paper_system
 from tests.dynamics_reference import assert_energy_closes
@@ -351,33 +351,32 @@ def test_kloss_power_per_peak_speed_by_hand() -> None:
     ids=["linear", "rolloff"],
 )
 def test_laws_in_factor_form_match_their_temperature_form(law: LinearEddy | KlossEddy) -> None:
+    # The dynamic method's law (physics.eddy, in the temperature factor f) against the
+    # law objects' temperature form, and its partial derivatives against differences.
     speed = np.array([0.0, 40.0, 2000.0, 9000.0])[:, None]
     temps = np.array([-40.0, 25.0, 200.0, 274.0])[None, :]
     factor = law.factor(temps)
     # Eq. 1's bracket (and the resistivity factor) by hand.
     assert np.allclose(factor, 1.0 - 0.004 * (temps - 25.0), rtol=1e-14)
     torque = law.torque(speed, temps)
+    a, b = law.parameters
+
+    def parts(w: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, ...]:
+        values = eddy.eddy_torque_parts(law.code, a, b, w, f)
+        return tuple(np.broadcast_to(v, np.broadcast(w, f).shape) for v in values)
+
+    tau, d_w, d_f, power, p_w, p_f = parts(speed, factor)
+    assert np.allclose(tau, torque, rtol=1e-14, atol=0.0)
     assert np.allclose(law.torque_at_factor(speed, factor), torque, rtol=1e-14, atol=0.0)
-    assert np.allclose(
-        law.power_per_factor(speed, factor) * factor, torque * speed, rtol=1e-13, atol=1e-300
-    )
+    assert np.allclose(power * factor, torque * speed, rtol=1e-13, atol=1e-300)
     # Partial derivatives against central differences (relative steps of 1e-6).
     dw, df = 1e-6 * np.maximum(speed, 1.0), 1e-6
-    d_speed = (
-        law.torque_at_factor(speed + dw, factor) - law.torque_at_factor(speed - dw, factor)
-    ) / (2 * dw)
-    d_factor = (
-        law.torque_at_factor(speed, factor + df) - law.torque_at_factor(speed, factor - df)
-    ) / (2 * df)
-    p_speed = (
-        law.power_per_factor(speed + dw, factor) - law.power_per_factor(speed - dw, factor)
-    ) / (2 * dw)
-    p_factor = (
-        law.power_per_factor(speed, factor + df) - law.power_per_factor(speed, factor - df)
-    ) / (2 * df)
-    by_speed, by_factor = law.power_per_factor_derivatives(speed, factor)
+    fd_w = (parts(speed + dw, factor)[0] - parts(speed - dw, factor)[0]) / (2 * dw)
+    fd_f = (parts(speed, factor + df)[0] - parts(speed, factor - df)[0]) / (2 * df)
+    fp_w = (parts(speed + dw, factor)[3] - parts(speed - dw, factor)[3]) / (2 * dw)
+    fp_f = (parts(speed, factor + df)[3] - parts(speed, factor - df)[3]) / (2 * df)
     # Truncation ~1e-12 relative; rounding ~1e-16 / 1e-6 = 1e-10 of the function's scale.
-    assert np.allclose(law.speed_derivative_at_factor(speed, factor), d_speed, rtol=1e-6, atol=1e-9)
-    assert np.allclose(law.factor_derivative(speed, factor), d_factor, rtol=1e-6, atol=1e-9)
-    assert np.allclose(by_speed, p_speed, rtol=1e-6, atol=1e-9)
-    assert np.allclose(by_factor, p_factor, rtol=1e-6, atol=1e-6)
+    assert np.allclose(d_w, fd_w, rtol=1e-6, atol=1e-9)
+    assert np.allclose(d_f, fd_f, rtol=1e-6, atol=1e-9)
+    assert np.allclose(p_w, fp_w, rtol=1e-6, atol=1e-9)
+    assert np.allclose(p_f, fp_f, rtol=1e-6, atol=1e-6)

@@ -25,9 +25,9 @@ from ecdsim.cli.app import app
 from ecdsim.config import ConfigError, load_config, parse_config
 from ecdsim.deployment import predict
 from ecdsim.dynamics import DynamicParameters, Rolloff, Thermal
-from ecdsim.dynamics.equations import stribeck_excess
 from ecdsim.dynamics.result import DynamicResult
 from ecdsim.model import DeploymentSystem
+from ecdsim.physics.friction import stribeck_excess
 from tests.dynamics_reference import assert_energy_closes, toy_system
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -3,8 +3,7 @@
 Each breakpoint is an event of the dynamic solver, so a deployment over a spring table of
 P points has about P events; the lookup of the current piece costs O(1) per event (it
 moves by one piece at a time), not O(P) (counting the breakpoints below the angle). Long
-forward runs over a table are crossed in one compiled call
-(tests/test_dynamics_table_kernel.py).
+forward runs over a table are crossed inside the compiled kernel.
 """
 
 from __future__ import annotations
@@ -17,8 +16,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ecdsim.deployment import predict
-from ecdsim.dynamics import DynamicParameters, solver
-from ecdsim.dynamics.solver import _Cases, _first_piece, _piece
+from ecdsim.dynamics import DynamicParameters
+from ecdsim.dynamics.kernel.segment import first_piece, piece_walk
 from ecdsim.model import DeploymentSystem, TabulatedSpring
 from tests import hand
 from tests.conftest import paper_system
@@ -41,17 +40,16 @@ def test_walking_lookup_equals_counting_from_any_start() -> None:
     points, n = 40, 300
     angles = np.sort(rng.integers(0, 25, size=(points, n)).astype(float), axis=0)
     angles[0], angles[-1] = 0.0, 25.0
-    torques = rng.uniform(0.0, 5.0, size=(points, n))
-    cases = _Cases.__new__(_Cases)
-    cases.angles, cases.torques = angles, torques
     on_breakpoint = angles[rng.integers(0, points, n), np.arange(n)]
     phi = np.where(rng.random(n) < 0.5, on_breakpoint, rng.uniform(0.0, 25.0, n))
     forward = rng.random(n) < 0.5
     start = rng.integers(0, points - 1, n)
-    idx = np.arange(n)
-    piece = _piece(cases, idx, phi, forward, start)
-    assert np.array_equal(piece.index, _counted(angles, phi, forward))
-    assert np.array_equal(_first_piece(cases, phi), _counted(angles, phi, np.ones(n, bool)))
+    walked = [
+        piece_walk(angles[:, k], float(phi[k]), bool(forward[k]), int(start[k])) for k in range(n)
+    ]
+    assert np.array_equal(walked, _counted(angles, phi, forward))
+    first = [first_piece(angles[:, k], float(phi[k])) for k in range(n)]
+    assert np.array_equal(first, _counted(angles, phi, np.ones(n, bool)))
 
 
 def test_ten_thousand_point_spring_against_scipy() -> None:
@@ -109,16 +107,12 @@ def _solve(system: DeploymentSystem, **params: float) -> Any:
     return solution.result  # type: ignore[attr-defined]
 
 
-def test_spring_breakpoints_do_not_count_against_the_event_limit(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def test_spring_breakpoints_do_not_count_against_the_event_limit() -> None:
     # A table of 60 points is 58 breakpoint events: with an event limit of 1 the run must
     # still reach the latch (its one pass that is not a breakpoint), and bit for bit as
     # with the default limit, which it never approaches. Before, every breakpoint was a
     # pass of the limit, and a table longer than max_events rows stopped short.
     system = _table_system(60)
-    # The per-piece path (one event-loop pass per breakpoint), not the compiled crossing.
-    monkeypatch.setattr(solver, "TABLE_PIECES", 10**9)
     limited = _solve(system, max_events=1)
     free = _solve(system)
     assert limited.status_names() == ["latched"]

@@ -1,15 +1,16 @@
-"""Gravity in the dynamic method's equations (issue 16 item 2): Model and the integrators.
+"""Gravity in the dynamic method's equations (issue 16 item 2).
 
-The engaged equations of :mod:`ecdsim.dynamics.equations` carry the ground test's gravity
-torque ``W sin(theta_0 + phi)`` (opposing deployment positive) when a segment is given
-one. Checked against scipy Radau at rtol 1e-12 of the equation of motion written here in
-the absolute angle phi (independent of the forward-frame bookkeeping), and the Jacobian
-against central differences of the right-hand side.
+The hinge's equations (:mod:`ecdsim.dynamics.kernel.hinge`) carry the ground test's
+gravity torque ``W sin(theta_0 + phi)`` (opposing deployment positive). Checked against
+scipy Radau at rtol 1e-12 of the equation of motion written here in the absolute angle
+phi, forward and backward, on the kernel compiled, plain and with scipy's Radau as its
+stepper. (The Jacobian against central differences: tests/test_dynamics_kernel.py.)
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -17,57 +18,60 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ecdsim.config import parse_config
-from ecdsim.deployment import predict
-from ecdsim.dynamics import integrate
-from ecdsim.dynamics.damping import LinearEddy
-from ecdsim.dynamics.equations import Model
+from ecdsim.deployment import build_problem, predict
+from ecdsim.dynamics import DynamicParameters
+from ecdsim.dynamics.kernel.build import backend
 from ecdsim.dynamics.method import DynamicSolution
+from ecdsim.dynamics.problem import dynamic_problem
+from ecdsim.dynamics.result import DynamicResult
+from ecdsim.dynamics.solver import solve_dynamic
+from ecdsim.model import DeploymentSystem, HighSpeedDamper
 from tests import hand
+from tests.dynamics_reference import assert_energy_closes, toy_system
 
 BD, N = 1.3e-4, 380.0  # the paper's damper and gear ratio; B = N^2 BD at factor 1
 B = N * N * BD
-INTEGRATORS = ("RODAS4", "Radau")
+PATHS = ("compiled", "python", "Radau")
 
 
-def _segment(
-    drive: float,
-    stiffness: float,
-    speed0: float,
-    length: float,
-    amplitude: float,
-    phase: float,
-    direction: float,
-) -> integrate.NonlinearSegments:
-    one = np.ones(1)
-    return integrate.NonlinearSegments(
-        inertia=5.0 * one,
-        stiffness=stiffness * one,
-        drive=drive * one,
-        speed0=speed0 * one,
-        length=length * one,
-        cap=np.full(1, np.inf),
-        state0=0.0 * one,
-        ambient=25.0 * one,
-        ratio=N * one,
-        gearbox_damping=0.0 * one,
-        heat_capacity=np.full(1, np.inf),
-        thermal_resistance=np.full(1, np.inf),
-        linear_damping=B * one,
-        eddy=LinearEddy(BD * one, 25.0 * one, 0.0 * one),
-        case=np.zeros(1, dtype=np.intp),
-        thermal=False,
-        gravity_amplitude=amplitude * one,
-        gravity_phase=phase * one,
-        gravity_direction=direction * one,
+def _ground(
+    torque: float, slope: float, friction: float, w: float, theta0: float, phi0: float,
+    speed0: float, travel: float, path: str,
+) -> DynamicResult:  # fmt: skip
+    """J = 5 kg*m^2 on the spring ``torque + slope phi`` (over the travel), friction,
+    damping B (the paper's BD behind N = 380, c = 0), gravity W from theta_0, released
+    at phi0 with speed0; on ``path``."""
+    system = toy_system(B, friction, torque, torque + slope * travel, travel)
+    damper = HighSpeedDamper(
+        damping_rate=BD, coulomb_friction=0.0, damping_temperature_coefficient=0.0
     )
+    system = DeploymentSystem(
+        ecd=replace(system.ecd, damper=damper, gearbox=replace(system.ecd.gearbox, ratio=N)),
+        load=system.load,
+    )
+    params = DynamicParameters(
+        5.0, initial_angle=phi0, initial_speed=speed0, rtol=1e-10,
+        integrator="Radau" if path == "Radau" else "RODAS4",
+    )  # fmt: skip
+    temps = np.array([25.0])
+    ecd = system.ecd.at(temps)
+    base, fs = build_problem(system, ecd, temps)
+    problem = replace(
+        dynamic_problem(system, ecd, temps, base, fs, params),
+        gravity_amplitude=np.full(1, w),
+        gravity_angle=np.full(1, theta0),
+    )
+    result = solve_dynamic(problem, kernel=backend("python") if path == "python" else None)
+    assert_energy_closes(result)
+    return result
 
 
 def _reference(
     torque: float, slope: float, friction: float, w: float, theta0: float, direction: float,
-    speed0: float, length: float,
+    phi0: float, speed0: float, end: float,
 ) -> tuple[float, float]:  # fmt: skip
-    """Time to move ``length`` and the speed there, from J phi'' = T(phi) - sign F - B phi'
-    - W sin(theta_0 + phi) with phi from 0 and T(phi) = torque + slope phi."""
+    """Time to reach ``end`` and the speed there, from J phi'' = T(phi) - sign F - B phi'
+    - W sin(theta_0 + phi) with T(phi) = torque + slope phi, from phi0 at speed0."""
 
     def rhs(_t: float, y: np.ndarray) -> list[float]:
         phi, w_phi = y
@@ -75,73 +79,41 @@ def _reference(
         return [w_phi, accel / 5.0]
 
     def arrive(_t: float, y: np.ndarray) -> float:
-        return direction * float(y[0]) - length
+        return float(y[0]) - end
 
     arrive.terminal = True  # type: ignore[attr-defined]
     sol = solve_ivp(
-        rhs, (0.0, 1e4), [0.0, direction * speed0], method="Radau", events=arrive,
-        rtol=1e-12, atol=1e-14,
-    )  # fmt: skip
-    return float(sol.t_events[0][0]), float(direction * sol.y_events[0][0][1])
+        rhs, (0.0, 1e4), [phi0, speed0], method="Radau", events=arrive, rtol=1e-12, atol=1e-14
+    )
+    return float(sol.t_events[0][0]), float(sol.y_events[0][0][1])
 
 
-@pytest.mark.parametrize("method", INTEGRATORS)
-def test_a_forward_segment_under_gravity_matches_radau(method: str) -> None:
+@pytest.mark.parametrize("path", PATHS)
+def test_a_forward_deployment_under_gravity_matches_radau(path: str) -> None:
     # The paper's falling spring (3.73 -> 1.58 N*m over 1.57 rad), friction 1.2 N*m,
     # gravity W = 0.35 N*m from theta_0 = -60 deg: aiding, then opposing.
     torque, slope, friction, w, theta0 = 3.73, -2.15 / 1.57, 1.2, 0.35, -math.pi / 3
-    segs = _segment(torque - friction, -slope, 0.0, 1.57, w, theta0, 1.0)
-    out = integrate.advance_nonlinear(segs, 1e-10, method, False)
-    time, speed = _reference(torque, slope, friction, w, theta0, 1.0, 0.0, 1.57)
-    # 1e-7: the integrator runs at rtol 1e-10 (event located on its dense output), the
-    # reference at 1e-12
-    assert float(out.duration[0]) == pytest.approx(time, rel=1e-7)
-    assert float(out.v[0]) == pytest.approx(speed, rel=1e-7)
+    result = _ground(torque, slope, friction, w, theta0, 0.0, 0.0, 1.57, path)
+    time, speed = _reference(torque, slope, friction, w, theta0, 1.0, 0.0, 0.0, 1.57)
+    # 1e-7: the kernel integrates at rtol 1e-10 (the latch located on its dense output),
+    # the reference at 1e-12
+    assert float(result.deployment_time[0]) == pytest.approx(time, rel=1e-7)
+    assert float(result.arrival_speed[0]) == pytest.approx(speed, rel=1e-7)
 
 
-@pytest.mark.parametrize("method", INTEGRATORS)
-def test_a_backward_segment_is_pulled_by_gravity(method: str) -> None:
-    # Moving backward (a rebound) with a constant spring 0.5 N*m and friction 0.2 N*m:
-    # in the forward frame of the motion the drive is -(T + F); gravity W = 1 N*m at
-    # theta_0 + phi_0 = 90 deg pulls the load back, harder than spring and friction.
-    torque, friction, w, theta0 = 0.5, 0.2, 1.0, math.pi / 2
-    segs = _segment(-(torque + friction), 0.0, 0.01, 0.3, w, theta0, -1.0)
-    out = integrate.advance_nonlinear(segs, 1e-10, method, False)
-    time, speed = _reference(torque, 0.0, friction, w, theta0, -1.0, 0.01, 0.3)
+@pytest.mark.parametrize("path", PATHS)
+def test_a_backward_motion_is_pulled_by_gravity(path: str) -> None:
+    # Launched backward at 0.01 rad/s from 0.3 rad with a constant spring 0.5 N*m and
+    # friction 0.2 N*m: gravity W = 1 N*m at theta_0 + phi = 90 deg pulls the load back,
+    # harder than spring and friction, onto the start stop.
+    torque, friction, w, theta0 = 0.5, 0.2, 1.0, math.pi / 2 - 0.3
+    result = _ground(torque, 0.0, friction, w, theta0, 0.3, -0.01, 1.57, path)
+    time, speed = _reference(torque, 0.0, friction, w, theta0, -1.0, 0.3, -0.01, 0.0)
+    names = result.events.names()
+    hit = names.index("start_stop")
     # 1e-7: as above
-    assert float(out.duration[0]) == pytest.approx(time, rel=1e-7)
-    assert float(out.v[0]) == pytest.approx(speed, rel=1e-7)
-
-
-def test_the_jacobian_with_gravity_matches_central_differences() -> None:
-    segs = _segment(2.5, 1.37, 0.02, 1.57, 0.35, -math.pi / 3, 1.0)
-    model = Model(
-        inertia=segs.inertia,
-        stiffness=segs.stiffness,
-        drive=segs.drive,
-        ratio=segs.ratio,
-        gearbox_damping=segs.gearbox_damping,
-        heat_capacity=segs.heat_capacity,
-        thermal_resistance=segs.thermal_resistance,
-        ambient=segs.ambient,
-        eddy=segs.eddy,
-        heating=False,
-        gravity_amplitude=segs.gravity_amplitude,
-        gravity_phase=segs.gravity_phase,
-        gravity_direction=segs.gravity_direction,
-    )
-    y = np.array([[0.7], [0.05], [0.0], [0.0]])
-    j10, j11 = (float(j[0]) for j in model.jacobian(y)[:2])
-    h = 1e-6
-    for row, expected in ((0, j10), (1, j11)):
-        up, down = y.copy(), y.copy()
-        up[row] += h
-        down[row] -= h
-        numeric = float((model.rhs(up)[1] - model.rhs(down)[1])[0]) / (2 * h)
-        # 1e-7 relative: the central difference's truncation (h^2 terms) and rounding
-        assert expected == pytest.approx(numeric, rel=1e-7)
-    # The gravity term itself: -(k + W cos(theta_0 + x)) / J by hand
-    assert j10 == pytest.approx(-(1.37 + 0.35 * math.cos(-math.pi / 3 + 0.7)) / 5.0, rel=1e-14)
+    assert float(result.events.time[hit]) == pytest.approx(time, rel=1e-7)
+    assert float(result.events.speed[hit]) == pytest.approx(speed, rel=1e-7)
 
 
 DYNAMIC = Path(__file__).resolve().parent.parent / "examples" / "paper_cc16_dynamic.toml"
@@ -223,45 +195,49 @@ def test_the_dynamic_method_stalls_where_gravity_holds_the_load() -> None:
     assert float(dynamic.stall_angle[0]) == pytest.approx(float(exact.stall_angle[0]), abs=1e-6)
 
 
-def test_the_compiled_kernel_carries_gravity_as_numpy_does(monkeypatch: pytest.MonkeyPatch) -> None:
-    # The same ground-test deployment by the compiled RODAS4 (numba) and the NumPy one:
-    # one algorithm in two implementations (docs/architecture.md), with the gravity
-    # columns of the compiled parameter table.
-    assert integrate.compiled_kernel() is not None, "numba is part of the test extra"
+def test_the_compiled_and_plain_kernels_carry_gravity_alike(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The same ground-test deployment by the kernel compiled (numba) and run as plain
+    # Python: one source (docs/architecture.md), two forms.
+    assert backend().name == "numba", "numba is a dependency"
     config = parse_config(DYNAMIC.read_text() + GROUND)
     temps = np.array([-40.0, 25.0, 100.0])
     compiled = predict(config.system, temps, ("dynamic",), dynamics=config.spec.dynamics())
     monkeypatch.setenv("ECDSIM_NUMBA", "0")
-    assert integrate.compiled_kernel() is None
+    assert backend().name == "python"
     plain = predict(config.system, temps, ("dynamic",), dynamics=config.spec.dynamics())
     for field in ("deployment_time", "end_speed", "max_speed"):
-        # 1e-10: the two implementations agree to about 1e-12 (tests/test_dynamics_compiled)
+        # 1e-12: the same arithmetic; the compiled code's exp and sin are the C library's
         np.testing.assert_allclose(
             getattr(compiled.solutions["dynamic"], field),
             getattr(plain.solutions["dynamic"], field),
-            rtol=1e-10,
+            rtol=1e-12,
             err_msg=field,
         )
 
 
-def test_the_compiled_right_hand_side_and_jacobian_hold_the_gravity_term() -> None:
-    # compiled._rhs and _jacobian against Model.rhs and jacobian at a state, gravity on:
-    # the parameter table's gravity columns reach the kernels (a backward segment, so
-    # that the direction's sign matters too).
-    from ecdsim.dynamics import compiled
+def test_a_grazing_bottleneck_is_crossed_not_taken_for_creep() -> None:
+    # Issue 23 item 8: a constant drive of 2.5 N*m less 0.5 N*m of friction against
+    # gravity W = 2 - 1e-9 N*m whose peak (theta_0 + phi = pi/2) lies mid-travel, at
+    # 0.785 rad: the net torque never reaches 0 (its minimum is +1e-9 N*m), so no
+    # equilibrium exists and the load crawls through in some 1e6 s. The speed there falls
+    # below the creep threshold (1e-9 of the speed scale); the creep rule must find no
+    # equilibrium ahead and go on (before, it stopped at 0.785 rad, "creep"). Reference,
+    # by hand: overdamped (J/B = 0.27 s against the crawl), t = B int dphi / (a - W
+    # sin(theta_0 + phi)) with a = 2 N*m, in closed form 2 B / s [atan((a tan(x/2) - W) /
+    # s)] over x = theta_0 + phi, s = sqrt(a^2 - W^2) (x/2 stays below pi/2 here).
+    a, gap, peak = 2.0, 1e-9, 0.785
+    w, theta0, travel = a - gap, math.pi / 2 - peak, 1.57
+    s = math.sqrt(gap * (a + w))  # a^2 - W^2 without the cancellation
 
-    segs = _segment(-0.7, 0.4, 0.01, 0.3, 1.0, math.pi / 2, -1.0)
-    model = integrate._model(segs)
-    par, law = compiled._parameters(model)
-    # The factor _segment stores from the start state (s = 0: the ambient factor).
-    par[0, compiled._FIXED] = par[0, compiled._FA]
-    y = np.array([0.2, 0.05, 0.0, 0.0])
-    out = np.empty(4)
-    compiled._rhs(par[0], law, False, y, out)
-    expected = model.rhs(y.reshape(4, 1))[:, 0]
-    # 1e-14: the same arithmetic, compiled (sin from the C library)
-    np.testing.assert_allclose(out, expected, rtol=1e-14, atol=1e-300)
-    j10 = compiled._jacobian(par[0], law, False, y)[0]
-    assert j10 == pytest.approx(float(model.jacobian(y.reshape(4, 1))[0][0]), rel=1e-14)
-    # and the gravity term is in both: -(k + W cos(pi/2 - 0.2)) / J by hand
-    assert j10 == pytest.approx(-(0.4 + math.cos(math.pi / 2 - 0.2)) / 5.0, rel=1e-14)
+    def primitive(x: float) -> float:
+        return 2.0 * B / s * math.atan((a * math.tan(x / 2.0) - w) / s)
+
+    time = primitive(theta0 + travel) - primitive(theta0)
+    assert time > 1e6
+    result = _ground(a + 0.5, 0.0, 0.5, w, theta0, 0.0, 0.0, travel, "compiled")
+    assert result.status_names() == ["latched"]
+    # The inertia's share of the time is of order J/B out of 1e6 s; the integration's
+    # at rtol 1e-10.
+    assert float(result.deployment_time[0]) == pytest.approx(time, rel=1e-6)

@@ -268,11 +268,11 @@ def test_a_back_driven_phase_inside_an_integrated_segment_matches_the_reference(
     assert abs(float(result.energy.error[0])) < 1e-9
 
 
-def test_compiled_and_numpy_integrators_agree_through_a_switch(
+def test_compiled_and_plain_kernels_agree_through_a_switch(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    # The same algorithm twice (compiled per segment, NumPy batched): the same events and
-    # numbers to well within the tolerance (1e-9 at rtol 1e-10; the bisection is the same).
+    # The same kernel twice (compiled, and run as plain Python): the same events and
+    # numbers to well within the tolerance (1e-9 at rtol 1e-10; the same arithmetic).
     text = _config_text(
         "{ forward = 0.8, backward = 0.6 }", rolloff=True, heating=True, back_driven=True
     )

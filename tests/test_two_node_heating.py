@@ -20,8 +20,8 @@ from scipy.integrate import solve_ivp
 
 from ecdsim.config.schema import ThermalSpec
 from ecdsim.deployment import ModelDomainError, predict
-from ecdsim.dynamics import DynamicParameters, DynamicResult, Thermal, integrate
-from ecdsim.dynamics.damping import LinearEddy
+from ecdsim.dynamics import DynamicParameters, DynamicResult, Thermal
+from ecdsim.dynamics.kernel.build import backend
 from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.model import (
     DeploymentSystem,
@@ -33,8 +33,8 @@ from ecdsim.model import (
     Load,
 )
 from tests import hand
-from tests.conftest import paper_system, require
-from tests.dynamics_reference import assert_energy_closes
+from tests.conftest import ROOT, paper_system
+from tests.dynamics_reference import assert_energy_closes, toy_system
 
 T_ZERO = 25.0 + 1.0 / 0.004  # Eq. 1's BD_T = 0 [degC]
 C_R, R_RH, C_H, R_HE = 0.002, 40.0, 0.02, 100.0  # rotor, rotor-housing, housing, mount
@@ -75,48 +75,28 @@ def step_response(power: float, t: float) -> tuple[float, float]:
     return rotor, housing
 
 
-def _held_segment(speed: float, length: float) -> integrate.NonlinearSegments:
-    """One engaged segment at constant speed and constant power: no spring slope, the
-    drive equal to the damping torque at the start speed (u' = 0), c = 0 (the damping,
-    hence the power BD (N u)^2, independent of temperature), BG = 0."""
-    bd, n = 1e-4, 100.0
-    one = np.ones(1)
-    return integrate.NonlinearSegments(
-        inertia=one,
-        stiffness=0.0 * one,
-        drive=n * bd * n * speed * one,
-        speed0=speed * one,
-        length=length * one,
-        cap=np.full(1, np.inf),
-        state0=0.0 * one,
-        ambient=25.0 * one,
-        ratio=n * one,
-        gearbox_damping=0.0 * one,
-        heat_capacity=C_R * one,
-        thermal_resistance=R_RH * one,
-        linear_damping=bd * n * n * one,
-        eddy=LinearEddy(bd * one, 25.0 * one, 0.0 * one),
-        case=np.zeros(1, dtype=np.intp),
-        thermal=True,
-        housing_state0=0.0 * one,
-        housing_heat_capacity=C_H * one,
-        housing_resistance=R_HE * one,
-    )
-
-
 @pytest.mark.parametrize("method", INTEGRATORS)
 def test_constant_power_step_response(method: str) -> None:
-    speed, length = 0.5, 5.0  # 10 s at P = 1e-4 (100 * 0.5)^2 = 0.25 W
-    power = 1e-4 * (100.0 * speed) ** 2
-    out = integrate.advance_nonlinear(_held_segment(speed, length), 1e-10, method, False)
+    # A load held at constant speed: J = 1 kg*m^2 launched at 0.5 rad/s against a drive
+    # equal to the damping torque there (BD = 1 N*m*s/rad at N = 1, c = 0: the damping,
+    # hence the power BD u^2 = 0.25 W, independent of the temperature; no friction, no
+    # spring slope), over 5 rad: 10 s at constant power, then the latch.
+    speed, length = 0.5, 5.0
+    power = 1.0 * speed**2
+    system = toy_system(1.0, 0.0, speed, speed, length)
+    thermal = Thermal(C_R, R_RH, C_H, R_HE)
+    params = DynamicParameters(1.0, initial_speed=speed, thermal=thermal, rtol=1e-10)
+    params = replace(params, integrator=method)
+    result = _dynamic(params, [25.0], system)
     duration = length / speed
     rotor, housing = step_response(power, duration)
-    # The segment ends on x = L at t = L / u exactly (u stays u0): rounding only.
-    assert out.duration[0] == pytest.approx(duration, rel=1e-9)
+    # The run ends on x = L at t = L / u exactly (u stays u0): the integrator's error.
+    assert float(result.deployment_time[0]) == pytest.approx(duration, rel=1e-9)
     # Global error of an rtol 1e-10 integration: a few 1e-10 of the ~10 K rises.
-    assert out.temperature[0] - 25.0 == pytest.approx(rotor, rel=1e-8)
-    assert out.housing is not None
-    assert out.housing[0] == pytest.approx(housing, rel=1e-8)
+    assert float(result.final_temperature[0]) - 25.0 == pytest.approx(rotor, rel=1e-8)
+    assert result.final_housing_temperature is not None
+    housing_rise = float(result.final_housing_temperature[0]) - 25.0
+    assert housing_rise == pytest.approx(housing, rel=1e-8)
     # Heat balance: P t = C_r theta_r + C_h theta_h + int theta_h / R_he dt, the last from
     # the housing's equation: int theta_h dt = R_he (P t - C_r theta_r - C_h theta_h) is
     # what is checked against the closed form's integral of the two exponentials.
@@ -131,9 +111,10 @@ def test_constant_power_step_response(method: str) -> None:
         k * (lv + a) * (math.exp(lv * duration) - 1.0) / lv
         for k, lv in zip((k1, k2), lam, strict=True)
     )
-    stored = C_R * (out.temperature[0] - 25.0) + C_H * out.housing[0]
+    stored = C_R * (float(result.final_temperature[0]) - 25.0) + C_H * housing_rise
     # The damper dissipation E is the eddy energy (BG = 0): E = stored + to the mount.
-    assert out.damper_work[0] == pytest.approx(power * duration, rel=1e-9)
+    damper = float(result.energy.damper_dissipation[0])
+    assert damper == pytest.approx(power * duration, rel=1e-9)
     assert stored + housing_integral / R_HE == pytest.approx(power * duration, rel=1e-8)
 
 
@@ -296,13 +277,11 @@ def test_bad_housing_keys(keys: dict[str, str], message: str) -> None:
 
 
 @pytest.mark.parametrize("numba", [True, False])
-def test_compiled_and_numpy_rodas4_agree(monkeypatch: pytest.MonkeyPatch, numba: bool) -> None:
-    # The compiled kernel (numba) and the NumPy RODAS4 integrate the same equations with
-    # the same tableau; each is checked against the Radau rtol 1e-12 reference at rtol
-    # 1e-10 (global error a few 1e-10), with the housing, the recorded time series
-    # included (the compiled kernel records the fifth row too).
-    if numba:
-        require("ecdsim.dynamics.compiled")
+def test_compiled_and_plain_kernels_agree(monkeypatch: pytest.MonkeyPatch, numba: bool) -> None:
+    # The kernel compiled (numba) and the same kernel run as plain Python integrate the
+    # same equations; each is checked against the Radau rtol 1e-12 reference at rtol
+    # 1e-10 (global error a few 1e-10), with the housing and a warm start.
+    assert backend().name == "numba" or not numba
     monkeypatch.setenv("ECDSIM_NUMBA", "1" if numba else "0")
     thermal = Thermal(C_R, R_RH, C_H, R_HE, initial_rotor_rise=5.0, initial_housing_rise=2.0)
     params = DynamicParameters(load_inertia=1.0, thermal=thermal, rtol=1e-10)

@@ -9,12 +9,16 @@ from numpy.typing import ArrayLike, NDArray
 
 FloatArray: TypeAlias = NDArray[np.float64]
 BoolArray: TypeAlias = NDArray[np.bool_]
+# A float or a float array: the argument and result type of the physics laws written once
+# for both (and compiled by numba from the same source, ecdsim.dynamics.kernel).
+Real: TypeAlias = float | FloatArray
 _Item = TypeVar("_Item", bound=np.generic)
 
 __all__ = [
     "ArrayLike",
     "BoolArray",
     "FloatArray",
+    "Real",
     "all_true",
     "any_true",
     "as_float",

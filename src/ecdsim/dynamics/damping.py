@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ecdsim._types import ArrayLike, FloatArray, as_float, broadcast
-from ecdsim.physics import assembly, rolloff
+from ecdsim.physics import assembly, eddy, rolloff
 
 
 class EddyLaw(Protocol):
@@ -56,22 +56,14 @@ class EddyLaw(Protocol):
         """Torque [N*m] at high-speed shaft speed [rad/s] and temperature factor f [-]."""
         ...
 
-    def speed_derivative_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """Partial derivative of the torque in speed at factor f [N*m*s/rad]."""
+    @property
+    def code(self) -> int:
+        """The law's code in :mod:`ecdsim.physics.eddy` (``LINEAR`` or ``KLOSS``)."""
         ...
 
-    def factor_derivative(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """Partial derivative of the torque in the factor f [N*m]."""
-        ...
-
-    def power_per_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """Eddy-current (heating) power over the factor, ``T_eddy omega_d / f`` [W]."""
-        ...
-
-    def power_per_factor_derivatives(
-        self, speed: ArrayLike, factor: ArrayLike
-    ) -> tuple[FloatArray, FloatArray]:
-        """Partial derivatives of :meth:`power_per_factor` in speed [W*s/rad] and f [W]."""
+    @property
+    def parameters(self) -> tuple[FloatArray, FloatArray]:
+        """``(a, b)``, the law's parameters in :mod:`ecdsim.physics.eddy`."""
         ...
 
     def flattened(self, shape: tuple[int, ...]) -> Self:
@@ -142,32 +134,18 @@ class LinearEddy(_Broadcastable):
         return assembly.damper_torque(rate, speed)
 
     def torque_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """``BD f omega_d`` [N*m]."""
-        return assembly.damper_torque(self._rate(factor), speed)
+        """``BD f omega_d`` [N*m] (:func:`ecdsim.physics.eddy.eddy_torque`)."""
+        return _at_factor(self, speed, factor)
 
-    def speed_derivative_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """``BD f`` [N*m*s/rad], broadcast against the speed."""
-        return as_float(self._rate(factor) + np.zeros_like(np.asarray(speed, dtype=float)))
+    @property
+    def code(self) -> int:
+        """:data:`ecdsim.physics.eddy.LINEAR`."""
+        return eddy.LINEAR
 
-    def factor_derivative(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """``BD omega_d`` [N*m], broadcast against the factor."""
-        bd = np.asarray(self.damping_rate, dtype=float)
-        return as_float(bd * np.asarray(speed, dtype=float) + 0.0 * np.asarray(factor, float))
-
-    def power_per_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """``BD omega_d**2`` [W]: the power ``BD_T omega_d**2`` over f (any f)."""
-        w = np.asarray(speed, dtype=float)
-        return as_float(np.asarray(self.damping_rate, dtype=float) * w * w)
-
-    def power_per_factor_derivatives(
-        self, speed: ArrayLike, factor: ArrayLike
-    ) -> tuple[FloatArray, FloatArray]:
-        """``(2 BD omega_d, 0)`` [W*s/rad, W]."""
-        by_speed = 2.0 * self.factor_derivative(speed, factor)
-        return by_speed, as_float(np.zeros_like(by_speed))
-
-    def _rate(self, factor: ArrayLike) -> FloatArray:
-        return as_float(np.asarray(self.damping_rate, dtype=float) * np.asarray(factor, float))
+    @property
+    def parameters(self) -> tuple[FloatArray, FloatArray]:
+        """``(BD, 0)``."""
+        return np.asarray(self.damping_rate, dtype=float), np.zeros(())
 
 
 @dataclass(frozen=True)
@@ -194,11 +172,13 @@ class KlossEddy(_Broadcastable):
 
     def peak_speed(self, temperature: ArrayLike) -> FloatArray:
         """omega_peak at damper temperature T [rad/s]."""
-        return rolloff.peak_speed_at(
-            temperature,
-            self.reference_peak_speed,
-            self.resistivity_coefficient,
-            self.reference_temperature,
+        return as_float(
+            rolloff.peak_speed_at(
+                np.asarray(temperature, dtype=float),
+                self.reference_peak_speed,
+                self.resistivity_coefficient,
+                self.reference_temperature,
+            )
         )
 
     @property
@@ -208,44 +188,43 @@ class KlossEddy(_Broadcastable):
 
     def factor(self, temperature: ArrayLike) -> FloatArray:
         """``omega_peak(T) / omega_peak_ref = 1 + alpha (T - T_ref)`` [-]."""
-        return rolloff.peak_speed_at(
-            temperature, 1.0, self.resistivity_coefficient, self.reference_temperature
+        return as_float(
+            rolloff.peak_speed_at(
+                np.asarray(temperature, dtype=float),
+                1.0,
+                self.resistivity_coefficient,
+                self.reference_temperature,
+            )
         )
 
     def torque(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
         """Kloss torque [N*m]."""
-        return rolloff.kloss_torque(speed, self.peak_torque, self.peak_speed(temperature))
-
-    def _peak(self, factor: ArrayLike) -> FloatArray:
-        return as_float(np.asarray(self.reference_peak_speed, float) * np.asarray(factor, float))
+        w = np.asarray(speed, dtype=float)
+        return as_float(rolloff.kloss_torque(w, self.peak_torque, self.peak_speed(temperature)))
 
     def torque_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
         """Kloss torque with ``omega_peak = omega_peak_ref f`` [N*m]."""
-        return rolloff.kloss_torque(speed, self.peak_torque, self._peak(factor))
+        return _at_factor(self, speed, factor)
 
-    def speed_derivative_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """Local damping rate of the Kloss curve [N*m*s/rad]."""
-        return rolloff.kloss_speed_derivative(speed, self.peak_torque, self._peak(factor))
+    @property
+    def code(self) -> int:
+        """:data:`ecdsim.physics.eddy.KLOSS`."""
+        return eddy.KLOSS
 
-    def factor_derivative(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """``dT_d/domega_peak * omega_peak_ref`` [N*m]."""
-        d_peak = rolloff.kloss_peak_speed_derivative(speed, self.peak_torque, self._peak(factor))
-        return as_float(d_peak * np.asarray(self.reference_peak_speed, float))
-
-    def power_per_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
-        """``T_d omega_d / f = omega_peak_ref T_d omega_d / omega_peak`` [W]."""
-        per_peak = rolloff.kloss_power_per_peak_speed(speed, self.peak_torque, self._peak(factor))
-        return as_float(per_peak * np.asarray(self.reference_peak_speed, float))
-
-    def power_per_factor_derivatives(
-        self, speed: ArrayLike, factor: ArrayLike
-    ) -> tuple[FloatArray, FloatArray]:
-        """Through :func:`ecdsim.physics.rolloff.kloss_power_per_peak_speed_derivatives`."""
-        ref = np.asarray(self.reference_peak_speed, float)
-        by_speed, by_peak = rolloff.kloss_power_per_peak_speed_derivatives(
-            speed, self.peak_torque, self._peak(factor)
+    @property
+    def parameters(self) -> tuple[FloatArray, FloatArray]:
+        """``(T_peak, omega_peak_ref)``."""
+        return (
+            np.asarray(self.peak_torque, dtype=float),
+            np.asarray(self.reference_peak_speed, dtype=float),
         )
-        return as_float(by_speed * ref), as_float(by_peak * ref * ref)
+
+
+def _at_factor(law: EddyLaw, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+    """The law's torque at a temperature factor, through :mod:`ecdsim.physics.eddy`."""
+    a, b = law.parameters
+    w, f = np.asarray(speed, dtype=float), np.asarray(factor, dtype=float)
+    return as_float(eddy.eddy_torque(law.code, a, b, w, f))
 
 
 EDDY_LAWS: dict[str, type[LinearEddy] | type[KlossEddy]] = {

@@ -341,13 +341,11 @@ def _one_case_findings(
 def _kloss_low_speed(eddy: KlossEddy, temperature: float) -> tuple[float, float] | None:
     """The peak speed at ``temperature`` and the Kloss law's slope at zero speed, in floats.
 
-    ``eddy.peak_speed(T)`` (``rolloff.one_peak_speed``) and
-    ``rolloff.kloss_speed_derivative(0, T_peak, p)`` (``2 T_peak p (p**2 - w**2) /
-    (w**2 + p**2)**2`` at ``w = 0``), written out in their order of operations: the same
-    bits as their NumPy elementwise arithmetic, without some ten NumPy calls on one
-    number (issue 13, single cases). Each parameter of a one-case law holds one number.
-    None, for the general path (NumPy's answer and warnings), where a value is not
-    finite or ``p`` is 0 (the derivative's guard).
+    ``rolloff.peak_speed_at`` and ``rolloff.kloss_speed_derivative(0, T_peak, p)`` called
+    on Python floats (the functions take floats as they take arrays: the same bits,
+    without some ten NumPy calls on one number; issue 13, single cases). Each parameter of
+    a one-case law holds one number. None, for the general path (NumPy's answer and
+    warnings), where a value is not finite or ``p`` is 0.
     """
     t_peak, p_ref, alpha, t_ref = (
         value if type(value) is float else float(np.asarray(value, dtype=float).item())
@@ -358,12 +356,10 @@ def _kloss_low_speed(eddy: KlossEddy, temperature: float) -> tuple[float, float]
             eddy.reference_temperature,
         )
     )
-    p = rolloff.one_peak_speed(temperature, p_ref, alpha, t_ref)
-    w = 0.0
-    den = w * w + p * p
-    if not (den > 0.0 and math.isfinite(den)):
+    p = rolloff.peak_speed_at(temperature, p_ref, alpha, t_ref)
+    if not (p != 0.0 and math.isfinite(p) and math.isfinite(p * p)):
         return None
-    slope = 2.0 * t_peak * p * (p * p - w * w) / den / den
+    slope = rolloff.kloss_speed_derivative(0.0, t_peak, p)
     if not math.isfinite(slope):
         return None
     return p, slope

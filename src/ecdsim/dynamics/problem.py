@@ -76,6 +76,14 @@ def _shape(value: float | FloatArray) -> tuple[int, ...]:
 # damping rate above it [1/s], is refused: every contact would be a swarm of events and
 # steps, and the rigid model is its limit (docs/dynamics.md, the error falls as 1/c).
 MAX_MESH_FREQUENCY = 1e7
+# A fast mode (above MESH_RING_FREQUENCY [rad/s]) that the mesh's damping and the damper's
+# damp little rings for many periods after each contact, through thousands of bounces and
+# a ring-down followed step by step: beyond MAX_MESH_RING radians of the mode per e-fold
+# of its decay it is refused (measured on the dynamic example with a 0.25 deg lost motion
+# and an undamped mesh: c = 1e10 N*m/rad, 1,440 rad per e-fold, solves in about a second;
+# c = 2.8e10, 2,420, runs out of steps in the ring-down; docs/dynamics.md).
+MESH_RING_FREQUENCY = 1e5
+MAX_MESH_RING = 2000.0
 
 
 class DynamicDomainError(ValueError):
@@ -126,6 +134,8 @@ class DynamicProblem(QuasiStaticProblem):
         ``damping_rate`` and ``ecd_friction`` already include it (Eq. 3-4 / eta_f)
     backward_efficiency : eta_b of a lossy mesh, while the damper side drives [-]; 1
     eddy : the damper's eddy-current law (linear Eq. 1 or roll-off)
+    resistance : a ``[load] resistive_table``'s torque at each breakpoint [N*m] (the
+        breakpoints' shape); ``torques`` are the spring's less it. None without a table
     thermal : True when self-heating is modelled
     two_node : True when the housing is a heat capacity of its own
     stop_time : end of the simulated interval [s]
@@ -159,6 +169,7 @@ class DynamicProblem(QuasiStaticProblem):
     initial_housing_rise: FloatArray = field(default_factory=lambda: np.asarray(0.0))
     forward_efficiency: FloatArray = field(default_factory=lambda: np.asarray(1.0))
     backward_efficiency: FloatArray = field(default_factory=lambda: np.asarray(1.0))
+    resistance: FloatArray | None = None
     thermal: bool = False
     two_node: bool = False
     stop_time: float = math.inf
@@ -238,52 +249,88 @@ def dynamic_problem(
     reused, never recomputed. Raises ValueError where a parameter leaves its domain (the
     message names the field).
     """
-    damper = system.ecd.damper
-    gearbox = system.ecd.gearbox
     n = ecd.gear_ratio
     reflected: float | FloatArray | None = _one_case_reflected(params, n)
     if reflected is None:
         reflected = mechanics.reflect_inertia_to_input(
             np.asarray(params.rotor_inertia, float) + np.asarray(params.gearbox_inertia, float), n
         )
-    eddy: EddyLaw
+    eddy = _eddy_law(system.ecd.damper, params, temperatures)
+    _check_start(params, base, eddy, temperatures)
+    lossy = _differs(ecd.forward_efficiency, 1.0) or _differs(ecd.backward_efficiency, 1.0)
+    if lossy and params.stribeck_speed is not None:
+        # The Stribeck excess mixes the ECD's friction (through the mesh) with the
+        # system's (not): its mesh loss is not separated yet (docs/dynamics.md).
+        raise DynamicDomainError(
+            "gearbox.efficiency",
+            "the dynamic method takes a lossy gear without damper.stribeck_speed only",
+        )
+    if params.gear_stiffness is not None:
+        _check_compliant(params, reflected, base.damping_rate, lossy, base.has_gravity)
+    case = _case_fields(params, ecd, reflected, system_friction, temperatures)
+    case["lost_motion"] = system.ecd.gearbox.lost_motion
+    thermal = params.thermal
+    resistive = system.load.resistance
+    settings: dict[str, Any] = {
+        "eddy": eddy,
+        "resistance": None
+        if resistive is None
+        else np.asarray(resistive.torque_at(base.angles, temperatures), dtype=float),
+        "thermal": thermal is not None,
+        "two_node": thermal is not None and thermal.housing_heat_capacity is not None,
+        "stop_time": params.stop_time,
+        "rtol": params.rtol,
+        "integrator": params.integrator,
+        "max_events": params.max_events,
+    }
+    one = _one_case_problem(base, case, settings)
+    if one is not None:
+        return one
+    return DynamicProblem(
+        angles=base.angles,
+        torques=base.torques,
+        friction=base.friction,
+        damping_rate=base.damping_rate,
+        **case,
+        **settings,
+    )
+
+
+def _eddy_law(damper: Any, params: DynamicParameters, temperatures: FloatArray) -> EddyLaw:
+    """The damper's eddy law: Eq. 1's linear law, or the Kloss roll-off (checked)."""
     if params.rolloff is None:
-        eddy = LinearEddy(
+        return LinearEddy(
             damper.damping_rate,
             damper.reference_temperature,
             damper.damping_temperature_coefficient,
         )
-    else:
-        peak_torque = _peak_torque(damper.damping_rate, params.rolloff.peak_speed)
-        eddy = KlossEddy(
-            peak_torque,
-            params.rolloff.peak_speed,
-            params.rolloff.resistivity_coefficient,
-            damper.reference_temperature,
+    peak_speed = params.rolloff.peak_speed
+    alpha = params.rolloff.resistivity_coefficient
+    if _peak_speed_not_positive(temperatures, peak_speed, alpha, damper.reference_temperature):
+        raise DynamicDomainError(
+            "damper.rolloff.resistivity_coefficient",
+            "the peak speed omega_peak(T) is <= 0 at an analysis temperature; the "
+            "resistivity law does not reach that far",
         )
-        if _peak_speed_not_positive(
-            temperatures,
-            params.rolloff.peak_speed,
-            params.rolloff.resistivity_coefficient,
-            damper.reference_temperature,
-        ):
-            raise DynamicDomainError(
-                "damper.rolloff.resistivity_coefficient",
-                "the peak speed omega_peak(T) is <= 0 at an analysis temperature; the "
-                "resistivity law does not reach that far",
-            )
-        alpha = params.rolloff.resistivity_coefficient
-        if params.thermal is not None and _below_zero(alpha):
-            # Heating drives omega_peak = omega_peak_ref (1 + alpha (T - T_ref)) towards 0
-            # and the low-speed damping BD / (1 + alpha (T - T_ref)) to infinity: the
-            # damper would lock the load short of the end, approached without end.
-            raise DynamicDomainError(
-                "damper.rolloff.resistivity_coefficient",
-                f"must be >= 0 with self-heating (got {float(np.min(alpha)):.6g} /K): the "
-                "Kloss law's low-speed damping BD / (1 + alpha (T - T_ref)) grows without "
-                "bound as the damper heats towards T_ref - 1/alpha (conductors have "
-                "alpha > 0; copper 0.0039 /K)",
-            )
+    if params.thermal is not None and _below_zero(alpha):
+        # Heating drives omega_peak = omega_peak_ref (1 + alpha (T - T_ref)) towards 0
+        # and the low-speed damping BD / (1 + alpha (T - T_ref)) to infinity: the
+        # damper would lock the load short of the end, approached without end.
+        raise DynamicDomainError(
+            "damper.rolloff.resistivity_coefficient",
+            f"must be >= 0 with self-heating (got {float(np.min(alpha)):.6g} /K): the "
+            "Kloss law's low-speed damping BD / (1 + alpha (T - T_ref)) grows without "
+            "bound as the damper heats towards T_ref - 1/alpha (conductors have "
+            "alpha > 0; copper 0.0039 /K)",
+        )
+    peak_torque = rolloff.peak_torque_from_damping(damper.damping_rate, peak_speed)
+    return KlossEddy(peak_torque, peak_speed, alpha, damper.reference_temperature)
+
+
+def _check_start(
+    params: DynamicParameters, base: QuasiStaticProblem, eddy: EddyLaw, temperatures: FloatArray
+) -> None:
+    """The release angle lies on the travel; a warm start below the damping law's zero."""
     travel = np.asarray(base.travel)
     start = np.asarray(params.initial_angle, dtype=float)
     if start.size == 1 and travel.size == 1:  # one case: the same test on the numbers
@@ -305,31 +352,32 @@ def dynamic_problem(
                 "damper.thermal.initial_rotor_rise",
                 "puts the damper at or beyond the temperature where its damping law reaches zero",
             )
-    lossy = _differs(ecd.forward_efficiency, 1.0) or _differs(ecd.backward_efficiency, 1.0)
-    if lossy and params.stribeck_speed is not None:
-        # The Stribeck excess mixes the ECD's friction (through the mesh) with the
-        # system's (not): its mesh loss is not separated yet (docs/dynamics.md).
-        raise DynamicDomainError(
-            "gearbox.efficiency",
-            "the dynamic method takes a lossy gear without damper.stribeck_speed only",
-        )
-    if params.gear_stiffness is not None:
-        _check_compliant(params, reflected, lossy=lossy, gravity=base.has_gravity)
-    case: dict[str, Any] = {
+
+
+def _case_fields(
+    params: DynamicParameters,
+    ecd: EcdState,
+    reflected: float | FloatArray,
+    system_friction: FloatArray,
+    temperatures: FloatArray,
+) -> dict[str, Any]:
+    """The per-case fields of :class:`DynamicProblem` (the lost motion aside)."""
+    thermal = params.thermal
+    static = params.system_static_friction_factor
+    return {
         "load_inertia": params.load_inertia,
         "damper_inertia": reflected,
         "ecd_friction": ecd.ecd_friction,
         "system_friction": system_friction,
         "static_friction_factor": params.static_friction_factor,
         "system_static_friction_factor": params.static_friction_factor
-        if params.system_static_friction_factor is None
-        else params.system_static_friction_factor,
+        if static is None
+        else static,
         "restitution": params.restitution,
-        "lost_motion": gearbox.lost_motion,
-        "initial_angle": start,
+        "initial_angle": np.asarray(params.initial_angle, dtype=float),
         "initial_speed": params.initial_speed,
         "ambient_temperature": temperatures,
-        "gear_ratio": n,
+        "gear_ratio": ecd.gear_ratio,
         "gearbox_damping_rate": ecd.gearbox_damping_rate,
         "heat_capacity": math.inf if thermal is None else thermal.heat_capacity,
         "thermal_resistance": math.inf if thermal is None else thermal.thermal_resistance,
@@ -340,26 +388,6 @@ def dynamic_problem(
         "forward_efficiency": ecd.forward_efficiency,
         "backward_efficiency": ecd.backward_efficiency,
     }
-    settings: dict[str, Any] = {
-        "eddy": eddy,
-        "thermal": thermal is not None,
-        "two_node": thermal is not None and thermal.housing_heat_capacity is not None,
-        "stop_time": params.stop_time,
-        "rtol": params.rtol,
-        "integrator": params.integrator,
-        "max_events": params.max_events,
-    }
-    one = _one_case_problem(base, case, settings)
-    if one is not None:
-        return one
-    return DynamicProblem(
-        angles=base.angles,
-        torques=base.torques,
-        friction=base.friction,
-        damping_rate=base.damping_rate,
-        **case,
-        **settings,
-    )
 
 
 # Every field of DynamicProblem by where _one_case_problem takes it from: the base
@@ -367,7 +395,16 @@ def dynamic_problem(
 # field added to the class must be added here too (tests/test_fast_paths.py).
 _BASE_FIELDS = ("angles", "torques", "friction", "damping_rate")
 _NO_GRAVITY = ("gravity_amplitude", "gravity_angle")
-_SETTING_FIELDS = ("eddy", "thermal", "two_node", "stop_time", "rtol", "integrator", "max_events")
+_SETTING_FIELDS = (
+    "eddy",
+    "resistance",
+    "thermal",
+    "two_node",
+    "stop_time",
+    "rtol",
+    "integrator",
+    "max_events",
+)
 
 
 def _one_case_problem(
@@ -448,22 +485,10 @@ def _peak_speed_not_positive(
     coefficient: float | FloatArray,
     reference: float,
 ) -> bool:
-    """True where ``rolloff.peak_speed_at`` is <= 0 at some analysis temperature.
-
-    One temperature and float parameters: :func:`rolloff.one_peak_speed`, the same
-    number, compared as a float (NaN is not <= 0 in either); otherwise, or where that
-    number is not finite (NumPy's overflow warning), the array test.
-    """
-    if (
-        temperatures.size == 1
-        and type(peak_speed) is float
-        and type(coefficient) is float
-        and type(reference) is float
-    ):
-        peak = rolloff.one_peak_speed(temperatures.item(), peak_speed, coefficient, reference)
-        if math.isfinite(peak):
-            return peak <= 0.0
-    peaks = rolloff.peak_speed_at(temperatures, peak_speed, coefficient, reference)
+    """True where ``rolloff.peak_speed_at`` is <= 0 at some analysis temperature (NaN
+    is not <= 0)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        peaks = rolloff.peak_speed_at(temperatures, peak_speed, coefficient, reference)
     return any_true(np.asarray(peaks <= 0.0))
 
 
@@ -487,20 +512,12 @@ def _below_zero(value: float | FloatArray) -> bool:
     return any_true(np.asarray(value, dtype=float) < 0.0)
 
 
-def _peak_torque(damping_rate: float | FloatArray, peak_speed: float | FloatArray) -> FloatArray:
-    """``rolloff.peak_torque_from_damping``: ``BD omega_peak / 2`` of float parameters in
-    floats, its 0-d array (the same bits, IEEE doubles), without its NumPy calls; the
-    function itself for arrays or an answer that is not finite (NumPy's overflow warning).
-    """
-    if type(damping_rate) is float and type(peak_speed) is float:
-        value = damping_rate * peak_speed / 2.0
-        if math.isfinite(value):
-            return np.asarray(value)
-    return rolloff.peak_torque_from_damping(damping_rate, peak_speed)
-
-
 def _check_compliant(
-    params: DynamicParameters, damper_inertia: float | FloatArray, lossy: bool, gravity: bool
+    params: DynamicParameters,
+    damper_inertia: float | FloatArray,
+    damper_damping: FloatArray,
+    lossy: bool,
+    gravity: bool,
 ) -> None:
     """What the compliant backlash (two degrees of freedom) does not model yet."""
     for absent, what in (
@@ -534,15 +551,19 @@ def _check_compliant(
             "needs a damper-side inertia: give [damper] rotor_inertia or [gearbox] inertia "
             "> 0 kg*m^2 (a massless damper side behind a compliant mesh has no dynamics)",
         )
-    jd = np.asarray(damper_inertia, dtype=float)
-    frequency = np.sqrt(
-        np.asarray(params.gear_stiffness, dtype=float)
-        * (1.0 / np.asarray(params.load_inertia, dtype=float) + 1.0 / jd)
-    )
+    _check_mesh_mode(params, np.asarray(damper_inertia, dtype=float), damper_damping)
+
+
+def _check_mesh_mode(
+    params: DynamicParameters, damper_inertia: FloatArray, damper_damping: FloatArray
+) -> None:
+    """The compliant mesh's two-inertia mode: its frequency ``sqrt(c (1/J_L + 1/J_D))``,
+    the mesh's damping rate ``d (1/J_L + 1/J_D)`` and the mode's decay rate ``(d (1/J_L +
+    1/J_D) + BECD / J_D) / 2`` against the limits above."""
+    per_inertia = 1.0 / np.asarray(params.load_inertia, dtype=float) + 1.0 / damper_inertia
+    frequency = np.sqrt(np.asarray(params.gear_stiffness, dtype=float) * per_inertia)
     damping = 0.0 if params.gear_mesh_damping is None else params.gear_mesh_damping
-    rate = np.asarray(damping, dtype=float) * (
-        1.0 / np.asarray(params.load_inertia, dtype=float) + 1.0 / jd
-    )
+    rate = np.asarray(damping, dtype=float) * per_inertia
     if np.any(rate > MAX_MESH_FREQUENCY):
         raise DynamicDomainError(
             "gearbox.mesh_damping",
@@ -557,6 +578,21 @@ def _check_compliant(
             f"{float(np.max(frequency)):.3g} rad/s, above {MAX_MESH_FREQUENCY:.0e} rad/s: "
             "a mesh that stiff is rigid for this model (omit the key for the rigid mesh, "
             "its limit)",
+        )
+    decay = 0.5 * (rate + np.asarray(damper_damping, dtype=float) / damper_inertia)
+    with np.errstate(divide="ignore"):
+        ring = np.where(frequency > MESH_RING_FREQUENCY, frequency / decay, 0.0)
+    if np.any(ring > MAX_MESH_RING):
+        worst = int(np.argmax(ring))
+        w = float(np.broadcast_to(frequency, ring.shape).ravel()[worst])
+        sigma = float(np.broadcast_to(decay, ring.shape).ravel()[worst])
+        raise DynamicDomainError(
+            "gearbox.stiffness",
+            f"the mesh's mode (sqrt(c (1/J_L + 1/J_D)) = {w:.3g} rad/s) decays at "
+            f"{sigma:.3g} 1/s through the mesh's and the damper's damping: it would ring "
+            f"{w / sigma:.3g} rad per e-fold, above the {MAX_MESH_RING:.0f} this model "
+            "follows (give gearbox.mesh_damping, a smaller stiffness, or omit stiffness "
+            "for the rigid mesh, its limit)",
         )
 
 

@@ -19,10 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ecdsim._types import BoolArray, FloatArray, all_true
-from ecdsim.dynamics.damping import EddyLaw
-from ecdsim.dynamics.equations import stribeck_excess
-from ecdsim.dynamics.records import ClosedFormRecord, IntegratedRecord, sample
-from ecdsim.physics import mechanics
+from ecdsim.physics.eddy import damper_side_torque
+from ecdsim.physics.friction import stribeck_excess
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -79,7 +77,7 @@ class EnergyBalance:
     damper_dissipation : energy dissipated by the ECD's damping (eddy currents and gearbox
         damping) [J]; with a Stribeck speed it also holds the dissipation of the friction
         above Coulomb, ``(F_brk - F_C) exp(-(w/w_St)^2)``, integrated with the damping
-        power in the one dissipation state (:mod:`ecdsim.dynamics.equations`)
+        power in the one dissipation state (:mod:`ecdsim.dynamics.kernel.hinge`)
     friction_dissipation : energy dissipated by Coulomb friction (FECD and FS), the
         kinetic value times the path length [J]
     engagement_loss : kinetic energy lost when the lost motion closed [J]
@@ -95,6 +93,9 @@ class EnergyBalance:
         damping, and the stored energy lost when the flanks part faster than the mesh
         relaxes) [J]; None for a rigid mesh
     elastic_energy : compliant backlash only: energy stored in the mesh at the end [J]
+    resistive_work : work done against a ``[load] resistive_table`` (harness, blanket)
+        [J]; spring_work is then the spring's own work, the drive's; None without a table
+        (issue 23 item 8)
     """
 
     spring_work: FloatArray
@@ -109,6 +110,7 @@ class EnergyBalance:
     # Compliant backlash only (None otherwise, so the rigid account is unchanged).
     mesh_dissipation: FloatArray | None = None
     elastic_energy: FloatArray | None = None
+    resistive_work: FloatArray | None = None
 
     def reshaped(self, shape: tuple[int, ...]) -> EnergyBalance:
         """The same balance with arrays of the given shape."""
@@ -120,80 +122,69 @@ class EnergyBalance:
         }
         return EnergyBalance(**values)
 
+    def _totals(self, one: bool) -> tuple[Any, Any]:
+        """Supplied (spring work plus initial kinetic energy, less the work against gravity
+        and a resistive table) and accounted (dissipations, losses, final energies), each
+        summed in one order: of arrays, or of one case's floats (``one``)."""
+
+        def term(name: str) -> Any:
+            value = getattr(self, name)
+            return 0.0 if value is None else value.item() if one else value
+
+        supplied = term("spring_work") + term("initial_kinetic_energy")
+        supplied = supplied - term("gravity_work") - term("resistive_work")
+        accounted = term("damper_dissipation")
+        for name in _ACCOUNTED:
+            accounted = accounted + term(name)
+        return supplied, accounted
+
     @property
     def supplied(self) -> FloatArray:
-        """Spring work plus initial kinetic energy, less the work against gravity [J]."""
-        supplied = self.spring_work + self.initial_kinetic_energy
-        if self.gravity_work is not None:
-            supplied = supplied - self.gravity_work
-        return np.asarray(supplied)
+        """Spring work plus initial kinetic energy, less the work against gravity and
+        against a resistive table [J]."""
+        return np.asarray(self._totals(False)[0])
 
     @property
     def accounted(self) -> FloatArray:
         """Dissipations, losses and final kinetic energy [J]."""
-        return np.asarray(
-            self.damper_dissipation
-            + self.friction_dissipation
-            + self.engagement_loss
-            + self.impact_loss
-            + self.final_kinetic_energy
-            + self.gear_loss
-            + (0.0 if self.mesh_dissipation is None else self.mesh_dissipation)
-            + (0.0 if self.elastic_energy is None else self.elastic_energy)
-        )
+        return np.asarray(self._totals(False)[1])
 
     @property
     def error(self) -> FloatArray:
         """Relative imbalance ``(supplied - accounted) / max(|supplied|, |accounted|)``; 0
-        where no energy moved."""
-        one = self._one_case_error()
-        if one is not None:
-            return one
-        # Each sum once (they are properties: a single case pays every NumPy call).
-        supplied, accounted = self.supplied, self.accounted
+        where no energy moved.
+
+        One case (every term of one element) is summed in Python floats, the same sums
+        in the same order (the same bits) without some twenty NumPy calls (issue 13);
+        a sum that is not finite takes the arrays' path (NumPy's NaN and warnings).
+        """
+        shape = self.spring_work.shape
+        if math.prod(shape) == 1 and all(
+            getattr(self, name) is None or getattr(self, name).shape == shape for name in _TERMS
+        ):
+            supplied, accounted = self._totals(True)
+            if math.isfinite(supplied) and math.isfinite(accounted):
+                scale = max(abs(supplied), abs(accounted))
+                error = (supplied - accounted) / scale if scale > 0.0 else 0.0
+                return np.array(error, dtype=np.float64).reshape(shape)
+        supplied, accounted = self._totals(False)
         scale = np.maximum(np.abs(supplied), np.abs(accounted))
         moved = scale > 0.0
         if all_true(moved):  # energy moved in every case (the usual answer): no guard
             return np.asarray((supplied - accounted) / scale)
         return np.where(moved, (supplied - accounted) / np.where(moved, scale, 1.0), 0.0)
 
-    def _one_case_error(self) -> FloatArray | None:
-        """:attr:`error` of one case in Python floats, or None for the general path.
 
-        The sums of :attr:`supplied` and :attr:`accounted` in their order, then the
-        guarded ratio: the same bits as the elementwise NumPy expressions, in a new array
-        of the terms' shape, without some twenty NumPy calls on one-element arrays
-        (issue 13, single cases). A term of another shape, or a sum that is not finite
-        (np.maximum propagates NaN where max() does not; NumPy warns of inf - inf), takes
-        the general path.
-        """
-        shape = self.spring_work.shape
-        if math.prod(shape) != 1:
-            return None
-        for name in _TERMS:
-            value = getattr(self, name)
-            if value is not None and value.shape != shape:
-                return None
-        supplied = self.spring_work.item() + self.initial_kinetic_energy.item()
-        if self.gravity_work is not None:
-            supplied = supplied - self.gravity_work.item()
-        accounted = (
-            self.damper_dissipation.item()
-            + self.friction_dissipation.item()
-            + self.engagement_loss.item()
-            + self.impact_loss.item()
-            + self.final_kinetic_energy.item()
-            + self.gear_loss.item()
-            + (0.0 if self.mesh_dissipation is None else self.mesh_dissipation.item())
-            + (0.0 if self.elastic_energy is None else self.elastic_energy.item())
-        )
-        if not (math.isfinite(supplied) and math.isfinite(accounted)):
-            return None
-        scale = max(abs(supplied), abs(accounted))
-        error = (supplied - accounted) / scale if scale > 0.0 else 0.0
-        return np.array(error, dtype=np.float64).reshape(shape)
-
-
+# The terms accounted after the damper's dissipation, in their order of summation.
+_ACCOUNTED = (
+    "friction_dissipation",
+    "engagement_loss",
+    "impact_loss",
+    "final_kinetic_energy",
+    "gear_loss",
+    "mesh_dissipation",
+    "elastic_energy",
+)
 # The fields of EnergyBalance, every one a term of the balance (tests/test_fast_paths.py).
 _TERMS = (
     "spring_work",
@@ -207,6 +198,7 @@ _TERMS = (
     "gravity_work",
     "mesh_dissipation",
     "elastic_energy",
+    "resistive_work",
 )
 
 
@@ -256,23 +248,45 @@ class EventLog:
 
 @dataclass(frozen=True)
 class TrajectoryData:
-    """What is needed to re-evaluate time series: recorded segments and torque models."""
+    """What time series are re-evaluated from: the kernel's recorded spans and points.
 
-    closed: list[ClosedFormRecord]
-    integrated: list[IntegratedRecord]
-    initial: tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]
-    final: tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_], FloatArray]
+    Attributes
+    ----------
+    spans : one row per segment, sorted by case and time (``kernel.layout.SPAN_*``): a
+        closed form's constants, or the range of an integrated segment's points
+    points : the integrated segments' accepted steps (``kernel.layout.POINT_*``)
+    span_start : where each case's spans start in ``spans`` (n_cases + 1)
+    initial : each case's state at release: angle, speed, temperature, engaged, 0
+    final : each case's final state and the time it holds from (``kernel.sample``)
+    display_end : where a plot of each case should end [s]
+    table : the cases' constants (``kernel.layout``), for the torques at the samples
+    angles : the spring's breakpoints per case (n_cases, points) [rad]
+    torques : the net spring torque there [N*m]
+    """
+
+    spans: FloatArray
+    points: FloatArray
+    span_start: FloatArray
+    initial: FloatArray
+    final: FloatArray
     display_end: FloatArray
+    table: FloatArray
     angles: FloatArray
     torques: FloatArray
-    ecd_friction: FloatArray
-    system_friction: FloatArray
-    factor: FloatArray
-    system_factor: FloatArray
-    ratio: FloatArray
-    gearbox_damping: FloatArray
-    eddy: EddyLaw
-    stribeck_speed: FloatArray | None = None  # w_St per case [rad/s]; inf or None: none
+
+    def segment_counts(self) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+        """Per case: closed-form segments, integrated segments, integrator steps."""
+        from ecdsim.dynamics.kernel import layout as lay
+
+        n = self.span_start.size - 1
+        case = self.spans[:, lay.SPAN_CASE].astype(np.int64)
+        closed = self.spans[:, lay.SPAN_KIND] == lay.SPAN_CLOSED
+        steps = np.where(closed, 0.0, np.maximum(self.spans[:, lay.SPAN_COUNT] - 1.0, 0.0))
+        return (
+            np.bincount(case[closed], minlength=n),
+            np.bincount(case[~closed], minlength=n),
+            np.bincount(case, weights=steps, minlength=n).astype(np.int64),
+        )
 
 
 @dataclass(frozen=True)
@@ -421,34 +435,47 @@ class DynamicResult:
     def sample(self, times: FloatArray | None = None, n_points: int = 501) -> TimeSeries:
         """States and torques at ``times`` (1-D, shared; or (n_times, n_cases)) [s].
 
-        Without ``times``, :meth:`default_times` is used.
+        Without ``times``, :meth:`default_times` is used. The states are re-evaluated
+        from the recorded segments (exactly for closed forms, by the integrator's dense
+        output otherwise), the torques by the same laws the solver used
+        (:mod:`ecdsim.physics`).
         """
+        from ecdsim.dynamics.kernel import layout as lay
+        from ecdsim.dynamics.kernel.build import backend
+
         data = self._data()
         grid = self.default_times(n_points) if times is None else np.asarray(times, float)
         if grid.ndim == 1:
             grid = np.broadcast_to(grid[:, None], (grid.size, self.size))
-        s = sample(grid, data.closed, data.integrated, data.initial, data.final)
-        spring = _spring_at(data.angles, data.torques, s.angle)
-        kinetic = np.where(
-            s.engaged, data.ecd_friction + data.system_friction, data.system_friction
-        )
-        static = mechanics.static_friction(data.system_friction, data.system_factor) + np.where(
-            s.engaged, mechanics.static_friction(data.ecd_friction, data.factor), 0.0
-        )
+        grid = np.ascontiguousarray(grid, dtype=float)
+        states = np.zeros((4, *grid.shape))
+        backend().sample_cases(
+            grid, data.table, data.spans, data.points, data.span_start, data.initial,
+            data.final, states,
+        )  # fmt: skip
+        angle, speed, temperature, engaged = states[0], states[1], states[2], states[3] != 0.0
+        t = data.table
+        spring = _spring_at(data.angles.T, data.torques.T, angle)
+        ecd, system = t[:, lay.FE], t[:, lay.FS]
+        kinetic = np.where(engaged, ecd + system, system)
+        static = t[:, lay.FSB] + np.where(engaged, t[:, lay.FEB], 0.0)
         holding = -np.clip(spring, -static, static)
-        if data.stribeck_speed is not None and np.any(np.isfinite(data.stribeck_speed)):
-            # Sliding friction falls from the breakaway to the kinetic value with speed
-            # (equations.stribeck_excess); where w_St is inf the excess is 0.
-            finite = np.isfinite(data.stribeck_speed)
+        stribeck_speed = t[:, lay.WST]
+        if np.any(np.isfinite(stribeck_speed)):
+            # Sliding friction falls from the breakaway to the kinetic value with speed;
+            # where w_St is inf the excess is 0.
+            finite = np.isfinite(stribeck_speed)
             excess = np.where(finite, np.maximum(static - kinetic, 0.0), 0.0)
             kinetic = (
-                kinetic
-                + stribeck_excess(s.speed, excess, np.where(finite, data.stribeck_speed, 1.0))[0]
+                kinetic + stribeck_excess(speed, excess, np.where(finite, stribeck_speed, 1.0))[0]
             )
-        friction = np.where(s.speed != 0.0, -np.sign(s.speed) * kinetic, holding)
-        shaft = data.ratio * s.speed
-        eddy = data.eddy.torque(shaft, s.damper_temperature)
-        damping = np.where(s.engaged, -data.ratio * (eddy + data.gearbox_damping * shaft), 0.0)
+        friction = np.where(speed != 0.0, -np.sign(speed) * kinetic, holding)
+        factor = 1.0 + t[:, lay.COEF] * (temperature - t[:, lay.TREF])  # Eq. 1's bracket
+        law = int(t[0, lay.LAW]) if t.shape[0] else 0
+        torque, _ = damper_side_torque(
+            law, t[:, lay.LA], t[:, lay.LB], t[:, lay.RATIO], t[:, lay.BG], speed, factor
+        )
+        damping = np.where(engaged, -torque, 0.0)
         shape = (grid.shape[0], *self.batch_shape)
 
         def shaped(a: NDArray[Any]) -> NDArray[Any]:
@@ -456,13 +483,13 @@ class DynamicResult:
 
         return TimeSeries(
             time=shaped(grid),
-            angle=shaped(s.angle),
-            speed=shaped(s.speed),
-            damper_temperature=shaped(s.damper_temperature),
+            angle=shaped(angle),
+            speed=shaped(speed),
+            damper_temperature=shaped(temperature),
             spring_torque=shaped(spring),
             friction_torque=shaped(friction),
             damping_torque=shaped(damping),
-            engaged=shaped(s.engaged),
+            engaged=shaped(engaged),
         )
 
     def case_summary(self, case: int) -> dict[str, Any]:
@@ -502,6 +529,7 @@ class DynamicResult:
                 "final_kinetic": at(e.final_kinetic_energy),
                 "gear_loss": at(e.gear_loss),
                 **({} if e.gravity_work is None else {"gravity_work": at(e.gravity_work)}),
+                **({} if e.resistive_work is None else {"resistive_work": at(e.resistive_work)}),
                 **(
                     {}
                     if e.mesh_dissipation is None or e.elastic_energy is None

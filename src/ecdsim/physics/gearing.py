@@ -25,7 +25,7 @@ Every function is vectorised; efficiencies are dimensionless in (0, 1].
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim._types import ArrayLike, FloatArray, Real, as_float
 
 
 def refer_damping_through_mesh(
@@ -120,11 +120,8 @@ def mesh_loss_power(
 
 
 def power_flow_indicator(
-    load_inertia: ArrayLike,
-    damper_inertia: ArrayLike,
-    damper_torque: ArrayLike,
-    load_torque: ArrayLike,
-) -> FloatArray:
+    load_inertia: Real, damper_inertia: Real, damper_torque: Real, load_torque: Real
+) -> Real:
     """A quantity with the sign of the mesh torque ``N tau_out`` while the gear turns.
 
     The load (inertia ``J_L`` at the input) feels ``load_torque`` A (spring, resistance
@@ -149,7 +146,4 @@ def power_flow_indicator(
     damper_torque : D, damper-side torque reflected by an ideal gear [N*m]
     load_torque : A, the torque on the load other than the gear's [N*m]
     """
-    return as_float(
-        as_float(load_inertia) * as_float(damper_torque)
-        + as_float(damper_inertia) * as_float(load_torque)
-    )
+    return load_inertia * damper_torque + damper_inertia * load_torque

@@ -21,7 +21,7 @@ so that deployment lifting the CG (0 < beta < 180 deg) is opposed, lowering it
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim._types import ArrayLike, FloatArray, Real, as_float
 
 # Standard acceleration of gravity (CGPM 1901; ISO 80000-3), m/s^2.
 STANDARD_GRAVITY = 9.80665
@@ -48,7 +48,7 @@ def gravity_amplitude(
     return as_float(as_float(mass) * gravity * as_float(cg_radius) * (1.0 - as_float(offload)))
 
 
-def gravity_torque(angle: ArrayLike, amplitude: ArrayLike, release_angle: ArrayLike) -> FloatArray:
+def gravity_torque(angle: Real, amplitude: Real, release_angle: Real) -> Real:
     """Gravity torque about the hinge, opposing deployment positive [N*m].
 
     ``T_g(phi) = W sin(theta_0 + phi)`` (rigid-body statics, Meriam & Kraige, Statics,
@@ -64,12 +64,10 @@ def gravity_torque(angle: ArrayLike, amplitude: ArrayLike, release_angle: ArrayL
     >>> round(float(gravity_torque(np.pi / 2, 2.0, 0.0)), 12)  # arm horizontal: full W
     2.0
     """
-    return as_float(as_float(amplitude) * np.sin(as_float(release_angle) + as_float(angle)))
+    return amplitude * np.sin(release_angle + angle)
 
 
-def gravity_torque_slope(
-    angle: ArrayLike, amplitude: ArrayLike, release_angle: ArrayLike
-) -> FloatArray:
+def gravity_torque_slope(angle: Real, amplitude: Real, release_angle: Real) -> Real:
     """``dT_g/dphi = W cos(theta_0 + phi)`` [N*m/rad], for Jacobians and extremes.
 
     The derivative of :func:`gravity_torque` (rigid-body statics, section on the moment
@@ -81,12 +79,10 @@ def gravity_torque_slope(
     amplitude : W [N*m]
     release_angle : theta_0 [rad]
     """
-    return as_float(as_float(amplitude) * np.cos(as_float(release_angle) + as_float(angle)))
+    return amplitude * np.cos(release_angle + angle)
 
 
-def gravity_work(
-    start: ArrayLike, end: ArrayLike, amplitude: ArrayLike, release_angle: ArrayLike
-) -> FloatArray:
+def gravity_work(start: Real, end: Real, amplitude: Real, release_angle: Real) -> Real:
     """Work done *against* gravity from phi = start to end, ``int T_g dphi`` [J].
 
     ``W (cos(theta_0 + start) - cos(theta_0 + end))``: the rise of the CG's potential
@@ -100,7 +96,4 @@ def gravity_work(
     amplitude : W [N*m]
     release_angle : theta_0 [rad]
     """
-    theta0 = as_float(release_angle)
-    return as_float(
-        as_float(amplitude) * (np.cos(theta0 + as_float(start)) - np.cos(theta0 + as_float(end)))
-    )
+    return amplitude * (np.cos(release_angle + start) - np.cos(release_angle + end))

@@ -9,7 +9,7 @@ lost motion (section 3.4) without modelling it.
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim._types import ArrayLike, FloatArray, Real, as_float
 
 
 def reflect_inertia_to_input(inertia: ArrayLike, gear_ratio: ArrayLike) -> FloatArray:
@@ -31,7 +31,7 @@ def reflect_inertia_to_input(inertia: ArrayLike, gear_ratio: ArrayLike) -> Float
     return as_float(np.asarray(inertia, dtype=float) * n * n)
 
 
-def kinetic_energy(inertia: ArrayLike, speed: ArrayLike) -> FloatArray:
+def kinetic_energy(inertia: Real, speed: Real) -> Real:
     """Rotational kinetic energy ``J omega**2 / 2``.
 
     Meriam and Kraige, *Engineering Mechanics: Dynamics*, 7th ed., 2012, section 6/6
@@ -43,13 +43,12 @@ def kinetic_energy(inertia: ArrayLike, speed: ArrayLike) -> FloatArray:
     inertia : J [kg*m^2]
     speed : omega [rad/s]
     """
-    w = np.asarray(speed, dtype=float)
-    return as_float(0.5 * np.asarray(inertia, dtype=float) * w * w)
+    return 0.5 * inertia * speed * speed
 
 
 def plastic_engagement(
-    load_inertia: ArrayLike, load_speed: ArrayLike, damper_inertia: ArrayLike
-) -> tuple[FloatArray, FloatArray]:
+    load_inertia: Real, load_speed: Real, damper_inertia: Real
+) -> tuple[Real, Real]:
     """Closing of the gear lost motion: the load meets the resting damper side and they lock.
 
     Angular momentum is conserved through the (short, perfectly plastic) tooth contact
@@ -73,16 +72,12 @@ def plastic_engagement(
     >>> float(w), float(loss)
     (1.5, 1.5)
     """
-    jl = np.asarray(load_inertia, dtype=float)
-    jd = np.asarray(damper_inertia, dtype=float)
-    w = np.asarray(load_speed, dtype=float)
-    total = jl + jd
-    return as_float(jl * w / total), as_float(0.5 * jl * jd * w * w / total)
+    total = load_inertia + damper_inertia
+    w = load_speed
+    return load_inertia * w / total, 0.5 * load_inertia * damper_inertia * w * w / total
 
 
-def rebound(
-    speed: ArrayLike, restitution: ArrayLike, inertia: ArrayLike
-) -> tuple[FloatArray, FloatArray]:
+def rebound(speed: Real, restitution: Real, inertia: Real) -> tuple[Real, Real]:
     """Impact on a rigid end stop with Newton's coefficient of restitution e.
 
     ``omega_after = -e * omega_before`` (Meriam and Kraige 3/12); the energy lost in the
@@ -104,12 +99,10 @@ def rebound(
     >>> float(w), float(loss)
     (-1.0, 1.5)
     """
-    e = np.asarray(restitution, dtype=float)
-    w = np.asarray(speed, dtype=float)
-    return as_float(-e * w), as_float((1.0 - e * e) * kinetic_energy(inertia, w))
+    return -restitution * speed, (1.0 - restitution * restitution) * kinetic_energy(inertia, speed)
 
 
-def static_friction(kinetic_friction: ArrayLike, static_factor: ArrayLike) -> FloatArray:
+def static_friction(kinetic_friction: Real, static_factor: Real) -> Real:
     """Breakaway (static) friction torque: ``factor * kinetic``, factor >= 1.
 
     The static coefficient of friction is at least the kinetic one (Meriam and Kraige,
@@ -121,53 +114,63 @@ def static_friction(kinetic_friction: ArrayLike, static_factor: ArrayLike) -> Fl
     kinetic_friction : Coulomb (kinetic) friction torque [N*m]
     static_factor : static over kinetic friction [-], >= 1
     """
-    return as_float(
-        np.asarray(kinetic_friction, dtype=float) * np.asarray(static_factor, dtype=float)
-    )
+    return kinetic_friction * static_factor
 
 
-def elasto_backlash_torque(
-    relative_angle: ArrayLike,
-    relative_speed: ArrayLike,
-    gap: ArrayLike,
-    stiffness: ArrayLike,
-    damping: ArrayLike,
-) -> FloatArray:
-    """Torque through a compliant gear mesh with lost motion (an elastic backlash).
+def mesh_torque(
+    relative_angle: Real, relative_speed: Real, half_gap: Real, stiffness: Real, damping: Real
+) -> Real:
+    """Torque through a compliant gear mesh with lost motion, Modelica's ElastoBacklash2.
 
     The Modelica Standard Library's ``Modelica.Mechanics.Rotational.Components.
-    ElastoBacklash`` (MSL 4.0, documentation of the component): a spring-damper in
+    ElastoBacklash2`` (MSL 4.0, documentation of the component): a spring-damper in
     series with a backlash of total width b; with ``phi_rel`` the relative angle between
     the driving and the driven flange and ``w_rel`` its rate,
 
-        tau = c (phi_rel - b/2) + d w_rel     phi_rel >  b/2, limited to tau >= 0
-        tau = 0                               |phi_rel| <= b/2
-        tau = c (phi_rel + b/2) + d w_rel     phi_rel < -b/2, limited to tau <= 0
+        tau = max(c (phi_rel - b/2) + d w_rel, 0)     phi_rel >  b/2
+        tau = 0                                       |phi_rel| <= b/2
+        tau = min(c (phi_rel + b/2) + d w_rel, 0)     phi_rel < -b/2
 
-    The limit is Modelica's: the damping term cannot make the contact pull the flanks
-    together (the teeth only push), so the contact torque never changes sign through d.
-    A torque limited to zero while ``|phi_rel| > b/2`` means the flanks have separated
-    faster than the compressed mesh relaxes (its stored energy is then dissipated, see
+    The limit is ElastoBacklash2's: the damping term cannot make the contact pull the
+    flanks together (the teeth only push), so the contact torque never changes sign
+    through d. (MSL's ``ElastoBacklash`` limits the damping differently, ``tau_c +
+    min(tau_c, tau_d)`` on the pressed side: a smaller torque at a fast impact.) A torque
+    limited to zero while ``|phi_rel| > b/2`` means the flanks have separated faster
+    than the compressed mesh relaxes (its stored energy is then dissipated, see
     docs/dynamics.md). The lost motion b is the gearbox's, which the paper notes in its
-    section 3.4 without modelling it.
+    section 3.4 without modelling it. Branch-free (floats, arrays, numba alike).
 
     Parameters
     ----------
     relative_angle : phi_rel, driving minus driven angle at the input shaft [rad]
     relative_speed : w_rel = phi_rel' [rad/s]
-    gap : b, total lost motion [rad], >= 0
+    half_gap : b / 2, half the total lost motion [rad], >= 0
     stiffness : c [N*m/rad], > 0
     damping : d [N*m*s/rad], >= 0
 
-    >>> [round(float(t), 12) for t in elasto_backlash_torque(
-    ...     [0.0, 0.02, 0.02, -0.03], [1.0, 0.1, -1.0, 0.0], 0.02, 100.0, 1.0)]
+    >>> [round(float(mesh_torque(a, w, 0.01, 100.0, 1.0)), 12)
+    ...  for a, w in ((0.0, 1.0), (0.02, 0.1), (0.02, -1.0), (-0.03, 0.0))]
     [0.0, 1.1, 0.0, -2.0]
     """
-    phi = np.asarray(relative_angle, dtype=float)
-    w = np.asarray(relative_speed, dtype=float)
-    half = 0.5 * np.asarray(gap, dtype=float)
-    c = np.asarray(stiffness, dtype=float)
-    d = np.asarray(damping, dtype=float)
-    ahead = np.maximum(c * (phi - half) + d * w, 0.0)
-    behind = np.minimum(c * (phi + half) + d * w, 0.0)
-    return as_float(np.where(phi > half, ahead, np.where(phi < -half, behind, 0.0)))
+    ahead = np.maximum(stiffness * (relative_angle - half_gap) + damping * relative_speed, 0.0)
+    behind = np.minimum(stiffness * (relative_angle + half_gap) + damping * relative_speed, 0.0)
+    return (relative_angle > half_gap) * ahead + (relative_angle < -half_gap) * behind
+
+
+def mesh_elastic_energy(relative_angle: Real, half_gap: Real, stiffness: Real) -> Real:
+    """Energy stored in the compliant mesh's spring, ``c (|phi_rel| - b/2)^2 / 2`` [J].
+
+    The potential of the spring in series with the backlash (MSL ElastoBacklash2, see
+    :func:`mesh_torque`); 0 inside the gap (the paper's lost motion, section 3.4).
+
+    Parameters
+    ----------
+    relative_angle : phi_rel [rad]
+    half_gap : b / 2 [rad], >= 0
+    stiffness : c [N*m/rad]
+
+    >>> round(float(mesh_elastic_energy(-0.03, 0.01, 100.0)), 12)
+    0.02
+    """
+    deflection = np.maximum(np.abs(relative_angle) - half_gap, 0.0)
+    return 0.5 * stiffness * deflection * deflection

@@ -24,12 +24,10 @@ rated BD: ``T_peak = BD * omega_peak_ref / 2`` (:func:`peak_torque_from_damping`
 All speeds and torques here are at the high-speed damper shaft.
 """
 
-import numpy as np
-
-from ecdsim._types import ArrayLike, BoolArray, FloatArray, all_true, as_float
+from ecdsim._types import Real
 
 
-def peak_torque_from_damping(damping_rate: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
+def peak_torque_from_damping(damping_rate: Real, peak_speed: Real) -> Real:
     """Peak eddy-current torque whose Kloss curve has slope BD at zero speed.
 
     ``T_peak = BD * omega_peak / 2``, from ``dT_d/domega_d (0) = 2 * T_peak / omega_peak``
@@ -44,15 +42,15 @@ def peak_torque_from_damping(damping_rate: ArrayLike, peak_speed: ArrayLike) -> 
     >>> round(float(peak_torque_from_damping(1.3e-4, 2000.0)), 12)
     0.13
     """
-    return as_float(np.asarray(damping_rate, dtype=float) * np.asarray(peak_speed, float) / 2.0)
+    return damping_rate * peak_speed / 2.0
 
 
 def peak_speed_at(
-    temperature: ArrayLike,
-    reference_peak_speed: ArrayLike,
-    resistivity_coefficient: ArrayLike,
-    reference_temperature: ArrayLike = 25.0,
-) -> FloatArray:
+    temperature: Real,
+    reference_peak_speed: Real,
+    resistivity_coefficient: Real,
+    reference_temperature: Real = 25.0,
+) -> Real:
     """Speed of peak eddy-current torque at conductor temperature T.
 
     ``omega_peak(T) = omega_peak_ref * (1 + alpha * (T - T_ref))``: the peak speed is
@@ -70,59 +68,25 @@ def peak_speed_at(
     >>> round(float(peak_speed_at(125.0, 2000.0, 0.0039)), 6)
     2780.0
     """
-    dt = np.asarray(temperature, dtype=float) - np.asarray(reference_temperature, dtype=float)
-    factor = 1.0 + np.asarray(resistivity_coefficient, dtype=float) * dt
-    return as_float(np.asarray(reference_peak_speed, dtype=float) * factor)
-
-
-def one_peak_speed(
-    temperature: float,
-    reference_peak_speed: float,
-    resistivity_coefficient: float,
-    reference_temperature: float,
-) -> float:
-    """:func:`peak_speed_at` of one case in Python floats [rad/s].
-
-    ``omega_peak_ref * (1 + alpha * (T - T_ref))`` (Wouterse 1991,
-    doi:10.1049/ip-b.1991.0019) in :func:`peak_speed_at`'s order of operations: the same
-    bits as its NumPy elementwise arithmetic (IEEE doubles), without its NumPy calls on
-    one number (a single deployment asks it twice; issue 13). Unlike NumPy it does not
-    warn of an overflow: callers take the array path where the answer is not finite.
-    To first order this is the paper's 0.4 % per degC fall of BD (Eq. 1).
-
-    Parameters
-    ----------
-    temperature : conductor (damper) temperature T [degC]
-    reference_peak_speed : omega_peak at T_ref [rad/s]
-    resistivity_coefficient : alpha, fractional change of resistivity per kelvin [1/K]
-    reference_temperature : T_ref [degC]
-
-    >>> one_peak_speed(125.0, 2000.0, 0.0039, 25.0) == float(peak_speed_at(125.0, 2000.0, 0.0039))
-    True
-    """
     dt = temperature - reference_temperature
     return reference_peak_speed * (1.0 + resistivity_coefficient * dt)
 
 
-def _kloss_parts(
-    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, BoolArray]:
-    """``(w, p, 2 T_peak, w**2 + p**2, denominator > 0)`` for the rational Kloss forms.
+def _denominator(speed: Real, peak_speed: Real) -> Real:
+    """``w**2 + p**2`` of the rational Kloss forms, 1 where both speeds vanish.
 
     Multiplying ``x = w / p`` out of the Kloss formulas gives rational functions of the
     speed w and the peak speed p that stay finite where p vanishes (where x is infinite).
-    Only ``w = p = 0`` is left undefined; the callers return 0 there.
+    Only ``w = p = 0`` is left undefined; there every numerator is 0, so a denominator of
+    1 returns 0. Written with arithmetic only (no branch, no ``np.where``), so that the
+    same code runs on floats, on NumPy arrays and compiled by numba
+    (:mod:`ecdsim.dynamics.kernel`).
     """
-    w = np.asarray(speed, dtype=float)
-    p = np.asarray(peak_speed, dtype=float)
-    scale = 2.0 * np.asarray(peak_torque, dtype=float)
-    den = w * w + p * p
-    defined = den > 0.0
-    # Where every case is defined (the usual answer) the guard is den itself.
-    return w, p, scale, den if all_true(defined) else np.where(defined, den, 1.0), defined
+    den = speed * speed + peak_speed * peak_speed
+    return den + (den == 0.0)
 
 
-def kloss_torque(speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike) -> FloatArray:
+def kloss_torque(speed: Real, peak_torque: Real, peak_speed: Real) -> Real:
     """Eddy-current torque against speed, Kloss form: ``2 T_peak x / (1 + x**2)``.
 
     ``x = omega_d / omega_peak``. Odd in the speed: the torque opposes the motion's
@@ -140,13 +104,10 @@ def kloss_torque(speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
     >>> float(kloss_torque(2000.0, 0.13, 2000.0))  # at the peak
     0.13
     """
-    w, p, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
-    return as_float(np.where(defined, scale * w * p / den, 0.0))
+    return 2.0 * peak_torque * speed * peak_speed / _denominator(speed, peak_speed)
 
 
-def kloss_speed_derivative(
-    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
-) -> FloatArray:
+def kloss_speed_derivative(speed: Real, peak_torque: Real, peak_speed: Real) -> Real:
     """``dT_d / domega_d`` of the Kloss torque: ``(2 T_peak / omega_peak)(1 - x**2)/(1 + x**2)**2``.
 
     The local damping rate of the damper (the slope definition of paper section 2.1; the
@@ -161,14 +122,12 @@ def kloss_speed_derivative(
     peak_torque : T_peak [N*m]
     peak_speed : omega_peak [rad/s], >= 0
     """
-    w, p, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
-    slope = scale * p * (p * p - w * w) / den / den
-    return as_float(slope if all_true(defined) else np.where(defined, slope, 0.0))
+    w, p = speed, peak_speed
+    inv = 1.0 / _denominator(w, p)
+    return 2.0 * peak_torque * p * (p * p - w * w) * (inv * inv)
 
 
-def kloss_peak_speed_derivative(
-    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
-) -> FloatArray:
+def kloss_peak_speed_derivative(speed: Real, peak_torque: Real, peak_speed: Real) -> Real:
     """``dT_d / domega_peak`` of the Kloss torque at fixed speed and peak torque.
 
     ``-(2 T_peak x / omega_peak)(1 - x**2)/(1 + x**2)**2``, evaluated as
@@ -183,13 +142,12 @@ def kloss_peak_speed_derivative(
     peak_torque : T_peak [N*m]
     peak_speed : omega_peak [rad/s], >= 0
     """
-    w, p, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
-    return as_float(np.where(defined, scale * w * (w * w - p * p) / den / den, 0.0))
+    w, p = speed, peak_speed
+    inv = 1.0 / _denominator(w, p)
+    return 2.0 * peak_torque * w * (w * w - p * p) * (inv * inv)
 
 
-def kloss_power_per_peak_speed(
-    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
-) -> FloatArray:
+def kloss_power_per_peak_speed(speed: Real, peak_torque: Real, peak_speed: Real) -> Real:
     """Eddy-current power over the peak speed: ``T_d omega_d / omega_peak``.
 
     ``2 T_peak omega_d**2 / (omega_d**2 + omega_peak**2)``: the Kloss torque times the
@@ -210,13 +168,12 @@ def kloss_power_per_peak_speed(
     >>> float(kloss_power_per_peak_speed(2000.0, 0.13, 2000.0))  # at the peak: T_peak
     0.13
     """
-    w, _, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
-    return as_float(np.where(defined, scale * w * w / den, 0.0))
+    return 2.0 * peak_torque * speed * speed / _denominator(speed, peak_speed)
 
 
 def kloss_power_per_peak_speed_derivatives(
-    speed: ArrayLike, peak_torque: ArrayLike, peak_speed: ArrayLike
-) -> tuple[FloatArray, FloatArray]:
+    speed: Real, peak_torque: Real, peak_speed: Real
+) -> tuple[Real, Real]:
     """Partial derivatives of :func:`kloss_power_per_peak_speed` in omega_d and omega_peak.
 
     ``(4 T_peak w p**2, -4 T_peak w**2 p) / (w**2 + p**2)**2`` with ``w = omega_d``,
@@ -230,9 +187,7 @@ def kloss_power_per_peak_speed_derivatives(
     peak_torque : T_peak [N*m]
     peak_speed : omega_peak [rad/s], >= 0
     """
-    w, p, scale, den, defined = _kloss_parts(speed, peak_torque, peak_speed)
-    common = 2.0 * scale * w * p / den / den
-    return (
-        as_float(np.where(defined, common * p, 0.0)),
-        as_float(np.where(defined, -common * w, 0.0)),
-    )
+    w, p = speed, peak_speed
+    inv = 1.0 / _denominator(w, p)
+    common = 4.0 * peak_torque * w * p * (inv * inv)
+    return common * p, -common * w

@@ -16,12 +16,10 @@ seconds to minutes).
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim._types import ArrayLike, FloatArray, Real, as_float
 
 
-def heat_loss(
-    temperature: ArrayLike, ambient_temperature: ArrayLike, thermal_resistance: ArrayLike
-) -> FloatArray:
+def heat_loss(temperature: Real, ambient_temperature: Real, thermal_resistance: Real) -> Real:
     """Heat flow from the damper to ambient: ``(T - T_ambient) / R``; 0 where R is inf.
 
     The loss term of the lumped-capacitance balance (Incropera, DeWitt, Bergman and
@@ -39,19 +37,17 @@ def heat_loss(
     >>> float(heat_loss(30.0, 25.0, float("inf")))
     0.0
     """
-    r = np.asarray(thermal_resistance, dtype=float)
-    dt = np.asarray(temperature, dtype=float) - np.asarray(ambient_temperature, dtype=float)
-    finite = np.isfinite(r)
-    return np.where(finite, dt / np.where(finite, r, 1.0), 0.0)
+    # A finite difference over an infinite resistance is 0: adiabatic without a branch.
+    return (temperature - ambient_temperature) / thermal_resistance
 
 
 def temperature_rate(
-    power: ArrayLike,
-    temperature: ArrayLike,
-    ambient_temperature: ArrayLike,
-    heat_capacity: ArrayLike,
-    thermal_resistance: ArrayLike,
-) -> FloatArray:
+    power: Real,
+    temperature: Real,
+    ambient_temperature: Real,
+    heat_capacity: Real,
+    thermal_resistance: Real,
+) -> Real:
     """``dT/dt = (P - (T - T_ambient) / R) / C`` of the lumped damper (Incropera Eq. 5.2).
 
     Parameters
@@ -66,12 +62,10 @@ def temperature_rate(
     2.0
     """
     loss = heat_loss(temperature, ambient_temperature, thermal_resistance)
-    return as_float(
-        (np.asarray(power, dtype=float) - loss) / np.asarray(heat_capacity, dtype=float)
-    )
+    return (power - loss) / heat_capacity
 
 
-def adiabatic_temperature_rise(energy: ArrayLike, heat_capacity: ArrayLike) -> FloatArray:
+def adiabatic_temperature_rise(energy: Real, heat_capacity: Real) -> Real:
     """Temperature rise of an adiabatic lumped body: ``dT = E / C``.
 
     Incropera, DeWitt, Bergman and Lavine 2007, section 5.1, Eq. 5.2 integrated with no
@@ -86,7 +80,7 @@ def adiabatic_temperature_rise(energy: ArrayLike, heat_capacity: ArrayLike) -> F
     >>> round(float(adiabatic_temperature_rise(4.2, 90.0)), 6)  # ~4 J into a 90 J/K damper
     0.046667
     """
-    return as_float(np.asarray(energy, dtype=float) / np.asarray(heat_capacity, dtype=float))
+    return energy / heat_capacity
 
 
 # Heating towards the zero of the damping law
@@ -107,11 +101,11 @@ def adiabatic_temperature_rise(energy: ArrayLike, heat_capacity: ArrayLike) -> F
 
 
 def temperature_from_factor_log(
-    state: ArrayLike,
-    ambient_temperature: ArrayLike,
-    ambient_factor: ArrayLike,
-    coefficient: ArrayLike,
-) -> FloatArray:
+    state: Real,
+    ambient_temperature: Real,
+    ambient_factor: Real,
+    coefficient: Real,
+) -> Real:
     """Damper temperature from the damping factor's log: ``T_amb + f_a s E(c s)``.
 
     ``s = ln(f(T) / f_a) / c`` for a damping law scaled by ``f(T) = 1 + c (T - T_ref)``
@@ -133,14 +127,10 @@ def temperature_from_factor_log(
     >>> float(temperature_from_factor_log(2.0, 25.0, 0.5, 0.0))  # c = 0: T = T_amb + f_a s
     26.0
     """
-    s = as_float(state)
-    shift = as_float(ambient_factor) * s * _exprel(as_float(coefficient) * s)
-    return as_float(as_float(ambient_temperature) + shift)
+    return ambient_temperature + ambient_factor * state * exprel(coefficient * state)
 
 
-def damping_factor_from_log(
-    state: ArrayLike, ambient_factor: ArrayLike, coefficient: ArrayLike
-) -> FloatArray:
+def damping_factor_from_log(state: Real, ambient_factor: Real, coefficient: Real) -> Real:
     """The damping law's temperature factor ``f = f_a exp(c s)``, > 0 where f_a > 0.
 
     The factor of Eq. 1 of the ECD paper (c = -0.004 / K) or of the Kloss law's peak
@@ -155,16 +145,16 @@ def damping_factor_from_log(
     >>> round(float(damping_factor_from_log(250.0 * np.log(2.0), 1.0, -0.004)), 12)
     0.5
     """
-    return as_float(as_float(ambient_factor) * np.exp(as_float(coefficient) * as_float(state)))
+    return ambient_factor * np.exp(coefficient * state)
 
 
 def factor_log_rate(
-    power_per_factor: ArrayLike,
-    state: ArrayLike,
-    heat_capacity: ArrayLike,
-    thermal_resistance: ArrayLike,
-    coefficient: ArrayLike,
-) -> FloatArray:
+    power_per_factor: Real,
+    state: Real,
+    heat_capacity: Real,
+    thermal_resistance: Real,
+    coefficient: Real,
+) -> Real:
     """``ds/dt = (p - (T - T_amb) / (R f)) / C``: the lumped heat balance in the log state.
 
     Incropera Eq. 5.2, ``C dT/dt = P - (T - T_amb) / R``, divided by ``dT/ds = f``, with
@@ -184,40 +174,76 @@ def factor_log_rate(
     >>> float(factor_log_rate(2.0, 5.0, 0.5, 2.5, 0.0))  # c = 0: (P - (T - T_amb) / R) / C
     0.0
     """
-    power = as_float(power_per_factor)
-    r = as_float(thermal_resistance)
-    finite = np.isfinite(r)
-    if not np.any(finite):  # adiabatic (the usual case): no loss term to evaluate
-        return as_float(power / as_float(heat_capacity))
-    s = as_float(state)
-    if np.all(finite):
-        loss = s * _exprel(-as_float(coefficient) * s) / r
-    else:
-        # E(-c s) grows as f shrinks; it is only evaluated where a resistance cools.
-        growth = _exprel(-as_float(coefficient) * np.where(finite, s, 0.0))
-        loss = np.where(finite, s * growth / np.where(finite, r, 1.0), 0.0)
-    return as_float((power - loss) / as_float(heat_capacity))
+    return factor_log_heating(power_per_factor, heat_capacity) - factor_log_cooling(
+        state, heat_capacity, thermal_resistance, coefficient
+    )
 
 
-def _exprel(z: FloatArray) -> FloatArray:
-    """``E(z) = (e^z - 1) / z``, 1 at z = 0; inf (no warning) where e^z overflows.
+def factor_log_heating(power_per_factor: Real, heat_capacity: Real) -> Real:
+    """The heating term of :func:`factor_log_rate`: ``p / C`` (Incropera Eq. 5.2's source
+    ``P / C`` over ``dT/ds = f``, with ``P = f p``).
 
-    NumPy's expm1 over z is three times faster than ``scipy.special.exprel``, and this
-    runs in the integrator's right-hand side.
+    Parameters
+    ----------
+    power_per_factor : p, the heating power over the damping factor [W]
+    heat_capacity : C [J/K], > 0
+
+    >>> float(factor_log_heating(2.0, 0.5))
+    4.0
     """
-    with np.errstate(over="ignore"):
-        grown = np.expm1(z)
-    return np.divide(grown, z, out=np.ones_like(grown), where=z != 0.0)
+    return power_per_factor / heat_capacity
+
+
+def factor_log_cooling(
+    state: Real, heat_capacity: Real, thermal_resistance: Real, coefficient: Real
+) -> Real:
+    """The cooling term of :func:`factor_log_rate`: ``(T - T_amb) / (R f C) = s E(-c s) / (R C)``.
+
+    The loss to ambient of Incropera Eq. 5.2 in the log state (module notes); 0 where the
+    damper is adiabatic (R = inf), which the dynamic kernel then skips.
+
+    Parameters
+    ----------
+    state : s, the damping factor's logarithm over c [K]
+    heat_capacity : C [J/K], > 0
+    thermal_resistance : R, damper to ambient [K/W]; ``inf`` for adiabatic
+    coefficient : c [1/K]
+
+    >>> float(factor_log_cooling(5.0, 0.5, 2.5, 0.0))  # (T - T_amb) / (R C) at c = 0
+    4.0
+    """
+    return state * exprel(-coefficient * state) / (thermal_resistance * heat_capacity)
+
+
+def exprel(z: Real) -> Real:
+    """``E(z) = (e^z - 1) / z``, 1 at z = 0: the relative growth of the damping factor.
+
+    The function that turns the damping law's log state into a temperature
+    (:func:`temperature_from_factor_log`, the Eq. 1 factor of the ECD paper in the log
+    form of the module notes). Written without a branch (the 1 added to the numerator
+    and the denominator at z = 0 only), so that floats, arrays and numba's compiled
+    kernel (:mod:`ecdsim.dynamics.kernel`) take the same code; e^z overflows (to inf)
+    only beyond z = 709, a rise no damping law reaches.
+
+    Parameters
+    ----------
+    z : c s, the log state times the factor's coefficient [-]
+
+    >>> float(exprel(0.0)), round(float(exprel(1.0)), 12)
+    (1.0, 1.718281828459)
+    """
+    zero = z == 0.0
+    return (np.expm1(z) + zero) / (z + zero)
 
 
 def factor_log_rate_slope(
-    power_per_factor_slope: ArrayLike,
-    factor: ArrayLike,
-    state: ArrayLike,
-    heat_capacity: ArrayLike,
-    thermal_resistance: ArrayLike,
-    coefficient: ArrayLike,
-) -> FloatArray:
+    power_per_factor_slope: Real,
+    factor: Real,
+    state: Real,
+    heat_capacity: Real,
+    thermal_resistance: Real,
+    coefficient: Real,
+) -> Real:
     """``d(ds/dt)/ds = (c f dp/df - exp(-c s) / R) / C``: :func:`factor_log_rate`'s slope.
 
     The Jacobian entry of the temperature state. Uses ``df/ds = c f`` and
@@ -236,14 +262,46 @@ def factor_log_rate_slope(
     >>> float(factor_log_rate_slope(0.0, 1.0, 0.0, 2.0, 0.5, -0.004))  # -1 / (R C)
     -1.0
     """
-    c = as_float(coefficient)
-    slope = c * as_float(factor) * as_float(power_per_factor_slope)
-    r = as_float(thermal_resistance)
-    finite = np.isfinite(r)
-    if np.any(finite):
-        cooling = np.where(finite, np.exp(-c * np.where(finite, as_float(state), 0.0)), 0.0)
-        slope = slope - cooling / np.where(finite, r, 1.0)
-    return as_float(slope / as_float(heat_capacity))
+    heating = factor_log_heating_slope(power_per_factor_slope, factor, heat_capacity, coefficient)
+    return heating - factor_log_cooling_slope(state, heat_capacity, thermal_resistance, coefficient)
+
+
+def factor_log_heating_slope(
+    power_per_factor_slope: Real, factor: Real, heat_capacity: Real, coefficient: Real
+) -> Real:
+    """``d/ds`` of :func:`factor_log_heating` at fixed speed: ``c f (dp/df) / C`` (df/ds =
+    c f; Incropera Eq. 5.2 in the log state).
+
+    Parameters
+    ----------
+    power_per_factor_slope : dp/df at fixed speed [W]
+    factor : f [-]
+    heat_capacity : C [J/K], > 0
+    coefficient : c [1/K]
+
+    >>> float(factor_log_heating_slope(2.0, 0.5, 0.25, -0.004))
+    -0.016
+    """
+    return coefficient * factor * power_per_factor_slope / heat_capacity
+
+
+def factor_log_cooling_slope(
+    state: Real, heat_capacity: Real, thermal_resistance: Real, coefficient: Real
+) -> Real:
+    """``d/ds`` of :func:`factor_log_cooling`: ``exp(-c s) / (R C)`` (Incropera Eq. 5.2 in
+    the log state, ``d(s E(-c s))/ds = exp(-c s)``); 0 where adiabatic.
+
+    Parameters
+    ----------
+    state : s [K]
+    heat_capacity : C [J/K], > 0
+    thermal_resistance : R [K/W]; ``inf`` for adiabatic
+    coefficient : c [1/K]
+
+    >>> float(factor_log_cooling_slope(0.0, 2.0, 0.5, -0.004))  # 1 / (R C)
+    1.0
+    """
+    return np.exp(-coefficient * state) / (thermal_resistance * heat_capacity)
 
 
 # Two nodes: the damper's rotor and its housing
@@ -264,11 +322,11 @@ def factor_log_rate_slope(
 
 
 def housing_return(
-    housing_rise: ArrayLike,
-    factor: ArrayLike,
-    coupling_resistance: ArrayLike,
-    heat_capacity: ArrayLike,
-) -> FloatArray:
+    housing_rise: Real,
+    factor: Real,
+    coupling_resistance: Real,
+    heat_capacity: Real,
+) -> Real:
     """``(T_h - T_env) / (R_rh f C_r)``: the housing's term in the rotor's ``ds/dt``.
 
     The two-node balance (Incropera et al. 2007, sections 3.1.3 and 5.2; module notes)
@@ -286,20 +344,20 @@ def housing_return(
     >>> float(housing_return(2.0, 0.5, 4.0, 0.5))  # 2 / (4 * 0.5 * 0.5)
     2.0
     """
-    r = as_float(coupling_resistance)
-    f = as_float(factor)
-    den = np.where(np.isfinite(r), r, np.inf) * f * as_float(heat_capacity)
-    rise = as_float(housing_rise) * np.ones_like(den)
-    return np.divide(rise, den, out=np.zeros_like(rise), where=np.isfinite(den) & (den > 0.0))
+    # f = 0 (the law at its zero) returns 0 rather than dividing by it; an infinite
+    # resistance (no coupling) gives 0 by itself.
+    positive = factor > 0.0
+    den = coupling_resistance * (factor + (factor <= 0.0)) * heat_capacity
+    return positive * housing_rise / den
 
 
 def housing_rate(
-    rotor_rise: ArrayLike,
-    housing_rise: ArrayLike,
-    heat_capacity: ArrayLike,
-    coupling_resistance: ArrayLike,
-    environment_resistance: ArrayLike,
-) -> FloatArray:
+    rotor_rise: Real,
+    housing_rise: Real,
+    heat_capacity: Real,
+    coupling_resistance: Real,
+    environment_resistance: Real,
+) -> Real:
     """``dT_h/dt = ((T_r - T_h) / R_rh - (T_h - T_env) / R_he) / C_h`` (two-node network).
 
     Incropera et al. 2007, section 5.2's lumped balance of the housing node, with the
@@ -318,12 +376,10 @@ def housing_rate(
     """
     gain = heat_loss(rotor_rise, housing_rise, coupling_resistance)
     loss = heat_loss(housing_rise, 0.0, environment_resistance)
-    return as_float((gain - loss) / as_float(heat_capacity))
+    return (gain - loss) / heat_capacity
 
 
-def factor_log_from_rise(
-    rise: ArrayLike, ambient_factor: ArrayLike, coefficient: ArrayLike
-) -> FloatArray:
+def factor_log_from_rise(rise: Real, ambient_factor: Real, coefficient: Real) -> Real:
     """The log state ``s = ln(1 + c (T - T_amb) / f_a) / c`` of a temperature rise.
 
     The inverse of :func:`temperature_from_factor_log` (``f(T) = f_a + c (T - T_amb)``
@@ -341,12 +397,10 @@ def factor_log_from_rise(
     >>> float(factor_log_from_rise(3.0, 0.5, 0.0))
     6.0
     """
-    c = as_float(coefficient)
-    z = c * as_float(rise) / as_float(ambient_factor)
-    safe = np.where(c != 0.0, c, 1.0)
-    return as_float(
-        np.where(c != 0.0, np.log1p(z) / safe, as_float(rise) / as_float(ambient_factor))
-    )
+    zero = coefficient == 0.0
+    relative = rise / ambient_factor
+    # c = 0: log1p(0) = 0, and the rise over f_a over 1; else log1p(c rise / f_a) / c.
+    return (np.log1p(coefficient * relative) + zero * relative) / (coefficient + zero)
 
 
 def two_node_relaxation(

@@ -461,8 +461,8 @@ def solver_appendix(config: Config, prediction: Prediction, document: dict[str, 
 
     For the dynamic method, per case: its end status, the relative energy-balance error,
     the number of closed-form and integrated segments and the integrator's accepted steps
-    (where the integrator keeps them, as the batched Rosenbrock RODAS4 does); "-" where a
-    count is not available.
+    (:meth:`ecdsim.dynamics.result.TrajectoryData.segment_counts`); "-" without a
+    recorded trajectory.
     """
     analysis = config.spec.analysis
     settings = [("methods", "; ".join(f"{m}: {_described(m)}" for m in document["methods"]))]
@@ -488,46 +488,13 @@ def solver_appendix(config: Config, prediction: Prediction, document: dict[str, 
 def _dynamic_counts(solution: Any, n: int) -> list[dict[str, str]]:
     """Per case: closed-form segments, integrated segments, integrator steps ("-": unknown)."""
     trajectory = getattr(getattr(solution, "result", None), "trajectory", None)
-    closed = [0] * n
-    integrated = [0] * n
-    steps: list[int | None] = [0] * n
     if trajectory is None:
         return [{"closed": "-", "integrated": "-", "steps": "-"}] * n
-    for record in getattr(trajectory, "closed", ()):
-        for case in np.ravel(record.case):
-            if 0 <= int(case) < n:
-                closed[int(case)] += 1
-    for record in getattr(trajectory, "integrated", ()):
-        case = int(record.case)
-        if not 0 <= case < n:
-            continue
-        integrated[case] += 1
-        taken, count = _accepted_steps(record.solution), steps[case]
-        steps[case] = None if taken is None or count is None else count + taken
+    closed, integrated, steps = trajectory.segment_counts()
     return [
-        {
-            "closed": str(closed[i]),
-            "integrated": str(integrated[i]),
-            "steps": "-" if steps[i] is None else str(steps[i]),
-        }
+        {"closed": str(closed[i]), "integrated": str(integrated[i]), "steps": str(steps[i])}
         for i in range(n)
     ]
-
-
-def _accepted_steps(solution: Any) -> int | None:
-    """The accepted steps of a segment's dense output (its step times), None if unknown.
-
-    The output may be wrapped (e.g. to turn a state into a temperature): the wrapped
-    ``solution`` is looked into, a few levels deep.
-    """
-    for _ in range(4):
-        times = getattr(solution, "times", None)
-        if times is not None:
-            return max(int(np.size(times)) - 1, 0)
-        solution = getattr(solution, "solution", None)
-        if solution is None:
-            return None
-    return None
 
 
 def _described(method: str) -> str:

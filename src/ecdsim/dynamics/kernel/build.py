@@ -1,0 +1,221 @@
+"""The dynamic kernel compiled from its own source, or run as plain Python.
+
+The kernel's modules (this package, and the laws of :mod:`ecdsim.physics` they call)
+are plain Python written in the subset numba compiles: functions of floats, ints, tuples
+and NumPy arrays. :func:`backend` gives the entry points in one of two forms, built
+from the same functions:
+
+* ``"numba"`` (the default): each function is compiled with ``numba.njit``. Its globals
+  are copied and every kernel or physics function they name is replaced by its compiled
+  form, recursively (a compiled function can only call compiled ones), the way
+  CalebBell/fluids builds its numba versions from the Python source. The functions that
+  a step evaluates many times (:data:`INLINE`) are inlined into their callers in numba's
+  IR, so that their arrays and values stay in registers between stages; the rest are
+  ordinary calls. Compiled code is cached on disk (numba's ``cache=True``) under a key
+  that includes a digest of every kernel and physics source file, so that editing a law
+  in :mod:`ecdsim.physics` recompiles the kernels that inline it (numba itself checks only
+  the calling function's own file).
+* ``"python"``: the same functions uncompiled (slow, identical in logic): used without
+  numba or with ``ECDSIM_NUMBA=0``, and by the tests that hold the two together.
+
+Numba is imported here, on the first dynamic solve, never at start-up.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+import types
+from collections.abc import Callable
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+# The kernel's modules and the physics modules whose functions it compiles.
+KERNEL_PACKAGE = "ecdsim.dynamics.kernel"
+PHYSICS_PACKAGE = "ecdsim.physics"
+# Functions inlined into their callers when compiled: the right-hand side, Jacobian and
+# stage solve of a step, and the laws they evaluate (numba counts references to every
+# array passed between compiled functions with atomic operations; inlined, the stage
+# values stay in registers: docs/architecture.md, the dynamic kernel).
+INLINE = frozenset(
+    {
+        "derivatives",
+        "jacobian",
+        "hinge_forces",
+        "stage_solve",
+        "factorize",
+        "error_norm",
+        "step_factor",
+        "excess_at",
+        "factor_at",
+        "load_spring",
+        "mesh_now",
+        "event_value",
+        "crossed",
+        "_endpoint",
+        "_extremes",
+    }
+)
+
+
+# Functions that allocate arrays, compiled with numba's reference-counted memory (NRT);
+# every other kernel function is compiled without it, so that passing the case's arrays
+# between functions costs no atomic reference counting (it had cost a quarter of a step).
+ALLOCATING = frozenset({"solve_cases", "new_workspace"})
+
+
+def numba_requested() -> bool:
+    """False when ``ECDSIM_NUMBA=0`` asks for the plain-Python kernel."""
+    return os.environ.get("ECDSIM_NUMBA", "1").strip() != "0"
+
+
+@cache
+def source_digest() -> str:
+    """SHA-256 of every kernel and physics source file (the compiled code's real inputs)."""
+    root = Path(__file__).resolve().parents[2]
+    digest = hashlib.sha256()
+    for folder in ("dynamics/kernel", "physics"):
+        for path in sorted((root / folder).glob("*.py")):
+            digest.update(path.name.encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def _ours(value: object) -> bool:
+    """A plain function of the kernel or of the physics package."""
+    if not isinstance(value, types.FunctionType):
+        return False
+    module = value.__module__ or ""
+    return module.startswith((KERNEL_PACKAGE, PHYSICS_PACKAGE))
+
+
+class _Compiler:
+    """Compiled copies of kernel functions, each calling the compiled copies of its own."""
+
+    def __init__(self) -> None:
+        import numba
+
+        self._numba = numba
+        self._done: dict[Callable[..., Any], Any] = {}
+
+    def __call__(self, func: Callable[..., Any]) -> Any:
+        done = self._done.get(func)
+        if done is not None:
+            return done
+        namespace = dict(func.__globals__)
+        copy = types.FunctionType(
+            func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__
+        )
+        copy.__qualname__ = func.__qualname__
+        copy.__module__ = func.__module__
+        inline = "always" if func.__name__ in INLINE else "never"
+        nrt = func.__name__ in ALLOCATING
+        dispatcher = self._numba.njit(nogil=True, error_model="numpy", inline=inline, _nrt=nrt)(
+            copy
+        )
+        dispatcher._cache = _digest_cache(self._numba)(copy)  # cache=True, keyed below
+        self._done[func] = dispatcher
+        for name, value in list(namespace.items()):
+            if _ours(value):
+                namespace[name] = self(value)
+        return dispatcher
+
+
+@cache
+def _digest_cache(numba: Any) -> type:
+    """numba's function cache with the sources' digest in every entry's key."""
+    from numba.core.caching import FunctionCache
+
+    class DigestCache(FunctionCache):  # type: ignore[misc]
+        def _index_key(self, sig: Any, codegen: Any) -> Any:
+            return (*super()._index_key(sig, codegen), source_digest())
+
+    return DigestCache
+
+
+class Backend:
+    """The kernel's entry points in one form: ``name`` is ``"numba"`` or ``"python"``."""
+
+    def __init__(self, name: str, convert: Callable[[Callable[..., Any]], Any]) -> None:
+        self.name = name
+        self._convert = convert
+        self._entries: dict[str, Any] = {}
+
+    def __getattr__(self, attr: str) -> Any:
+        if attr.startswith("_"):
+            raise AttributeError(attr)
+        found = self._entries.get(attr)
+        if found is None:
+            from ecdsim.dynamics.kernel import entry
+
+            found = self._convert(getattr(entry, attr))
+            self._entries[attr] = found
+        return found
+
+
+class _Substituter:
+    """Plain copies of kernel functions whose globals name some substituted functions
+    (every kernel function is copied, its globals pointing at the copies)."""
+
+    def __init__(self, substitutes: dict[str, Callable[..., Any]]) -> None:
+        self._substitutes = substitutes
+        self._done: dict[Callable[..., Any], Callable[..., Any]] = {}
+
+    def __call__(self, func: Callable[..., Any]) -> Callable[..., Any]:
+        done = self._done.get(func)
+        if done is not None:
+            return done
+        namespace = dict(func.__globals__)
+        copy = types.FunctionType(
+            func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__
+        )
+        copy.__qualname__ = func.__qualname__
+        self._done[func] = copy
+        for name, value in list(namespace.items()):
+            if name in self._substitutes:
+                namespace[name] = self._substitutes[name]
+            elif _ours(value):
+                namespace[name] = self(value)
+        return copy
+
+
+@cache
+def _backend(name: str) -> Backend:
+    if name == "numba":
+        return Backend(name, _Compiler())
+    if name == "scipy":
+        from ecdsim.dynamics import scipy_steppers
+
+        stepping = {
+            "start_stepper": scipy_steppers.start_stepper,
+            "attempt": scipy_steppers.attempt,
+        }
+        return Backend(name, _Substituter(stepping))
+    return Backend(name, lambda func: func)
+
+
+def backend(name: str | None = None) -> Backend:
+    """The kernel's entry points, compiled (``"numba"``) or plain (``"python"``), or
+    plain with scipy's steppers (``"scipy"``: ``[analysis] integrator`` Radau, BDF,
+    LSODA; :mod:`ecdsim.dynamics.scipy_steppers`).
+
+    Without a name: compiled when numba is installed and not switched off
+    (``ECDSIM_NUMBA=0``), else plain.
+    """
+    if name is None:
+        name = "numba" if numba_requested() and _numba_available() else "python"
+    if name not in ("numba", "python", "scipy"):
+        raise ValueError(f"backend must be 'numba', 'python' or 'scipy', got {name!r}")
+    return _backend(name)
+
+
+def _numba_available() -> bool:
+    if "numba" in sys.modules:
+        return True
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return False
+    return True
