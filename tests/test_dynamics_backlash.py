@@ -59,7 +59,7 @@ def test_contact_torque_by_hand() -> None:
         100.0,
         2.0,
     )
-    assert tau.tolist() == pytest.approx([0.0, 3.0, 0.0, 0.0, -3.0], abs=1e-15)
+    assert np.asarray(tau).tolist() == pytest.approx([0.0, 3.0, 0.0, 0.0, -3.0], abs=1e-15)
 
 
 def test_elastic_impacts_through_the_backlash_by_hand() -> None:

@@ -275,7 +275,7 @@ def test_log_factor_state_by_hand(shape: tuple[int, ...]) -> None:
     s = np.full(shape, 250.0 * math.log(2.0))
     factor = thermal.damping_factor_from_log(s, 1.0, -0.004)
     temp = thermal.temperature_from_factor_log(s, 25.0, 1.0, -0.004)
-    assert factor.shape == temp.shape == shape
+    assert np.shape(factor) == np.shape(temp) == shape
     # exp and exprel of a moderate argument: a few ulp.
     assert np.allclose(factor, 0.5, rtol=1e-15, atol=0.0)
     assert np.allclose(temp, 150.0, rtol=1e-14, atol=0.0)

@@ -57,7 +57,10 @@ def _dynamic(
 
 def test_stribeck_excess_by_hand() -> None:
     # g(0) = F_brk - F_C; g(w_St) = (F_brk - F_C) / e; dg/dw = -2 w / w_St^2 g.
-    g, slope = stribeck_excess(np.array([0.0, 0.05, -0.05]), np.full(3, 0.3), np.full(3, 0.05))
+    g, slope = (
+        np.asarray(v)
+        for v in stribeck_excess(np.array([0.0, 0.05, -0.05]), np.full(3, 0.3), np.full(3, 0.05))
+    )
     assert g[0] == 0.3
     assert g[1] == pytest.approx(0.3 / math.e, rel=1e-15)  # one exp, rounding only
     assert g[2] == g[1]  # even in w

@@ -2,11 +2,13 @@
 where numba is missing, the compile notice, and the compiled cache of a read-only install.
 
 The compiled kernels are checked against the NumPy paths number by number elsewhere
-(tests/test_exact_kernel.py, tests/test_dynamics_compiled.py,
+(tests/test_exact_kernel.py, tests/test_dynamics_kernel.py,
 tests/test_montecarlo_streaming.py); here: that every entry point falls back where numba
-cannot be imported (a platform without its wheels), that a compile without a cache says
-so, and that `ecdsim precompile` on a package folder nobody can write leaves its kernels
-in the user's cache, where the next process finds them all.
+cannot be imported (a platform without its wheels), that the dynamic kernel (compiled
+from its own Python source by ecdsim.dynamics.kernel.build) obeys the same switch, that
+a compile without a cache says so, and that `ecdsim precompile` on a package folder
+nobody can write leaves its kernels (the dynamic kernel's included) in the user's cache,
+where the next process finds them all.
 """
 
 from __future__ import annotations
@@ -31,9 +33,9 @@ from tests.conftest import ROOT
 FAKE_NUMBA = 'raise ImportError("no numba on this platform (a test stand-in)")\n'
 
 # Every compiled entry point, asked what it runs where numba is missing, and each
-# computation run by its NumPy path: the dynamic method (the single-case path, the
-# batched integrator, the spring-table kernel), the exact kernel of a large batch and the
-# Monte Carlo sums and brackets. Prints one JSON document.
+# computation run by its NumPy path: the dynamic method (its kernel as plain Python: one
+# case, a batch, a spring table), the exact kernel of a large batch and the Monte Carlo
+# sums and brackets. Prints one JSON document.
 WITHOUT_NUMBA = """
 import json, sys
 import numpy as np
@@ -41,13 +43,13 @@ from ecdsim import _numba
 from ecdsim.cli import precompile
 from ecdsim.deployment import predict
 from ecdsim.api import load
-from ecdsim.dynamics import integrate, single
+from ecdsim.dynamics.kernel import build
 from ecdsim.montecarlo import intervals, streaming
 from ecdsim.solvers import exact_kernel
 
 found = {
     "available": _numba.available(),
-    "compiled_kernel": integrate.compiled_kernel() is not None,
+    "dynamic_kernel": build.backend().name,
     "exact_kernel": exact_kernel.choose(10**6),
     "compiled_sums": streaming.compiled_sums(10**6),
     "compiled_selection": intervals.compiled_selection(),
@@ -89,15 +91,15 @@ def test_without_numba_every_entry_point_takes_the_numpy_path(tmp_path: Path) ->
     assert done.returncode == 0, done.stderr
     found = json.loads(done.stdout)
     assert found["available"] is False
-    assert found["compiled_kernel"] is False
+    assert found["dynamic_kernel"] == "python"
     assert found["exact_kernel"] == "numpy"
     assert found["compiled_sums"] is False
     assert found["compiled_selection"] is False
     assert found["numba_imported"] is False
-    # The same deployments with the compiled kernels, in this process: the NumPy RODAS4
-    # and the compiled one integrate the same equations at the same rtol (1e-8 per step),
-    # and agree to about 1e-9 on deployment times (tests/test_dynamics_compiled.py);
-    # 1e-7 is docs/dynamics.md's stated accuracy of a time.
+    # The same deployments with the compiled kernel, in this process: the plain and the
+    # compiled kernel are the same functions (ecdsim.dynamics.kernel.build), at the same
+    # rtol (1e-8 per step); they differ only in rounding (fused or reordered operations),
+    # and 1e-7 is docs/dynamics.md's stated accuracy of a time.
     import numpy as np
 
     from ecdsim.api import load
@@ -138,7 +140,7 @@ def test_precompile_without_numba_names_the_install_command(tmp_path: Path) -> N
 
 
 def test_the_switch_turns_every_compiled_path_off(monkeypatch: pytest.MonkeyPatch) -> None:
-    from ecdsim.dynamics import integrate
+    from ecdsim.dynamics.kernel import build
     from ecdsim.montecarlo import intervals, streaming
     from ecdsim.solvers import exact_kernel
 
@@ -146,13 +148,13 @@ def test_the_switch_turns_every_compiled_path_off(monkeypatch: pytest.MonkeyPatc
     monkeypatch.delenv("ECDSIM_EXACT_KERNEL", raising=False)
     assert _numba.switched_off()
     assert not _numba.enabled()
-    assert integrate.compiled_kernel() is None
+    assert build.backend().name == "python"  # the dynamic kernel's plain form
     assert exact_kernel.choose(10**6) == "numpy"
     assert not streaming.compiled_sums(10**6)
     assert not intervals.compiled_selection()
     monkeypatch.setenv("ECDSIM_NUMBA", "1")
     assert _numba.enabled()
-    assert integrate.compiled_kernel() is not None
+    assert build.backend().name == "numba"
     assert exact_kernel.choose(10**6) == "numba"
 
 

@@ -33,7 +33,7 @@ from ecdsim.model import (
     Load,
 )
 from tests import hand
-from tests.conftest import ROOT, paper_system
+from tests.conftest import paper_system
 from tests.dynamics_reference import assert_energy_closes, toy_system
 
 T_ZERO = 25.0 + 1.0 / 0.004  # Eq. 1's BD_T = 0 [degC]

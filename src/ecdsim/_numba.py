@@ -39,6 +39,7 @@ __all__ = [
     "compilations",
     "enabled",
     "load",
+    "note_cache",
     "switched_off",
 ]
 
@@ -51,6 +52,9 @@ NOTICE_TEXT = "ecdsim: compiling its kernels for this CPU, once (about 15 to 30 
 
 _lock = threading.Lock()
 _state: dict[str, Any] = {"listener": None, "compilations": 0, "noticed": False}
+# Cache folders of compiled kernels that are not module globals (the dynamic kernel's,
+# built from its Python source by ecdsim.dynamics.kernel.build).
+_caches: set[str] = set()
 
 
 def switched_off() -> bool:
@@ -103,10 +107,16 @@ def compilations() -> int:
     return int(_state["compilations"])
 
 
+def note_cache(path: str) -> None:
+    """Record the cache folder of a kernel compiled outside a module's globals."""
+    with _lock:
+        _caches.add(path)
+
+
 def cache_folder() -> str | None:
     """Where the kernels loaded so far are cached (the folder common to their caches, or
     the ``__pycache__`` folders under it); None before any kernel is loaded."""
-    folders: set[str] = set()
+    folders: set[str] = set(_caches)
     for name, module in list(sys.modules.items()):
         if module is None or not (name == "ecdsim" or name.startswith("ecdsim.")):
             continue

@@ -663,7 +663,9 @@ class Gravity:
 
     def torque_at(self, angle: ArrayLike) -> FloatArray:
         """Gravity torque at deployed angle phi [N*m], opposing deployment positive."""
-        return gravity.gravity_torque(angle, self.amplitude, self.release_angle)
+        return as_float(
+            gravity.gravity_torque(as_float(angle), self.amplitude, as_float(self.release_angle))
+        )
 
     def describe(self) -> str:
         """One-line description."""

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ecdsim._types import FloatArray
+from ecdsim._types import FloatArray, as_float
 from ecdsim.dynamics.kernel import layout as L
 from ecdsim.dynamics.problem import DynamicProblem
 from ecdsim.dynamics.result import DynamicResult, EnergyBalance, EventLog, TrajectoryData
@@ -181,7 +181,7 @@ def result_of(
     rows = np.ascontiguousarray(out.T).reshape((L.OUT_FIELDS, *shape))
 
     def shaped(column: int) -> FloatArray:
-        return rows[column]
+        return as_float(rows[column])
 
     energy = _energy(problem, packed, rows, shape)
     status: NDArray[np.int8] = rows[L.OUT_STATUS].astype(np.int8)

@@ -362,7 +362,7 @@ def _kloss_low_speed(eddy: KlossEddy, temperature: float) -> tuple[float, float]
     slope = rolloff.kloss_speed_derivative(0.0, t_peak, p)
     if not math.isfinite(slope):
         return None
-    return p, slope
+    return float(p), float(slope)
 
 
 DYNAMIC = DynamicMethod()

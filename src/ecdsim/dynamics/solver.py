@@ -255,7 +255,12 @@ def _run_part(
     if n == packed.table.shape[0]:  # every case, in order (one group, one part)
         arrays = whole
     else:
-        arrays = tuple(np.ascontiguousarray(values[index]) for values in whole)
+        arrays = (
+            np.ascontiguousarray(packed.table[index]),
+            np.ascontiguousarray(packed.angles[index]),
+            np.ascontiguousarray(packed.torques[index]),
+            np.ascontiguousarray(packed.resistance[index]),
+        )
     first = 0
     while True:
         stopped = kernel.solve_cases(

@@ -16,7 +16,7 @@ kernel (:mod:`ecdsim.dynamics.kernel`), which compiles these very functions.
 
 import numpy as np
 
-from ecdsim._types import Real
+from ecdsim._types import BoolArray, Real
 
 
 def stribeck_excess(speed: Real, excess: Real, stribeck_speed: Real) -> tuple[Real, Real]:
@@ -65,7 +65,7 @@ def breakaway(kinetic: Real, static_factor: Real) -> Real:
     return kinetic * static_factor
 
 
-def holds(drive: Real, static: Real, margin: Real) -> Real:
+def holds(drive: Real, static: Real, margin: Real) -> bool | BoolArray:
     """Whether friction at rest holds a drive: ``|drive| <= static (1 + margin)``.
 
     The stick test of a resting body (Coulomb's law at rest, paper section 2.2's static

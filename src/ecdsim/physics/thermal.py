@@ -348,7 +348,8 @@ def housing_return(
     # resistance (no coupling) gives 0 by itself.
     positive = factor > 0.0
     den = coupling_resistance * (factor + (factor <= 0.0)) * heat_capacity
-    return positive * housing_rise / den
+    # numpy types a bool mask times a float as a float array of unknown width
+    return housing_rise / den * positive  # type: ignore[return-value]
 
 
 def housing_rate(

@@ -302,7 +302,7 @@ def margin_over_travel(
         # T_g at every point (physics.gravity); at the stall the net drive less gravity
         # equals the friction, so there the spring less resistance is F + T_g.
         theta0 = as_float(0.0 if gravity_angle is None else gravity_angle)
-        weight = gravity_torque(angles, as_float(gravity_amplitude), theta0)
+        weight = as_float(gravity_torque(angles, as_float(gravity_amplitude), theta0))
         at_stall = as_float(f + weight[-1])
     drive = np.concatenate([torques, np.broadcast_to(at_stall, torques.shape[1:])[None]])
     if resist is not None:

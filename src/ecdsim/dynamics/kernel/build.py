@@ -18,19 +18,21 @@ from the same functions:
 * ``"python"``: the same functions uncompiled (slow, identical in logic): used without
   numba or with ``ECDSIM_NUMBA=0``, and by the tests that hold the two together.
 
-Numba is imported here, on the first dynamic solve, never at start-up.
+numba is imported here, on the first dynamic solve, never at start-up, through
+:mod:`ecdsim._numba` (the one switch, the compile notice and count, the cache folder
+rules of a read-only install: ``ecdsim precompile`` compiles these kernels ahead).
 """
 
 from __future__ import annotations
 
 import hashlib
-import os
-import sys
 import types
 from collections.abc import Callable
 from functools import cache
 from pathlib import Path
 from typing import Any
+
+from ecdsim import _numba
 
 # The kernel's modules and the physics modules whose functions it compiles.
 KERNEL_PACKAGE = "ecdsim.dynamics.kernel"
@@ -67,8 +69,9 @@ ALLOCATING = frozenset({"solve_cases", "new_workspace"})
 
 
 def numba_requested() -> bool:
-    """False when ``ECDSIM_NUMBA=0`` asks for the plain-Python kernel."""
-    return os.environ.get("ECDSIM_NUMBA", "1").strip() != "0"
+    """False when ``ECDSIM_NUMBA=0`` asks for the plain-Python kernel (the switch every
+    compiled kernel obeys: :func:`ecdsim._numba.switched_off`)."""
+    return not _numba.switched_off()
 
 
 @cache
@@ -95,9 +98,8 @@ class _Compiler:
     """Compiled copies of kernel functions, each calling the compiled copies of its own."""
 
     def __init__(self) -> None:
-        import numba
-
-        self._numba = numba
+        # numba with ecdsim's compile notice and compile count (ecdsim._numba).
+        self._numba: Any = _numba.load()
         self._done: dict[Callable[..., Any], Any] = {}
 
     def __call__(self, func: Callable[..., Any]) -> Any:
@@ -112,10 +114,10 @@ class _Compiler:
         copy.__module__ = func.__module__
         inline = "always" if func.__name__ in INLINE else "never"
         nrt = func.__name__ in ALLOCATING
-        dispatcher = self._numba.njit(nogil=True, error_model="numpy", inline=inline, _nrt=nrt)(
-            copy
-        )
+        njit: Any = self._numba.njit  # _nrt: numba's own option (ALLOCATING), not in its stubs
+        dispatcher = njit(nogil=True, error_model="numpy", inline=inline, _nrt=nrt)(copy)
         dispatcher._cache = _digest_cache(self._numba)(copy)  # cache=True, keyed below
+        _numba.note_cache(dispatcher._cache.cache_path)
         self._done[func] = dispatcher
         for name, value in list(namespace.items()):
             if _ours(value):
@@ -128,9 +130,10 @@ def _digest_cache(numba: Any) -> type:
     """numba's function cache with the sources' digest in every entry's key."""
     from numba.core.caching import FunctionCache
 
-    class DigestCache(FunctionCache):  # type: ignore[misc]
+    class DigestCache(FunctionCache):
         def _index_key(self, sig: Any, codegen: Any) -> Any:
-            return (*super()._index_key(sig, codegen), source_digest())
+            base: tuple[Any, ...] = super()._index_key(sig, codegen)  # type: ignore[no-untyped-call]
+            return (*base, source_digest())
 
     return DigestCache
 
@@ -188,7 +191,7 @@ def _backend(name: str) -> Backend:
     if name == "scipy":
         from ecdsim.dynamics import scipy_steppers
 
-        stepping = {
+        stepping: dict[str, Callable[..., Any]] = {
             "start_stepper": scipy_steppers.start_stepper,
             "attempt": scipy_steppers.attempt,
         }
@@ -212,10 +215,5 @@ def backend(name: str | None = None) -> Backend:
 
 
 def _numba_available() -> bool:
-    if "numba" in sys.modules:
-        return True
-    try:
-        import numba  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    """numba imports (with ecdsim's set-up, :func:`ecdsim._numba.available`)."""
+    return _numba.available()

@@ -190,21 +190,21 @@ def _modal(seg: Segment, t: float, energy: bool) -> tuple[float, float, float, f
                 + b2 * b2 * _phi1_real(2.0 * z2)
             )
         return x, v, acc, v2
-    z1 = r1 * t
-    z2 = r2 * t
-    e1 = cmath.exp(complex(min(z1.real, _EXP_CAP), z1.imag))
-    e2 = cmath.exp(complex(min(z2.real, _EXP_CAP), z2.imag))
-    vc = c1 * e1 + c2 * e2
-    xc = c1 * t * _phi1(z1) + c2 * t * _phi1(z2)
-    ac = c1 * r1 * e1 + c2 * r2 * e2
-    v2 = 0.0
+    w1 = r1 * t
+    w2 = r2 * t
+    q1 = cmath.exp(complex(min(w1.real, _EXP_CAP), w1.imag))
+    q2 = cmath.exp(complex(min(w2.real, _EXP_CAP), w2.imag))
+    vc = c1 * q1 + c2 * q2
+    xc = c1 * t * _phi1(w1) + c2 * t * _phi1(w2)
+    ac = c1 * r1 * q1 + c2 * r2 * q2
+    v2c = 0.0
     if energy:
-        v2 = (
-            c1 * c1 * t * _phi1(2.0 * z1)
-            + 2.0 * c1 * c2 * t * _phi1(z1 + z2)
-            + c2 * c2 * t * _phi1(2.0 * z2)
+        v2c = (
+            c1 * c1 * t * _phi1(2.0 * w1)
+            + 2.0 * c1 * c2 * t * _phi1(w1 + w2)
+            + c2 * c2 * t * _phi1(2.0 * w2)
         ).real
-    return xc.real, vc.real, ac.real, v2
+    return xc.real, vc.real, ac.real, v2c
 
 
 def evaluate(seg: Segment, t: float, energy: bool) -> tuple[float, float, float, float]:

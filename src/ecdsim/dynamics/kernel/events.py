@@ -78,8 +78,8 @@ def mesh_event(par: FloatArray, md: FloatArray, slot: int, delta: float, speed: 
         back: float = side * (delta - side * half)
         return back
     if slot == L.SLOT_MESH_A:
-        return half - delta
-    return delta + half
+        return float(half - delta)
+    return float(delta + half)
 
 
 def indicator(cw: FloatArray, y: FloatArray, m: int, na: int) -> float:

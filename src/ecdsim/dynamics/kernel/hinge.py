@@ -60,8 +60,7 @@ def factor_at(par: FloatArray, y: FloatArray, m: int, na: int) -> float:
     if na == 0:
         ambient: float = par[L.FA]
         return ambient
-    value: float = damping_factor_from_log(y[2 * m], par[L.FA], par[L.COEF])
-    return value
+    return float(damping_factor_from_log(y[2 * m], par[L.FA], par[L.COEF]))
 
 
 def excess_at(speed: float, excess: float, stribeck_speed: float) -> tuple[float, float]:
@@ -69,7 +68,7 @@ def excess_at(speed: float, excess: float, stribeck_speed: float) -> tuple[float
     (:func:`ecdsim.physics.friction.stribeck_excess`); 0 without one, without its exp."""
     if excess > 0.0:
         g, slope = stribeck_excess(speed, excess, stribeck_speed)
-        return g, slope
+        return float(g), float(slope)
     return 0.0, 0.0
 
 
@@ -78,8 +77,7 @@ def mesh_now(par: FloatArray, md: FloatArray, delta: float, speed: float) -> flo
     (:func:`ecdsim.physics.mechanics.mesh_torque`), 0 in the gap or released."""
     if md[L.MD_MESH] != L.PRESS:
         return 0.0
-    value: float = mesh_torque(delta, speed, 0.5 * par[L.GAP], par[L.MC], par[L.MD])
-    return value
+    return float(mesh_torque(delta, speed, 0.5 * par[L.GAP], par[L.MC], par[L.MD]))
 
 
 def aux_rates(
@@ -88,12 +86,12 @@ def aux_rates(
     """The heating states' rates: the damper's log state (Incropera Eq. 5.2 in the log
     form of :mod:`ecdsim.physics.thermal`) and the housing's rise with two nodes."""
     s = y[2 * m]
-    rate = factor_log_heating(power, par[L.HC])
+    rate = float(factor_log_heating(power, par[L.HC]))
     if par[L.HR] < math.inf:  # the cooling term; 0 (and skipped) where adiabatic
-        rate -= factor_log_cooling(s, par[L.HC], par[L.HR], par[L.COEF])
+        rate -= float(factor_log_cooling(s, par[L.HC], par[L.HR], par[L.COEF]))
     if na == 2:
         h = y[2 * m + 1]
-        rate += housing_return(h, f, par[L.HR], par[L.HC])
+        rate += float(housing_return(h, f, par[L.HR], par[L.HC]))
         rise = temperature_from_factor_log(s, 0.0, par[L.FA], par[L.COEF])
         dy[2 * m + 1] = housing_rate(rise, h, par[L.HCH], par[L.HR], par[L.HRHE])
     dy[2 * m] = rate
@@ -118,23 +116,26 @@ def hinge_forces(
     g = excess_at(sigma * w, sg[L.SG_EX0], par[L.WST])[0]
     load = load_spring(sg, phi) - sigma * (sg[L.SG_FC0] + g)
     if par[L.GW] != 0.0:
-        load -= gravity_torque(sg[L.SG_PHI] + phi, par[L.GW], par[L.GTH])
+        load -= float(gravity_torque(sg[L.SG_PHI] + phi, par[L.GW], par[L.GTH]))
     if m == 1:
         eng = sg[L.SG_ENG]
-        torque, power = damper_side_torque(law, par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], w, f)
-        torque *= eng
+        torque_, power = damper_side_torque(
+            law, par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], w, f
+        )
+        torque = eng * float(torque_)
         q0 = load - sg[L.SG_MESH] * torque
-        return q0, 0.0, torque, eng * power, torque * w + sigma * g * w, 0.0, f
+        return q0, 0.0, torque, eng * float(power), torque * w + sigma * g * w, 0.0, f
     # A compliant mesh: q = (phi_L, delta), the damper side's speed w_L - delta'.
     speed = y[m + 1]
     wd = w - speed
     sigma_d = md[L.MD_SLIDE1]
     tau = mesh_now(par, md, y[1], speed)
     g_d = excess_at(sigma_d * wd, sg[L.SG_EX1], par[L.WST])[0]
-    torque, power = damper_side_torque(law, par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], wd, f)
+    torque_, power = damper_side_torque(law, par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], wd, f)
+    torque = float(torque_)
     damper = tau - sigma_d * (sg[L.SG_FC1] + g_d) - torque
     dissipated = torque * wd + sigma * g * w + sigma_d * g_d * wd
-    return load - tau + damper, -damper, torque, power, dissipated, tau, f
+    return load - tau + damper, -damper, torque, float(power), dissipated, tau, f
 
 
 def derivatives(
@@ -286,7 +287,7 @@ def compliant_jacobian(
         q0 = -d_factor * c_f
         jac[2, 4] = cw[L.PINV] * q0 - cw[L.PINV + 1] * q0
         jac[3, 4] = cw[L.PINV + 2] * q0 - cw[L.PINV + 3] * q0
-        aux_jacobian(par, y, jac, p_speed, p_factor, f, m, na)
+        aux_jacobian(par, y, jac, float(p_speed), float(p_factor), f, m, na)
         jac[e, 4] = d_factor * c_f * wd
     power_wd = d_speed * wd + torque + gd_slope * wd + sigma_d * g_d
     jac[e, 2] = power_wd + g_slope * w + sigma * g

@@ -60,9 +60,9 @@ def _arrival(cw: FloatArray, y: FloatArray, t: float, out: FloatArray, m: int) -
     par = md = cw
     if m == 1:
         inertia = par[L.JL] + par[L.JD] if md[L.MD_ENGAGED] != 0 else par[L.JL]
-        ke = kinetic_energy(inertia, y[1])
+        ke = float(kinetic_energy(inertia, y[1]))
     else:
-        ke = kinetic_energy(par[L.JL], y[2]) + kinetic_energy(par[L.JD], y[2] - y[3])
+        ke = float(kinetic_energy(par[L.JL], y[2]) + kinetic_energy(par[L.JD], y[2] - y[3]))
     if not math.isfinite(out[L.OUT_ARRIVAL_TIME]):
         out[L.OUT_ARRIVAL_TIME] = t
         out[L.OUT_ARRIVAL_SPEED] = y[m]
@@ -92,7 +92,7 @@ def stop_impact(
     log_event(buffers, counts, index, t, L.EV_ARRIVE if arriving else L.EV_START_STOP, phi, w)
     engaged = m == 1 and md[L.MD_ENGAGED] != 0
     inertia = par[L.JL] + par[L.JD] if engaged else par[L.JL]
-    ke = kinetic_energy(inertia, w)
+    ke = float(kinetic_energy(inertia, w))
     if arriving:
         _arrival(cw, y, t, out, m)
     e = par[L.REST]
@@ -119,7 +119,8 @@ def _bounce(
     start stop)."""
     par = md = cw
     w = y[m]
-    after, loss = rebound(w, par[L.REST], inertia)
+    after_, loss_ = rebound(w, par[L.REST], inertia)
+    after, loss = float(after_), float(loss_)
     largest = ke
     if not arriving:
         largest = max(out[L.OUT_START_KE], ke)

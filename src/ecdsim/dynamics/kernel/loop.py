@@ -22,6 +22,7 @@ from ecdsim.dynamics.kernel.closed import (
     REACH,
     REST,
     ZERO,
+    Segment,
     advance,
     prepare,
     rest_time,
@@ -53,8 +54,8 @@ _LATCHED, _STOP_TIME, _EVENT_LIMIT, _HORIZON = 1, 5, 6, 7  # statuses that keep 
 
 def temperature(par: FloatArray, s: float) -> float:
     """The damper temperature of the log state s, clipped to the law's zero [degC]."""
-    value: float = temperature_from_factor_log(s, par[L.AMB], par[L.FA], par[L.COEF])
-    return min(value, par[L.TZERO])
+    value = float(temperature_from_factor_log(s, par[L.AMB], par[L.FA], par[L.COEF]))
+    return min(value, float(par[L.TZERO]))
 
 
 def new_workspace(m: int, na: int, nq: int) -> tuple[FloatArray, ...]:
@@ -272,7 +273,7 @@ def advance_closed(
 
 
 def _closed_span(
-    cw: FloatArray, seg: tuple, t: float, duration: float, y: FloatArray, buffers: Buffers,
+    cw: FloatArray, seg: Segment, t: float, duration: float, y: FloatArray, buffers: Buffers,
     counts: FloatArray, index: int, na: int,
 ) -> None:  # fmt: skip
     """Record a closed-form segment's constants (its time series are re-evaluated)."""
@@ -308,7 +309,9 @@ def _pass(
     n = 2 * m + na + len(dq)
     par = cw
     atol, ex, start, creep = arrays[0], arrays[1], arrays[2], arrays[3]
-    factor = damping_factor_from_log(y[2 * m], par[L.FA], par[L.COEF]) if na > 0 else par[L.FA]
+    factor = float(par[L.FA])
+    if na > 0:
+        factor = float(damping_factor_from_log(y[2 * m], par[L.FA], par[L.COEF]))
     start_segment(cw, tables, y, phi, factor, ws[5], ws[6], m)
     for i in range(2 * m + na, n):
         y[i] = 0.0

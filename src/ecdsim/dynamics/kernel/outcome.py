@@ -57,7 +57,7 @@ def book(
         out[L.OUT_MESH_WORK] += y[e + 1]
     if md[L.MD_SLIDE0] > 0 and not math.isfinite(out[L.OUT_ARRIVAL_TIME]):
         out[L.OUT_MAX_SPEED] = max(out[L.OUT_MAX_SPEED], ex_speed)
-    return x
+    return float(x)
 
 
 def _breakaway_direction(
