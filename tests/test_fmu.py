@@ -1,8 +1,8 @@
 """FMU export (issue 17 item 1, issue 27 items 1-3): the laws, the C damper FMU, the
 deployment FMU, run by FMPy.
 
-* the plain-float laws of the damper FMU (ecdsim.physics.damper_laws through
-  ecdsim.fmu.equations) against the paper's Eq. 1-4 by hand and against ecdsim's own
+* the plain-float laws of the damper FMU (the physics laws the dynamic kernel compiles,
+  composed by ecdsim.fmu.equations) against the paper's Eq. 1-4 by hand and against ecdsim's own
   vectorised laws (the dynamic method's eddy laws, Ecd.at, physics.thermal);
 * the C translator against the Python it translates;
 * the C damper FMU loaded by FMPy: its outputs and derivatives against ecdsim's laws
@@ -33,11 +33,16 @@ import pytest
 from typer.testing import CliRunner
 
 import ecdsim
+from ecdsim._types import Real
 from ecdsim.cli.app import app
 from ecdsim.fmu.model import DamperModel
 from ecdsim.fmu.native import compiler
 from ecdsim.invocation import pip_install
-from ecdsim.physics import damper_laws, thermal
+from ecdsim.physics import eddy as eddy_law
+from ecdsim.physics import friction as friction_law
+from ecdsim.physics import laws as temperature_laws
+from ecdsim.physics import rolloff as rolloff_law
+from ecdsim.physics import thermal
 from tests import hand
 from tests.conftest import require
 
@@ -272,8 +277,8 @@ def test_plain_laws_equal_ecdsims_vectorised_laws(tmp_path: Path, case: str) -> 
 def test_the_factor_is_held_at_the_laws_zero() -> None:
     # Beyond T_zero = T_ref - 1/c the linear law's factor would be negative (a damper that
     # drives); held at 0, as the dynamic method never crosses it (docs/dynamics.md).
-    assert damper_laws.temperature_factor(275.0 + 1e-9, 25.0, -0.004) == 0.0
-    assert damper_laws.temperature_factor(-40.0, 25.0, -0.004) == pytest.approx(1.26, rel=1e-15)
+    assert eddy_law.temperature_factor(275.0 + 1e-9, 25.0, -0.004) == 0.0
+    assert eddy_law.temperature_factor(-40.0, 25.0, -0.004) == pytest.approx(1.26, rel=1e-15)
 
 
 # ---- The C translator -----------------------------------------------------------------
@@ -316,7 +321,11 @@ def _exported(functions: list[Callable[..., Any]]) -> str:
         hints = typing.get_type_hints(f)
         names = list(inspect.signature(f).parameters)
         kinds = {float: "double", int: "int", bool: "int"}
-        args = ", ".join(f"{kinds.get(hints[n], 'const double *')} {n}" for n in names)
+        kind = {
+            n: "double" if hints[n] == Real else kinds.get(hints[n], "const double *")
+            for n in names
+        }
+        args = ", ".join(f"{kind[n]} {n}" for n in names)
         call = f"ecd_{f.__name__}({', '.join(names)})"
         out.append(f"double py_{f.__name__}({args}) {{ return (double){call}; }}")
     return "\n".join(out)
@@ -327,15 +336,15 @@ def test_translated_laws_equal_the_python(tmp_path: Path) -> None:
     # on random arguments (and special values). The same IEEE operations in the same
     # order, libm's functions as CPython's: 1e-15 allows a libm of another build.
     laws: list[Callable[..., Any]] = [
-        damper_laws.temperature_factor,
-        damper_laws.linear_eddy_torque,
-        damper_laws.kloss_eddy_torque,
-        damper_laws.slow_shaft_damping_torque,
-        damper_laws.linear_in_temperature,
-        damper_laws.input_coulomb_friction,
-        damper_laws.stribeck_friction,
-        damper_laws.heat_flow,
-        damper_laws.heat_rate,
+        eddy_law.temperature_factor,
+        eddy_law.linear_eddy_torque,
+        rolloff_law.kloss_torque,
+        eddy_law.slow_shaft_damping_torque,
+        temperature_laws.linear_law,
+        friction_law.input_coulomb_friction,
+        friction_law.stribeck_friction,
+        thermal.heat_loss,
+        thermal.temperature_rate,
     ]
     library = _compile(tmp_path, _exported(laws), "laws")
     rng = np.random.default_rng(27)
@@ -367,7 +376,7 @@ def test_translated_laws_equal_the_python(tmp_path: Path) -> None:
 def test_translated_table_and_eddy_law_equal_the_python(tmp_path: Path) -> None:
     library = _compile(
         tmp_path,
-        _exported([damper_laws.table_in_temperature, damper_laws.eddy_torque]),
+        _exported([temperature_laws.table_in_temperature, eddy_law.rated_eddy_torque]),
         "table",
     )
     table = library.py_table_in_temperature
@@ -376,18 +385,18 @@ def test_translated_table_and_eddy_law_equal_the_python(tmp_path: Path) -> None:
     temps, values = [-50.0, 0.0, 60.0, 120.0], [3.4e-4, 2.2e-4, 1.0e-4, 0.6e-4]
     table.argtypes = [ctypes.c_double, array, array, ctypes.c_int]
     for t in np.linspace(-80.0, 150.0, 93):
-        expected = damper_laws.table_in_temperature(float(t), temps, values, 4)
+        expected = temperature_laws.table_in_temperature(float(t), temps, values, 4)
         # np.interp, NumPy's own piecewise-linear interpolation, held at the ends.
         assert expected == pytest.approx(float(np.interp(t, temps, values)), rel=1e-14)
         assert table(float(t), array(*temps), array(*values), 4) == pytest.approx(
             expected, rel=1e-15
         )
-    eddy = library.py_eddy_torque
+    eddy = library.py_rated_eddy_torque
     eddy.restype = ctypes.c_double
     eddy.argtypes = [ctypes.c_double] * 4 + [ctypes.c_int]
     for w in (-400.0, 0.0, 3.0, 30.0, 1e4):
         for rolloff in (False, True):
-            expected = damper_laws.eddy_torque(w, 0.9, 1.3e-4, 30.0, rolloff)
+            expected = eddy_law.rated_eddy_torque(w, 0.9, 1.3e-4, 30.0, rolloff)
             assert eddy(w, 0.9, 1.3e-4, 30.0, int(rolloff)) == pytest.approx(expected, rel=1e-15)
 
 
@@ -606,11 +615,13 @@ def _heated_reference(
     r = math.inf if spec.thermal_resistance is None else spec.thermal_resistance
     c = float(np.ravel(eddy.coefficient)[0])
     f_a = float(np.ravel(eddy.factor(ambient))[0])
+    a, b = (float(np.ravel(v)[0]) for v in eddy.parameters)
 
     def rate(t: float, y: np.ndarray) -> list[float]:
         shaft = n * speed(t)
         f = float(thermal.damping_factor_from_log(y[0], f_a, c))
-        p = float(np.ravel(eddy.power_per_factor(shaft, f))[0])
+        # The eddy power over f of the law the kernel compiles (physics.eddy).
+        p = float(eddy_law.eddy_torque_parts(eddy.code, a, b, shaft, f)[3])
         return [float(thermal.factor_log_rate(p, y[0], spec.heat_capacity, r, c))]
 
     solution = solve_ivp(

@@ -1,7 +1,8 @@
 """Translate plain Python functions of floats into C: the damper FMU's physics.
 
 The damper FMU needs no Python, yet its laws are ecdsim's own: they are written once,
-as plain Python functions (:mod:`ecdsim.physics.damper_laws`, :mod:`ecdsim.fmu.equations`),
+as plain Python functions (the laws of :mod:`ecdsim.physics` that the dynamic kernel
+compiles with numba, composed in :mod:`ecdsim.fmu.equations`),
 and this module turns their source into C, which the system's compiler builds into the
 FMU's shared library at export. Nothing is typed out twice.
 
@@ -9,7 +10,8 @@ The translator reads each function's syntax tree (:mod:`ast`) and accepts a smal
 explicit subset of Python, refusing anything else with a :class:`TranslationError`
 naming the function and the line:
 
-* arguments annotated ``float`` (C ``double``), ``int``, ``bool`` (C ``int``) or
+* arguments annotated ``float`` or ``Real`` (:data:`ecdsim._types.Real`, a float or an
+  array in Python, numba and NumPy; one C ``double``), ``int``, ``bool`` (C ``int``) or
   ``Sequence[float]`` (``const double *``, with its length passed as an ``int``); a
   return annotation ``float``, ``int``, ``bool`` or ``tuple[float, ...]`` (returned
   through output pointers);
@@ -22,8 +24,8 @@ naming the function and the line:
   functions (found through the function's globals, and translated too), of ``math``
   (``exp``, ``expm1``, ``log``, ``log1p``, ``sqrt``, ``copysign``, ``fabs``, ``isfinite``,
   ``isinf``, ``isnan``, ``floor``, ``ceil``, ``sin``, ``cos``, ``tan``, ``atan2``,
-  ``hypot``, ``pow``, ``inf``, ``nan``, ``pi``, ``e``) and of ``abs``, ``min``, ``max``
-  (two arguments) and ``float``.
+  ``hypot``, ``pow``, ``inf``, ``nan``, ``pi``, ``e``), of ``np.exp`` (C ``exp``: the
+  array laws' exponential) and of ``abs``, ``min``, ``max`` (two arguments) and ``float``.
 
 The C keeps Python's order of operations (every operation parenthesised), its ``**``
 (C ``pow``, as CPython's float power), its ``min``/``max`` (the first argument unless
@@ -46,6 +48,8 @@ import typing
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
 
 __all__ = ["TranslationError", "c_literal", "translate"]
 
@@ -130,8 +134,15 @@ class _Signature:
     outputs: int  # number of results of a tuple-returning function
 
 
+def _is_float(annotation: Any) -> bool:
+    """``float``, or ecdsim's ``Real`` (a float or a float array: one double in C)."""
+    from ecdsim._types import Real
+
+    return annotation is float or annotation == Real
+
+
 def _type_of(annotation: Any, where: str) -> str:
-    if annotation is float:
+    if _is_float(annotation):
         return "double"
     if annotation is int or annotation is bool:
         return "int"
@@ -157,7 +168,7 @@ def _signature(function: Callable[..., Any]) -> _Signature:
     result = hints["return"]
     if typing.get_origin(result) is tuple:
         items = typing.get_args(result)
-        if not items or any(item is not float for item in items):
+        if not items or not all(_is_float(item) for item in items):
             raise TranslationError(f"{where}: a tuple result must be tuple[float, ...]")
         return _Signature(PREFIX + function.__name__, arguments, "tuple", len(items))
     return _Signature(PREFIX + function.__name__, arguments, _type_of(result, where), 0)
@@ -346,6 +357,8 @@ class _Translator:
                 if word == "nan":
                     return "NAN", "double"
             return f"((double)({texts[0]}))", "double"
+        if target is np.exp:  # the array laws' exponential, one double at a time in C
+            return f"exp({', '.join(texts)})", "double"
         if getattr(target, "__module__", None) == "math" and target.__name__ in _MATH_FUNCTIONS:
             c_function, kind = _MATH_FUNCTIONS[target.__name__]
             return f"{c_function}({', '.join(texts)})", kind

@@ -4,7 +4,8 @@ Two functions, written once in the plain-float subset of :mod:`ecdsim.fmu.ctrans
 :func:`damper_outputs` (the torques, frictions and eddy-current power for a shaft
 speed, an ambient temperature and a damper temperature) and :func:`damper_heating`
 (the time derivatives of the damper's temperature and its housing's). They call the
-laws of :mod:`ecdsim.physics.damper_laws` and nothing else. The damper FMU is these two
+laws of :mod:`ecdsim.physics` (``eddy``, ``friction``, ``laws``, ``thermal``: the very
+functions the dynamic kernel compiles) and nothing else. The damper FMU is these two
 functions translated to C (the FMU variables bear their argument names);
 :class:`ecdsim.fmu.model.DamperModel` calls them in Python.
 
@@ -14,7 +15,9 @@ the sign of the speed (they oppose it).
 
 from collections.abc import Sequence
 
-from ecdsim.physics import damper_laws
+from ecdsim.physics import eddy as eddy_law
+from ecdsim.physics import friction as friction_law
+from ecdsim.physics import laws, thermal
 
 
 def shaft_eddy_torque(
@@ -34,8 +37,8 @@ def shaft_eddy_torque(
     (1 + alpha (T_d - T_ref))`` (docs/dynamics.md, "Roll-off"); the factor never below 0.
     """
     coefficient = resistivity_coefficient if rolloff else damping_temperature_coefficient
-    factor = damper_laws.temperature_factor(damper_temperature, reference_temperature, coefficient)
-    return damper_laws.eddy_torque(shaft_speed, factor, damping_rate, peak_speed, rolloff)
+    factor = eddy_law.temperature_factor(damper_temperature, reference_temperature, coefficient)
+    return eddy_law.rated_eddy_torque(shaft_speed, factor, damping_rate, peak_speed, rolloff)
 
 
 def damper_outputs(
@@ -87,28 +90,33 @@ def damper_outputs(
         resistivity_coefficient,
     )
     gearbox_damping = gearbox_damping_rate + gearbox_damping_fraction * damping_rate
-    torque = damper_laws.slow_shaft_damping_torque(
-        shaft_speed, gear_ratio, eddy, gearbox_damping, forward_efficiency
+    torque = float(
+        eddy_law.slow_shaft_damping_torque(
+            shaft_speed, gear_ratio, eddy, gearbox_damping, forward_efficiency
+        )
     )
     if lubrication_points > 0:
-        lubrication = damper_laws.table_in_temperature(
+        lubrication = laws.table_in_temperature(
             ambient_temperature, lubrication_temperatures, lubrication_frictions, lubrication_points
         )
     else:
-        lubrication = damper_laws.linear_in_temperature(
-            ambient_temperature, lubrication_friction_slope, lubrication_friction_at_0c
+        lubrication = float(
+            laws.linear_law(
+                ambient_temperature, lubrication_friction_slope, lubrication_friction_at_0c
+            )
         )
-    coulomb = damper_laws.input_coulomb_friction(
+    coulomb = friction_law.input_coulomb_friction(
         damper_coulomb_friction,
         lubrication,
         gearbox_coulomb_friction,
         gear_ratio,
         forward_efficiency,
     )
-    friction = damper_laws.stribeck_friction(
+    friction = friction_law.stribeck_friction(
         shaft_speed, coulomb, static_friction_factor, stribeck_speed
     )
-    return torque, friction, coulomb, static_friction_factor * coulomb, eddy * high_speed
+    breakaway = float(friction_law.breakaway(coulomb, static_friction_factor))
+    return torque, friction, coulomb, breakaway, eddy * high_speed
 
 
 def damper_heating(
@@ -149,21 +157,27 @@ def damper_heating(
     )
     power = eddy * high_speed
     if housing:
-        rotor = damper_laws.heat_rate(
-            power, damper_temperature, housing_temperature, heat_capacity, thermal_resistance
+        rotor = float(
+            thermal.temperature_rate(
+                power, damper_temperature, housing_temperature, heat_capacity, thermal_resistance
+            )
         )
-        conducted = damper_laws.heat_flow(
-            damper_temperature, housing_temperature, thermal_resistance
+        conducted = float(
+            thermal.heat_loss(damper_temperature, housing_temperature, thermal_resistance)
         )
-        shell = damper_laws.heat_rate(
-            conducted,
-            housing_temperature,
-            ambient_temperature,
-            housing_heat_capacity,
-            housing_thermal_resistance,
+        shell = float(
+            thermal.temperature_rate(
+                conducted,
+                housing_temperature,
+                ambient_temperature,
+                housing_heat_capacity,
+                housing_thermal_resistance,
+            )
         )
         return rotor, shell
-    rate = damper_laws.heat_rate(
-        power, damper_temperature, ambient_temperature, heat_capacity, thermal_resistance
+    rate = float(
+        thermal.temperature_rate(
+            power, damper_temperature, ambient_temperature, heat_capacity, thermal_resistance
+        )
     )
     return rate, 0.0

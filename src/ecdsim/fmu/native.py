@@ -10,7 +10,7 @@ the system's C compiler from three sources, which the FMU also carries (``source
   each argument of those functions to an FMU variable of the same name.
 
 The physics is therefore ecdsim's own Python source, not a copy: change a law in
-:mod:`ecdsim.physics.damper_laws` and the next export carries it.
+:mod:`ecdsim.physics` (the laws the dynamic kernel compiles) and the next export carries it.
 """
 
 from __future__ import annotations

@@ -13,6 +13,13 @@ every element of an array):
   the peak speed ``p = omega_peak_ref f`` and ``f = 1 + alpha (T - T_ref)``; parameters
   ``a = T_peak``, ``b = omega_peak_ref``.
 
+The laws are written once in the subset that numba compiles (the dynamic kernel) and
+that :mod:`ecdsim.fmu.ctranslate` turns into C (the damper FMU): arithmetic, ``if`` on
+the law's code, calls of other such functions (:mod:`ecdsim.physics.rolloff`'s Kloss
+forms). The FMU's plain-float compositions (:mod:`ecdsim.fmu.equations`) call
+:func:`temperature_factor`, :func:`rated_eddy_torque` and
+:func:`slow_shaft_damping_torque` below, which call the same laws the kernel compiles.
+
 Both scale with the affine temperature factor f, which the dynamic method carries as
 its logarithm (:mod:`ecdsim.physics.thermal`); the heating power is returned over f,
 ``p = T_eddy omega_d / f``, which stays finite where f vanishes. At the slow (input)
@@ -34,6 +41,86 @@ LINEAR = 0  # Eq. 1: BD_T omega_d
 KLOSS = 1  # the Kloss roll-off
 
 
+def temperature_factor(
+    temperature: float, reference_temperature: float, coefficient: float
+) -> float:
+    """The damping law's temperature factor ``f = 1 + c (T - T_ref)``, never below 0.
+
+    Eq. 1's bracket (``BD_T = BD f``, c = -0.004/K for the paper's damper), or the
+    Kloss law's resistivity factor (``omega_peak = omega_peak_ref f``, c = alpha;
+    Wouterse 1991, doi:10.1049/ip-b.1991.0019). Held at 0 beyond the law's zero
+    ``T_ref - 1/c``, which heating approaches and never crosses (docs/dynamics.md,
+    "The zero of the damping law is never crossed"): there the eddy damping has faded.
+    (The dynamic kernel carries f through its logarithm, :mod:`ecdsim.physics.thermal`.)
+
+    Parameters
+    ----------
+    temperature : damper temperature T [degC]
+    reference_temperature : T_ref [degC]
+    coefficient : c [1/K]
+
+    >>> temperature_factor(-40.0, 25.0, -0.004)
+    1.26
+    >>> temperature_factor(400.0, 25.0, -0.004)
+    0.0
+    """
+    factor = 1.0 + coefficient * (temperature - reference_temperature)
+    if factor > 0.0:
+        return factor
+    return 0.0
+
+
+def linear_eddy_torque(shaft_speed: Real, damping_rate: Real, factor: Real) -> Real:
+    """Eddy-current torque in the linear range: ``BD_T omega_d = (BD f) omega_d`` [N*m].
+
+    Eq. 1's first term (``BD_T = BD f``) times the high-speed shaft's speed (paper
+    section 2.1).
+
+    Parameters
+    ----------
+    shaft_speed : high-speed (damper) shaft speed omega_d [rad/s]
+    damping_rate : BD at the reference temperature [N*m*s/rad]
+    factor : f, the temperature factor [-]
+
+    >>> linear_eddy_torque(100.0, 1.3e-4, 1.0)
+    0.013
+    """
+    return damping_rate * factor * shaft_speed
+
+
+def slow_shaft_damping_torque(
+    speed: Real,
+    gear_ratio: Real,
+    shaft_eddy_torque: Real,
+    gearbox_damping_rate: Real,
+    forward_efficiency: Real,
+) -> Real:
+    """Damping torque of the ECD at its slow (input) shaft: ``N (T_eddy + BG N u) / eta_f``.
+
+    The damper's eddy torque and the gearbox damping at the high-speed shaft (Eq. 1),
+    referred to the input through the gear ratio (Eq. 3: with the linear law at
+    temperature T this is ``BECD_T u``), divided by the forward efficiency of a lossy
+    mesh driven from the input (Modelica's LossyGear; ``ecdsim.physics.gearing``; 1 for
+    an ideal mesh, as the dynamic kernel applies the efficiency itself). It opposes the
+    speed.
+
+    Parameters
+    ----------
+    speed : slow-shaft speed u [rad/s]
+    gear_ratio : N [-]
+    shaft_eddy_torque : T_eddy at the high-speed shaft speed N u [N*m]
+    gearbox_damping_rate : BG at the high-speed shaft [N*m*s/rad]
+    forward_efficiency : eta_f, in (0, 1] [-]
+
+    >>> round(slow_shaft_damping_torque(0.1, 380.0, 0.0, 3.38e-5, 1.0), 12)  # BG N^2 u
+    0.488072
+    """
+    shaft_speed = gear_ratio * speed
+    return (
+        gear_ratio * (shaft_eddy_torque + gearbox_damping_rate * shaft_speed) / forward_efficiency
+    )
+
+
 def eddy_torque(law: int, a: Real, b: Real, speed: Real, factor: Real) -> Real:
     """The eddy-current torque at the high-speed shaft [N*m] (Eq. 1, or the Kloss law).
 
@@ -51,8 +138,40 @@ def eddy_torque(law: int, a: Real, b: Real, speed: Real, factor: Real) -> Real:
     0.13
     """
     if law == LINEAR:
-        return a * factor * speed
+        return linear_eddy_torque(speed, a, factor)
     return kloss_torque(speed, a, b * factor)
+
+
+def rated_eddy_torque(
+    shaft_speed: float,
+    factor: float,
+    damping_rate: float,
+    reference_peak_speed: float,
+    rolloff: bool,
+) -> float:
+    """The damper's eddy-current torque at its own shaft from its rating BD [N*m].
+
+    :func:`eddy_torque` with the parameters a damper is rated by: linear (Eq. 1),
+    ``BD f omega_d``; with roll-off, the Kloss law with ``omega_peak = omega_peak_ref f``
+    and ``T_peak = BD omega_peak_ref / 2``, the peak torque whose slope at zero speed is
+    the rated BD (Wouterse 1991, doi:10.1049/ip-b.1991.0019;
+    :func:`ecdsim.physics.rolloff.peak_torque_from_damping`). The damper FMU's law.
+
+    Parameters
+    ----------
+    shaft_speed : high-speed shaft speed omega_d [rad/s]
+    factor : f, the law's temperature factor at the damper temperature [-]
+    damping_rate : BD at the reference temperature [N*m*s/rad]
+    reference_peak_speed : omega_peak_ref [rad/s] (used with roll-off only)
+    rolloff : the Kloss law (True) or the linear one (False) [bool]
+
+    >>> round(rated_eddy_torque(2000.0, 1.0, 1.3e-4, 2000.0, True), 12)  # T_peak at the peak
+    0.13
+    """
+    if rolloff:
+        peak_torque = damping_rate * reference_peak_speed / 2.0
+        return float(eddy_torque(KLOSS, peak_torque, reference_peak_speed, shaft_speed, factor))
+    return float(eddy_torque(LINEAR, damping_rate, 0.0, shaft_speed, factor))
 
 
 def eddy_torque_parts(
@@ -111,12 +230,11 @@ def damper_side_torque(
     (2.365272, 0.18772)
     """
     shaft = ratio * speed
+    eddy = eddy_torque(law, a, b, shaft, factor)
+    torque = slow_shaft_damping_torque(speed, ratio, eddy, gearbox_damping, 1.0)
     if law == LINEAR:
-        power = a * shaft * shaft
-        return ratio * (a * factor * shaft + gearbox_damping * shaft), power
-    peak = b * factor
-    eddy = kloss_torque(shaft, a, peak)
-    return ratio * (eddy + gearbox_damping * shaft), kloss_power_per_peak_speed(shaft, a, peak) * b
+        return torque, a * shaft * shaft
+    return torque, kloss_power_per_peak_speed(shaft, a, b * factor) * b
 
 
 def damper_side_parts(

@@ -11,8 +11,13 @@ Olsson, Astrom and Lischinsky, IEEE Trans. Automatic Control 40(3), 419-425, 199
     F(u) = F_C + (F_brk - F_C) exp(-(u / w_St)^2)
 
 Each function is written once for floats, NumPy arrays and numba's compiled dynamic
-kernel (:mod:`ecdsim.dynamics.kernel`), which compiles these very functions.
+kernel (:mod:`ecdsim.dynamics.kernel`), which compiles these very functions; the damper
+FMU translates the same functions to C (:mod:`ecdsim.fmu.ctranslate`, whose subset
+takes ``np.exp`` as C's ``exp``): :func:`stribeck_friction` and
+:func:`input_coulomb_friction` are its plain-float compositions of them.
 """
+
+import math
 
 import numpy as np
 
@@ -45,9 +50,19 @@ def stribeck_excess(speed: Real, excess: Real, stribeck_speed: Real) -> tuple[Re
     >>> [round(float(v), 12) for v in g], [round(float(v), 12) for v in slope]
     ([1.0, 0.367879441171], [-0.0, -0.367879441171])
     """
+    g = stribeck_curve(speed, excess, stribeck_speed)
+    return g, -2.0 * (speed / stribeck_speed) / stribeck_speed * g
+
+
+def stribeck_curve(speed: Real, excess: Real, stribeck_speed: Real) -> Real:
+    """``g(u) = (F_brk - F_C) exp(-(u / w_St)^2)``, the friction above Coulomb [N*m]
+    (:func:`stribeck_excess` without its slope; parameters as there).
+
+    >>> round(float(stribeck_curve(2.0, 1.0, 2.0)), 12)
+    0.367879441171
+    """
     ratio = speed / stribeck_speed
-    g = excess * np.exp(-ratio * ratio)
-    return g, -2.0 * ratio / stribeck_speed * g
+    return excess * np.exp(-ratio * ratio)
 
 
 def breakaway(kinetic: Real, static_factor: Real) -> Real:
@@ -83,3 +98,61 @@ def holds(drive: Real, static: Real, margin: Real) -> bool | BoolArray:
     (True, False)
     """
     return np.abs(drive) <= static + margin * np.maximum(np.abs(drive), static)
+
+
+def stribeck_friction(
+    speed: float, kinetic: float, static_factor: float, stribeck_speed: float
+) -> float:
+    """Sliding friction opposing ``speed``: ``sign(u) [F_C + (f F_C - F_C) exp(-(u/w_St)^2)]``.
+
+    The Stribeck curve of :func:`stribeck_excess` (docs/dynamics.md, "Stribeck
+    friction") over the kinetic ``F_C``, with the excess ``(f - 1) F_C`` of
+    :func:`breakaway`: from the breakaway ``f F_C`` near rest to the kinetic ``F_C`` as
+    speed grows; ``F_C`` at every speed without a Stribeck speed (w_St = inf). 0 at
+    rest (u = 0) and for a NaN speed: the holding torque at rest depends on the rest of
+    the mechanism. The damper FMU's friction (F_C its FECD_T, Eq. 2, 4).
+
+    Parameters
+    ----------
+    speed : u [rad/s]
+    kinetic : F_C, the kinetic (Coulomb) friction [N*m], >= 0
+    static_factor : f, breakaway over kinetic [-], >= 1
+    stribeck_speed : w_St [rad/s], > 0; inf for none
+
+    >>> stribeck_friction(-0.5, 2.0, 1.5, math.inf)
+    -2.0
+    """
+    if speed == 0.0 or math.isnan(speed):
+        return 0.0
+    friction = kinetic
+    excess = breakaway(kinetic, static_factor) - kinetic
+    if excess != 0.0 and math.isfinite(stribeck_speed):
+        friction = kinetic + float(stribeck_curve(speed, excess, stribeck_speed))
+    return math.copysign(friction, speed)
+
+
+def input_coulomb_friction(
+    damper_friction: float,
+    lubrication_friction: float,
+    gearbox_friction: float,
+    gear_ratio: float,
+    forward_efficiency: float,
+) -> float:
+    """FECD_T, the ECD's Coulomb friction at the slow shaft: ``(FD + FL_T + FG) N / eta_f``.
+
+    Eq. 2 (``FT_T = FD + FL_T + FG``) referred to the input (Eq. 4), through a lossy
+    mesh driven forward (``ecdsim.physics.gearing``; eta_f = 1 for an ideal mesh).
+
+    Parameters
+    ----------
+    damper_friction : FD at the high-speed shaft [N*m]
+    lubrication_friction : FL_T at the high-speed shaft [N*m]
+    gearbox_friction : FG at the high-speed shaft [N*m]
+    gear_ratio : N [-]
+    forward_efficiency : eta_f, in (0, 1] [-]
+
+    >>> round(input_coulomb_friction(7.9e-4, 1.67e-4, 4.5e-4, 380.0, 1.0), 12)
+    0.53466
+    """
+    total = damper_friction + lubrication_friction + gearbox_friction
+    return total * gear_ratio / forward_efficiency

@@ -4,9 +4,11 @@ Used for the lubrication friction FL_T (paper section 2.3) and the system fricti
 (paper section 5), both printed in the paper as ``slope * T + value_at_0C`` with T in degC.
 """
 
+from collections.abc import Sequence
+
 import numpy as np
 
-from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
+from ecdsim._types import ArrayLike, BoolArray, FloatArray, Real, as_float
 
 # Temperatures within this band of a table end count as inside the table [K].
 _RANGE_TOLERANCE_K = 1e-9
@@ -24,7 +26,47 @@ def linear_in_temperature(temperature: ArrayLike, slope: ArrayLike, at_0c: Array
     >>> round(float(linear_in_temperature(25.0, -0.0044, 0.58)), 6)  # FS_25, paper section 6
     0.47
     """
-    return as_float(as_float(slope) * as_float(temperature) + as_float(at_0c))
+    return as_float(linear_law(as_float(temperature), as_float(slope), as_float(at_0c)))
+
+
+def linear_law(temperature: Real, slope: Real, at_0c: Real) -> Real:
+    """``slope T + at_0C`` of floats or arrays (:func:`linear_in_temperature`'s formula,
+    in the subset the damper FMU translates to C: :mod:`ecdsim.fmu.ctranslate`).
+
+    >>> round(linear_law(25.0, -0.0044, 0.58), 12)
+    0.47
+    """
+    return slope * temperature + at_0c
+
+
+def table_in_temperature(
+    temperature: float, temperatures: Sequence[float], values: Sequence[float], count: int
+) -> float:
+    """:func:`interpolate_table` at one temperature, in plain floats (the damper FMU's
+    measured FL_T, translated to C by :mod:`ecdsim.fmu.ctranslate`): piecewise-linear,
+    held at its end values (NumPy's ``interp``; tests/test_fmu.py holds the two equal).
+
+    Parameters
+    ----------
+    temperature : T [degC]
+    temperatures : strictly increasing table temperatures [degC]
+    values : the quantity at those temperatures [unit of the quantity]
+    count : number of table points, >= 1 [-]
+
+    >>> table_in_temperature(10.0, [0.0, 20.0], [1.0, 3.0], 2)
+    2.0
+    """
+    if temperature <= temperatures[0]:
+        return values[0]
+    last = count - 1
+    if temperature >= temperatures[last]:
+        return values[last]
+    for i in range(1, count):
+        if temperature < temperatures[i]:
+            below = i - 1
+            slope = (values[i] - values[below]) / (temperatures[i] - temperatures[below])
+            return slope * (temperature - temperatures[below]) + values[below]
+    return values[last]
 
 
 def interpolate_table(
