@@ -761,6 +761,8 @@ def test_the_latch_mesh_torque_is_taken_at_the_latch() -> None:
         assert result.latch_mesh_torque is not None
         latched = float(result.latch_mesh_torque[0])
         assert latched == pytest.approx(BECD * speed + FECD, rel=1e-4)
+        # The hand value, c (delta - b/2) at the latch: 1.1172 N*m (5 digits).
+        assert latched == pytest.approx(1.1172, abs=5e-5)
     torques = [float(r.latch_mesh_torque[0]) for r in results]  # type: ignore[index]
     assert torques[0] == pytest.approx(torques[1], rel=1e-6)
 

@@ -90,6 +90,27 @@ def test_the_dynamic_method_sees_the_resistance_too() -> None:
     np.testing.assert_allclose(times_a, times_b, rtol=1e-9)
 
 
+def test_the_resistive_table_has_its_own_energy_term() -> None:
+    # Issue 23 item 8: spring_work had included the table's work. A constant R = 0.1 N*m
+    # over the whole travel L = 1.57 rad takes R L = 0.157 J (by hand), and the spring
+    # gives its own integral, (Ts + Te) L / 2 = (3.73 + 1.58) 1.57 / 2 = 4.16835 J.
+    config = parse_config(
+        _with_load_lines(
+            'inertia = "2 kg*m^2"',
+            'resistive_table = [["0 rad", "0.1 N*m"], ["1.57 rad", "0.1 N*m"]]',
+        )
+    )
+    found = predict(config.system, np.array([25.0]), ("dynamic",), dynamics=config.spec.dynamics())
+    result = found.solutions["dynamic"].result  # type: ignore[attr-defined]
+    assert result.arrived.all()
+    energy = result.energy
+    assert energy.resistive_work is not None
+    # 1e-12: the travel is reached exactly (the end-stop event), the table is constant
+    assert float(np.ravel(energy.resistive_work)[0]) == pytest.approx(0.1 * 1.57, rel=1e-12)
+    spring = (3.73 + 1.58) * 1.57 / 2.0
+    assert float(np.ravel(energy.spring_work)[0]) == pytest.approx(spring, rel=1e-12)
+
+
 def test_the_torque_margin_counts_the_table_as_its_own_kind() -> None:
     # Two breakpoints, net drive = spring - R; friction F = 1 N*m, no damping speed.
     # By hand, with factor 2 on the table: TM = spring / (F + 2 R) - 1 at each point.
