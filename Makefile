@@ -36,6 +36,7 @@ demo: $(STAMP_DEMO)
 lint: $(STAMP_TEST)
 	$(BIN)/ruff check src tests benchmarks validation
 	$(BIN)/ruff format --check src tests benchmarks validation
+	$(BIN)/python scripts/code_metrics.py
 
 typecheck: $(STAMP_TEST)
 	$(BIN)/mypy
