@@ -1052,7 +1052,7 @@ def compliant_backlash() -> CaseResult:
         title="Compliant backlash on the paper's example (dynamic method)",
         source=(
             "the paper's constants typed in plain Python as two bodies, the load and the "
-            "damper side, coupled by the Modelica Standard Library's ElastoBacklash contact "
+            "damper side, coupled by the Modelica Standard Library's ElastoBacklash2 contact "
             "torque, integrated with scipy phase by phase "
             "(`validation/scipy_reference.py`, PaperSystem.compliant_time)"
         ),

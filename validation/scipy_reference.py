@@ -241,7 +241,7 @@ class PaperSystem:
         ``until`` [s] before the arrival, the time and speed are nan and the dissipation is
         that up to ``until``.
 
-        Two bodies (the MSL's ElastoBacklash between them, docs/model.md): the load
+        Two bodies (the MSL's ElastoBacklash2 between them, docs/model.md): the load
         ``J_L w_L' = T(phi_L) - FS_T - tau`` and the damper side
         ``J_D w_D' = tau - FECD_T - BECD_T w_D``, ``tau = c (delta - b/2) + d delta'`` past
         the flank, with ``delta = phi_L - phi_D``. Three phases for the paper's system: the
