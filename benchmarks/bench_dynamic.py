@@ -26,8 +26,8 @@ travel, one call per deployment.
   of 1e-6 .. 1e-8 whose error on the first 3 cases (against Radau at rtol 1e-12) is no
   larger than LSODA's (equal accuracy). Goals: >= 100x with roll-off and with heating.
 * **Tabulated spring** of P = 1,000 points, one deployment, against LSODA on
-  ``np.interp`` of the same table (ecdsim crosses the breakpoints in one compiled call,
-  ``ecdsim.dynamics.compiled_table``); a note gives ecdsim's time per breakpoint at two
+  ``np.interp`` of the same table (ecdsim crosses each breakpoint as an event of its
+  compiled event loop, ``ecdsim.dynamics.kernel``); a note gives ecdsim's time per breakpoint at two
   sizes, 2,000 and 10,000 (O(P) per deployment: it stays flat).
 
 Agreement: largest relative difference in deployment time (final angle for the
