@@ -372,6 +372,18 @@ def test_an_unknown_effect_is_refused_by_the_kernel(monkeypatch: pytest.MonkeyPa
         solve_dynamic(_problem(paper_system(), DynamicParameters(5.0)))
 
 
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_one_case_effects_are_the_batch_ones(name: str) -> None:
+    # One deployment reads its effects off its row as floats (solver._case_effects); a
+    # batch tests its columns: the same bits, case by case.
+    problem = _problem(paper_system(), CASES[name], [-40.0, 25.0, 100.0])
+    table = pack(problem, record=False).table
+    batch = solver_module._effects(problem, table)
+    assert np.any(batch != 0.0) or name == "linear closed form"
+    for i in range(table.shape[0]):
+        assert solver_module._case_effects(problem, table[i].tolist()) == batch[i]
+
+
 @pytest.mark.parametrize("effect", [DUMMY, layout.EFFECT_ROLLOFF, layout.EFFECT_GRAVITY])
 def test_the_closed_form_takes_only_the_effects_it_models(effect: int) -> None:
     # A linear segment takes the closed form; the same segment with any effect outside

@@ -143,6 +143,8 @@ KNOWN_FIELDS = frozenset(
 def _effects(problem: DynamicProblem, table: FloatArray) -> FloatArray:
     """Each case's effects (``layout.EFFECT_*`` bits): what each path of the kernel must
     model to take it (``layout.KERNEL_EFFECTS``, ``layout.CLOSED_FORM_EFFECTS``)."""
+    if table.shape[0] == 1:  # one deployment: its numbers as floats (no array calls)
+        return np.array([float(_case_effects(problem, table[0].tolist()))])
     bits = [
         (L.EFFECT_ROLLOFF, table[:, L.LAW] == eddy_laws.KLOSS),
         (L.EFFECT_HEATING, table[:, L.NODES] > 0),
@@ -161,6 +163,25 @@ def _effects(problem: DynamicProblem, table: FloatArray) -> FloatArray:
     for bit, present in bits:
         effects += np.where(present, float(bit), 0.0)
     return effects
+
+
+def _case_effects(problem: DynamicProblem, row: list[float]) -> int:
+    """:func:`_effects` of one case, from its row as floats (the same tests)."""
+    present = (
+        (L.EFFECT_ROLLOFF, row[L.LAW] == eddy_laws.KLOSS),
+        (L.EFFECT_HEATING, row[L.NODES] > 0),
+        (L.EFFECT_TWO_NODE, row[L.NODES] == 2),
+        (L.EFFECT_STRIBECK, math.isfinite(row[L.WST])),
+        (L.EFFECT_GRAVITY, row[L.GW] != 0.0),
+        (L.EFFECT_LOSSY, row[L.ETAF] != 1.0 or row[L.ETAB] != 1.0),
+        (L.EFFECT_LOST_MOTION, row[L.GAP] > 0.0),
+        (L.EFFECT_COMPLIANT, math.isfinite(row[L.MC])),
+        (L.EFFECT_RESISTANCE, problem.resistance is not None),
+        (L.EFFECT_REBOUND, row[L.REST] > 0.0),
+        (L.EFFECT_WARM_START, row[L.S0] != 0.0 or row[L.H0] != 0.0),
+        (L.EFFECT_STOP_TIME, math.isfinite(problem.stop_time)),
+    )
+    return sum(bit for bit, found in present if found)
 
 
 def _check_known(problem: DynamicProblem, effects: FloatArray) -> None:
