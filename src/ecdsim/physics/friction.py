@@ -56,7 +56,15 @@ def stribeck_excess(speed: Real, excess: Real, stribeck_speed: Real) -> tuple[Re
 
 def stribeck_curve(speed: Real, excess: Real, stribeck_speed: Real) -> Real:
     """``g(u) = (F_brk - F_C) exp(-(u / w_St)^2)``, the friction above Coulomb [N*m]
-    (:func:`stribeck_excess` without its slope; parameters as there).
+    (:func:`stribeck_excess` without its slope: the LuGre model's steady-state Stribeck
+    curve, Canudas de Wit et al. 1995, section 2; paper section 2.2's friction is its
+    Coulomb part).
+
+    Parameters
+    ----------
+    speed : u, sliding speed at the input shaft [rad/s]
+    excess : F_brk - F_C, breakaway over Coulomb friction [N*m], >= 0
+    stribeck_speed : w_St [rad/s], > 0
 
     >>> round(float(stribeck_curve(2.0, 1.0, 2.0)), 12)
     0.367879441171

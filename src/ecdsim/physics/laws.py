@@ -30,8 +30,15 @@ def linear_in_temperature(temperature: ArrayLike, slope: ArrayLike, at_0c: Array
 
 
 def linear_law(temperature: Real, slope: Real, at_0c: Real) -> Real:
-    """``slope T + at_0C`` of floats or arrays (:func:`linear_in_temperature`'s formula,
-    in the subset the damper FMU translates to C: :mod:`ecdsim.fmu.ctranslate`).
+    """``slope T + at_0C`` of floats or arrays: the paper's FL_T and FS_T (sections 2.3
+    and 5; :func:`linear_in_temperature`'s formula, in the subset the damper FMU
+    translates to C: :mod:`ecdsim.fmu.ctranslate`).
+
+    Parameters
+    ----------
+    temperature : T [degC]
+    slope : change per kelvin [unit of the quantity / K]
+    at_0c : value at 0 degC [unit of the quantity]
 
     >>> round(linear_law(25.0, -0.0044, 0.58), 12)
     0.47
@@ -43,8 +50,9 @@ def table_in_temperature(
     temperature: float, temperatures: Sequence[float], values: Sequence[float], count: int
 ) -> float:
     """:func:`interpolate_table` at one temperature, in plain floats (the damper FMU's
-    measured FL_T, translated to C by :mod:`ecdsim.fmu.ctranslate`): piecewise-linear,
-    held at its end values (NumPy's ``interp``; tests/test_fmu.py holds the two equal).
+    measured FL_T of paper section 2.3, translated to C by :mod:`ecdsim.fmu.ctranslate`):
+    piecewise-linear, held at its end values (NumPy's ``interp``; tests/test_fmu.py holds
+    the two equal).
 
     Parameters
     ----------
