@@ -168,6 +168,8 @@ def main(argv: list[str]) -> None:
         target = argv[3]
         run = {"cosim": cosim, "simulate": simulate, "instances": instances}[command]
         result = run(path, inputs)
+        # The deployment FMU's Python runs in this interpreter (pythonfmu): did it load numba?
+        result["numba_loaded"] = "numba" in sys.modules
     try:
         import ecdsim  # noqa: F401
     except ImportError:

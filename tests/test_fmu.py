@@ -1073,6 +1073,7 @@ def drive(
     folder: Path,
     inputs: dict[str, Any] | None = None,
     check: bool = True,
+    environment: dict[str, str] | None = None,
 ) -> Any:
     """Run tests/fmu_driver.py under ``python``; its JSON result (or the process)."""
     target = folder / f"{command}-{fmu.stem}-out.json"
@@ -1083,6 +1084,7 @@ def drive(
         args.append(str(source))
     args.append(str(target))
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env.update(environment or {})
     done = subprocess.run(
         args, cwd=folder, capture_output=True, text=True, timeout=600, env=env, check=False
     )
@@ -1179,6 +1181,51 @@ def test_deployment_fmu_follows_the_dynamic_method(tmp_path: Path) -> None:
     assert (status[~before] == 2).all()  # latched
     assert out["angle"][-1] == pytest.approx(1.57, abs=1e-9)  # the travel
     assert out["speed"][-1] == 0.0
+
+
+def test_deployment_fmu_never_compiles_inside_the_host(tmp_path: Path) -> None:
+    # numba inside the host's call into pythonfmu's Python corrupted the host's heap (the
+    # process aborted: "corrupted double-linked list", rc 134) when its cache was cold.
+    # Run with an empty numba cache (NUMBA_CACHE_DIR) and numba switched on, the FMU must
+    # not load numba (the driver's interpreter is the FMU's), compile nothing (the cache
+    # stays empty), and follow the dynamic method.
+    require("pythonfmu")
+    require("fmpy")
+    fmu = export(DYNAMIC, tmp_path / "cold.fmu", "--deployment")
+    cache = tmp_path / "numba-cache"
+    cache.mkdir()
+    out = drive(
+        Path(sys.executable),
+        "simulate",
+        fmu,
+        tmp_path,
+        {
+            "kwargs": {
+                "stop_time": 20.0,
+                "output_interval": 0.5,
+                "output": ["angle", "speed", "latched", "status"],
+                "start_values": {"ambient_temperature": 100.0},
+            }
+        },
+        environment={"NUMBA_CACHE_DIR": str(cache), "ECDSIM_NUMBA": "1"},
+    )
+    assert out["numba_loaded"] is False
+    assert list(cache.rglob("*.nbi")) == []  # nothing compiled inside the host
+    time = np.array(out["time"])
+    run = ecdsim.deploy(DYNAMIC, temperatures=100.0, methods="dynamic")
+    latch = run.deployment_time("dynamic")[100.0]
+    before = time < latch
+    assert before.any()
+    assert not before.all()
+    trajectory = run.prediction.trajectory("dynamic", time[before])
+    # The same integration, plain Python in the FMU and compiled here: equal but for
+    # rounding (the compiler may contract a*b+c into one fused operation), which the
+    # adaptive steps carry on, far below the method's 1e-8 tolerance of the state.
+    assert np.array(out["angle"])[before] == pytest.approx(np.ravel(trajectory.angle), abs=1e-9)
+    assert np.array(out["speed"])[before] == pytest.approx(np.ravel(trajectory.speed), abs=1e-9)
+    assert (np.array(out["status"])[before] == 1).all()  # moving
+    assert (np.array(out["status"])[~before] == 2).all()  # latched
+    assert out["angle"][-1] == pytest.approx(1.57, abs=1e-9)  # the travel
 
 
 def test_deployment_fmu_reports_stuck_and_stalled(tmp_path: Path) -> None:

@@ -294,3 +294,16 @@ def test_a_read_only_install_compiles_once_into_the_user_cache(tmp_path: Path) -
     assert after == [b for b in before if not b.endswith("__pycache__")]
     for path in site.rglob("*"):
         path.chmod(path.stat().st_mode | stat.S_IWUSR)  # let tmp_path be removed
+
+
+def test_plain_turns_every_compiled_path_off_for_a_block(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The deployment FMU's guard (ecdsim.fmu.slaves): inside plain() the dynamic kernel
+    # runs its plain-Python form; after the block the switch is as the environment says.
+    from ecdsim.dynamics.kernel import build
+
+    monkeypatch.delenv(_numba.SWITCH, raising=False)
+    with _numba.plain():
+        assert _numba.switched_off()
+        assert not _numba.enabled()
+        assert build.backend().name == "python"
+    assert not _numba.switched_off()

@@ -23,6 +23,10 @@ integrator, the Monte Carlo sums) import numba through :func:`load`, never at st
   prints to a pipe or a log must not depend on the state of a cache, or a script that
   compares the output of two runs would see the first differ. ``ecdsim precompile``
   compiles everything ahead (``make demo`` runs it).
+* **Plain for a block.** Inside :func:`plain` every kernel runs its NumPy or plain-Python
+  path, as with ``ECDSIM_NUMBA=0``, and numba is not imported for it. The deployment FMU
+  runs so: numba inside a host's call into pythonfmu's Python aborted the host
+  (docs/fmu.md).
 """
 
 from __future__ import annotations
@@ -30,6 +34,8 @@ from __future__ import annotations
 import os
 import sys
 import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from types import ModuleType
 from typing import Any, TextIO
 
@@ -40,6 +46,7 @@ __all__ = [
     "enabled",
     "load",
     "note_cache",
+    "plain",
     "switched_off",
 ]
 
@@ -51,15 +58,31 @@ NOTICE = "ECDSIM_COMPILE_NOTICE"
 NOTICE_TEXT = "ecdsim: compiling its kernels for this CPU, once (about 15 to 30 s)"
 
 _lock = threading.Lock()
-_state: dict[str, Any] = {"listener": None, "compilations": 0, "noticed": False}
+# "plain": how many plain() blocks are open (process wide: the dynamic solve may run a
+# batch's parts in threads of its own).
+_state: dict[str, Any] = {"listener": None, "compilations": 0, "noticed": False, "plain": 0}
 # Cache folders of compiled kernels that are not module globals (the dynamic kernel's,
 # built from its Python source by ecdsim.dynamics.kernel.build).
 _caches: set[str] = set()
 
 
 def switched_off() -> bool:
-    """True if ``ECDSIM_NUMBA=0`` asks for the NumPy paths of every compiled kernel."""
-    return os.environ.get(SWITCH, "").strip() == "0"
+    """True if ``ECDSIM_NUMBA=0`` (or an open :func:`plain` block) asks for the NumPy
+    paths of every compiled kernel."""
+    return _state["plain"] > 0 or os.environ.get(SWITCH, "").strip() == "0"
+
+
+@contextmanager
+def plain() -> Iterator[None]:
+    """Within the block, every kernel runs its NumPy or plain-Python path, as with
+    ``ECDSIM_NUMBA=0`` (for the whole process while the block is open)."""
+    with _lock:
+        _state["plain"] += 1
+    try:
+        yield
+    finally:
+        with _lock:
+            _state["plain"] -= 1
 
 
 def available() -> bool:

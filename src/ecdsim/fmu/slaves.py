@@ -5,6 +5,12 @@ An FMU built by :func:`ecdsim.fmu.build_fmu` with ``deployment=True`` holds the 
 loader runs it in the Python the host provides, which must have ecdsim (of the version
 that built the FMU) installed. The physics is in :mod:`ecdsim.fmu.model`; this class
 only maps FMI variables onto it. (The damper FMU needs no Python: :mod:`ecdsim.fmu.native`.)
+
+The slave runs the dynamic kernels as plain Python (:func:`ecdsim._numba.plain`) and never
+loads numba in the host: numba inside the host's calls into the FMU aborted the host
+("corrupted double-linked list", rc 134) when it had kernels to compile, and even when
+it only found them missing from its cache (docs/fmu.md). A deployment is one run at
+initialization and look-ups of its trajectory, milliseconds to seconds in plain Python.
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ from pythonfmu import (
     Real,
 )
 
+from ecdsim import _numba
 from ecdsim.fmu.model import DEPLOYMENT_PARAMETERS, MOVING, DeploymentReplay, config_values
 
 CONFIG_FILE = "ecdsim_config.toml"
@@ -101,12 +108,14 @@ class DeploymentSlave(Fmi2Slave):  # type: ignore[misc]
         """Run the dynamic method with the parameters the host set."""
         overrides = {key: getattr(self, name) for name, key in self._names.items()}
         config = _config(self.resources, overrides)
-        self._replay = DeploymentReplay.from_config(config, float(self.ambient_temperature))
+        with _numba.plain():
+            self._replay = DeploymentReplay.from_config(config, float(self.ambient_temperature))
         self._update(0.0)
 
     def _update(self, time: float) -> None:
         assert self._replay is not None
-        self.angle, self.speed, self.latched = self._replay.at(time)
+        with _numba.plain():
+            self.angle, self.speed, self.latched = self._replay.at(time)
         self.status = self._replay.status(time)
 
     def do_step(self, current_time: float, step_size: float) -> bool:
