@@ -284,7 +284,7 @@ def test_full_output_tables_grow_and_the_case_runs_again(monkeypatch: pytest.Mon
     monkeypatch.setattr(
         solver_module,
         "_tables",
-        lambda cases, record: [
+        lambda cases, record, points: [
             np.zeros((1, layout.EVENT_FIELDS)),
             np.zeros((1, layout.SPAN_FIELDS)),
             np.zeros((1, layout.POINT_FIELDS)),

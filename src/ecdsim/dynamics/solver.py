@@ -246,13 +246,21 @@ def pack(problem: DynamicProblem, record: bool) -> Packed:
     )
 
 
-def _tables(cases: int, record: bool) -> list[FloatArray]:
-    """The kernel's output tables, sized for a typical run (they grow when needed)."""
-    spans = 8 * cases if record else 1
+# Rows of the event and span tables allocated up front at most (they grow when needed).
+TABLE_ROWS = 1 << 20
+
+
+def _tables(cases: int, record: bool, points: int) -> list[FloatArray]:
+    """The kernel's output tables, sized for a typical run (they grow when needed): each
+    breakpoint of a spring table is an event and a segment, so a case gets a row per
+    breakpoint (a full table makes the kernel run its case again from the start, which
+    had cost a one-deployment run over P = 1,000 points 14 runs)."""
+    rows = min(cases * (points + 8), TABLE_ROWS)
+    spans = rows if record else 1
     return [
-        np.zeros((8 * cases + 8, L.EVENT_FIELDS)),
+        np.zeros((rows + 8, L.EVENT_FIELDS)),
         np.zeros((spans, L.SPAN_FIELDS)),
-        np.zeros((64 * spans, L.POINT_FIELDS)),
+        np.zeros((min(64 * spans, 8 * TABLE_ROWS), L.POINT_FIELDS)),
     ]
 
 
@@ -269,7 +277,7 @@ def _run_part(
     record = packed.settings[L.RECORD] != 0.0
     index = cases[lo:hi]
     n = hi - lo
-    tables = _tables(n, record)
+    tables = _tables(n, record, packed.angles.shape[1])
     counts = np.zeros(COUNTS)
     out = np.zeros((n, L.OUT_FIELDS))
     whole = (packed.table, packed.angles, packed.torques, packed.resistance)

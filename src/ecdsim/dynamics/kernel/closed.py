@@ -136,58 +136,75 @@ def moment(j: int, mu: float, t: float) -> float:
     return math.exp(min(log_scale, _EXP_CAP)) * (1.0 - tail)
 
 
-def _beta(j: int, seg: Segment) -> float:
-    """Coefficient j of ``e^{pt} v(t) = sum_j beta_j t^j``: ``w0 h^2k / (2k)!`` for
-    j = 2k, ``Q h^2k / (2k+1)!`` for j = 2k + 1."""
-    base = seg[4] if j % 2 == 0 else seg[13]
-    return base * seg[7] ** (j // 2) / math.gamma(j + 1.0)
-
-
-def _betas(
-    seg: Segment,
-) -> tuple[float, float, float, float, float, float, float, float, float, float, float, float]:
-    """The series' coefficients beta_0 .. beta_11 (:func:`_beta`; SERIES_DEGREE = 11),
-    computed once per evaluation rather than once per term."""
-    return (
-        _beta(0, seg), _beta(1, seg), _beta(2, seg), _beta(3, seg), _beta(4, seg),
-        _beta(5, seg), _beta(6, seg), _beta(7, seg), _beta(8, seg), _beta(9, seg),
-        _beta(10, seg), _beta(11, seg),
-    )  # fmt: skip
+def _betas(seg: Segment) -> tuple[float, ...]:
+    """Coefficients beta_0 .. beta_11 of ``e^{pt} v(t) = sum_j beta_j t^j`` (SERIES_DEGREE
+    = 11): ``w0 h^2k / (2k)!`` for j = 2k, ``Q h^2k / (2k+1)!`` for j = 2k + 1, each
+    from the one two below (``beta_j = beta_{j-2} h^2 / (j (j - 1))``)."""
+    h2 = seg[7]
+    b0 = seg[4]
+    b1 = seg[13]
+    b2 = b0 * h2 / 2.0
+    b3 = b1 * h2 / 6.0
+    b4 = b2 * h2 / 12.0
+    b5 = b3 * h2 / 20.0
+    b6 = b4 * h2 / 30.0
+    b7 = b5 * h2 / 42.0
+    b8 = b6 * h2 / 56.0
+    b9 = b7 * h2 / 72.0
+    b10 = b8 * h2 / 90.0
+    b11 = b9 * h2 / 110.0
+    return (b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11)
 
 
 def _series(seg: Segment, t: float, energy: bool) -> tuple[float, float, float, float]:
     """Series evaluation (x, v, acceleration, int v**2) for near-critical points.
 
-    ``int v**2 = sum_n c_n M_n(2p, t)`` with ``c_n = sum_{i+k=n} beta_i beta_k`` the
-    coefficients of the squared polynomial: 23 moments rather than the 144 of the double
-    sum (the same terms, grouped by power: a table of short pieces crosses one segment
-    per breakpoint, each evaluated here).
+    ``x = sum_j beta_j M_j(p, t)`` and ``int v**2 = sum_n c_n M_n(2p, t)`` with ``c_n =
+    sum_{i+k=n} beta_i beta_k`` the coefficients of the squared polynomial. Each sum runs
+    from its highest power down, the moments by the backward recurrence ``M_{j-1} = (mu
+    M_j + t^j e^{-mu t}) / j`` from one :func:`moment`: a sum of positive terms, as
+    accurate as each moment alone, for 2 evaluations of the series rather than 35 (a table
+    of short pieces crosses one segment per breakpoint, each evaluated here).
     """
+    if t <= 0.0:
+        return 0.0, seg[4], seg[13] - seg[5] * seg[4], 0.0
     p = seg[5]
     b = _betas(seg)
-    x = 0.0
     poly = 0.0
     dpoly = 0.0
-    power = 1.0  # t^j
-    for j in range(SERIES_DEGREE + 1):
-        beta = b[j]
-        x += beta * moment(j, p, t)
-        if j >= 1:
-            dpoly += beta * j * (power / t if t > 0.0 else (1.0 if j == 1 else 0.0))
-        poly += beta * power
-        power *= t
+    for j in range(SERIES_DEGREE, 0, -1):  # Horner: poly(t) and its derivative
+        poly = poly * t + b[j]
+        dpoly = dpoly * t + j * b[j]
+    poly = poly * t + b[0]
     decay = math.exp(-p * t)
+    x = _moment_sum(b, SERIES_DEGREE, p, t, decay, False)
     v = decay * poly
     acc = decay * (dpoly - p * poly)
     if not energy:
         return x, v, acc, 0.0
-    v2 = 0.0
-    for n in range(2 * SERIES_DEGREE + 1):
-        c = 0.0
-        for i in range(max(0, n - SERIES_DEGREE), min(n, SERIES_DEGREE) + 1):
-            c += b[i] * b[n - i]
-        v2 += c * moment(n, 2.0 * p, t)
-    return x, v, acc, v2
+    return x, v, acc, _moment_sum(b, 2 * SERIES_DEGREE, 2.0 * p, t, decay * decay, True)
+
+
+def _moment_sum(
+    b: tuple[float, ...], top: int, mu: float, t: float, decay: float, squared: bool
+) -> float:
+    """``sum_{j<=top} c_j M_j(mu, t)``, c_j = beta_j, or the squared polynomial's
+    coefficients (``squared``); ``decay`` is e^{-mu t}."""
+    moment_j = moment(top, mu, t)
+    power = t**top  # t^j (afresh where a running quotient would have lost its digits)
+    total = 0.0
+    for j in range(top, -1, -1):
+        if squared:
+            c = 0.0
+            for i in range(max(0, j - SERIES_DEGREE), min(j, SERIES_DEGREE) + 1):
+                c += b[i] * b[j - i]
+        else:
+            c = b[j]
+        total += c * moment_j
+        if j > 0:
+            moment_j = (mu * moment_j + power * decay) / j
+            power = power / t if power > 1e-250 else t ** (j - 1)
+    return total
 
 
 def _modal(seg: Segment, t: float, energy: bool) -> tuple[float, float, float, float]:
