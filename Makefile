@@ -57,9 +57,17 @@ test: browser lint typecheck pytest
 # One table of every bench file's cases, ecdsim and its baseline interleaved (the machines
 # are shared and noisy); writes benchmarks/results.json. BENCH_OPTIONS=--quick for a short
 # run. The web and Monte Carlo benchmarks need the test extra (fastapi, dask, pyarrow).
+# BENCH_BASELINE=REF (a checkout folder or a git ref) compares the dynamic benchmarks of
+# this checkout with that baseline instead, each side in its own processes, interleaved
+# (benchmarks/bench_before.py; BENCH_OPTIONS=--full for bench_dynamic's full sizes).
 BENCH_OPTIONS ?=
+BENCH_BASELINE ?=
 bench: $(STAMP_TEST)
+ifneq ($(BENCH_BASELINE),)
+	$(BIN)/python benchmarks/bench_before.py $(BENCH_BASELINE) $(BENCH_OPTIONS)
+else
 	$(BIN)/python benchmarks/run.py $(BENCH_OPTIONS)
+endif
 
 # The long fuzz campaign (docs/fuzzing.md): FUZZ_EXAMPLES random examples per target and
 # per API operation (schemathesis, all checks); make test runs the same file short and seeded.

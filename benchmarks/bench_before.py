@@ -57,17 +57,17 @@ def _cases(quick: bool) -> list[Any]:
 
 def worker(quick: bool, repeats: int) -> int:
     """Measure every case in this process (whichever ecdsim it imports); print JSON."""
-    import harness
-
     import ecdsim
+    import harness
 
     rows = []
     for case in _cases(quick):
         row = harness.measure(case, repeats)
+        median = row.ecdsim_median_s
         rows.append(
             {
                 "name": row.name,
-                "ecdsim_s": None if row.ecdsim_median_s is None else row.ecdsim_median_s / row.items,
+                "ecdsim_s": None if median is None else median / row.items,
                 "ratio": row.ratio_median,
                 "agreement": row.agreement,
                 "error": row.error,
@@ -141,8 +141,7 @@ def compare(ref: str, rounds: int, quick: bool, repeats: int) -> int:
             f"{name[:44]:44} {1e3 * _median([b['ecdsim_s'] for b in before]):10.4f} "
             f"{1e3 * _median([a['ecdsim_s'] for a in after]):10.4f} {_median(pairs):7.2f} "
             f"{_median([b['ratio'] for b in before]):8.1f} "
-            f"{_median([a['ratio'] for a in after]):8.1f}"
-            + (f"  ERROR {errors}" if errors else "")
+            f"{_median([a['ratio'] for a in after]):8.1f}" + (f"  ERROR {errors}" if errors else "")
         )
     print(f"\n{rounds} rounds, each side in its own process, sides alternating; medians.")
     return 0

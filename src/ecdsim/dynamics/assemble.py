@@ -129,39 +129,32 @@ def _energy(
     )
 
 
+_INITIAL = (L.PHI0, L.W0, L.AMB)
+_FINAL = (L.OUT_ANGLE, L.OUT_SPEED, L.OUT_TEMPERATURE, L.OUT_ENGAGED, L.OUT_HOLD_FROM)
+
+
 def _trajectory(
-    packed: Packed, out: FloatArray, spans: FloatArray, points: FloatArray
+    packed: Packed, out: FloatArray, spans: FloatArray, points: FloatArray, single: bool
 ) -> TrajectoryData:
     """What :meth:`DynamicResult.sample` needs: the spans (sorted by case and time) and
-    points, the cases' initial and final states and constants."""
+    points, the cases' initial and final states and constants. One run's spans are in
+    that order already (its cases run in turn, each logging its spans in time)."""
     n = out.shape[0]
     table = packed.table
-    order = np.lexsort((spans[:, L.SPAN_T0], spans[:, L.SPAN_CASE])) if spans.size else None
-    if order is not None:
-        spans = spans[order]
+    if not single and spans.size:
+        spans = spans[np.lexsort((spans[:, L.SPAN_T0], spans[:, L.SPAN_CASE]))]
     start = np.searchsorted(spans[:, L.SPAN_CASE], np.arange(n + 1), side="left")
     time = out[:, L.OUT_TIME]
     display = np.where(np.isfinite(time), time, out[:, L.OUT_DISPLAY_END])
-    engaged0 = np.where(packed.compliant, 1.0, (table[:, L.GAP] <= 0.0).astype(float))
-    initial = np.stack(
-        [table[:, L.PHI0], table[:, L.W0], table[:, L.AMB], engaged0, np.zeros(n)], axis=1
-    )
-    final = np.stack(
-        [
-            out[:, L.OUT_ANGLE],
-            out[:, L.OUT_SPEED],
-            out[:, L.OUT_TEMPERATURE],
-            out[:, L.OUT_ENGAGED],
-            out[:, L.OUT_HOLD_FROM],
-        ],
-        axis=1,
-    )
+    initial = np.zeros((n, 5))
+    initial[:, :3] = table[:, _INITIAL]
+    initial[:, 3] = np.where(packed.compliant, 1.0, table[:, L.GAP] <= 0.0)
     return TrajectoryData(
         spans=np.ascontiguousarray(spans),
         points=np.ascontiguousarray(points),
         span_start=start.astype(float),
-        initial=np.ascontiguousarray(initial),
-        final=np.ascontiguousarray(final),
+        initial=initial,
+        final=out[:, _FINAL],
         display_end=display,
         table=table,
         angles=packed.angles,
@@ -206,7 +199,7 @@ def result_of(
         "status": status,
         "energy": energy,
         "events": _event_log(events, len(runs) == 1),
-        "trajectory": _trajectory(packed, out, spans, points) if record else None,
+        "trajectory": _trajectory(packed, out, spans, points, len(runs) == 1) if record else None,
         "final_housing_temperature": shaped(L.OUT_HOUSING) if packed.nodes == 2 else None,
         "max_mesh_torque": shaped(L.OUT_MAX_MESH_TORQUE) if compliant else None,
         "latch_mesh_torque": shaped(L.OUT_LATCH_MESH_TORQUE) if compliant else None,

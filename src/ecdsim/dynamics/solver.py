@@ -14,6 +14,7 @@ import os
 import threading
 from collections.abc import Callable
 from dataclasses import fields
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -184,13 +185,23 @@ def _case_effects(problem: DynamicProblem, row: list[float]) -> int:
     return sum(bit for bit, found in present if found)
 
 
+@cache
+def _unknown_fields(kind: type, known: frozenset[str]) -> frozenset[str]:
+    """The fields of a problem class not in ``known`` (worked out once per class)."""
+    return frozenset({f.name for f in fields(kind)} - known)
+
+
 def _check_known(problem: DynamicProblem, effects: FloatArray) -> None:
     """Refuse a problem with an input or an effect the kernel does not know."""
-    unknown = {f.name for f in fields(problem)} - KNOWN_FIELDS
+    unknown = _unknown_fields(type(problem), KNOWN_FIELDS)
     if unknown:
         raise TypeError(
             f"the dynamic kernel does not take DynamicProblem field(s) {sorted(unknown)}"
         )
+    if effects.shape[0] == 1:  # one deployment: its bits as an int (no array calls)
+        if int(effects[0]) & ~L.KERNEL_EFFECTS:
+            raise TypeError(f"the dynamic kernel does not model effect(s) {int(effects[0])}")
+        return
     outside = effects.astype(np.int64) & ~L.KERNEL_EFFECTS
     if np.any(outside):
         raise TypeError(f"the dynamic kernel does not model effect(s) {int(np.max(outside))}")
