@@ -12,8 +12,11 @@ process, the sides alternating over ``--rounds`` rounds (before, after, after, b
 and its scipy LSODA baseline interleaved (``harness.measure``).
 
 Printed per case: each side's median time per deployment and ratio to LSODA (medians
-over the rounds), and after / before, the median over the rounds of the time ratio of
-the two processes of a round (below 1: this checkout is faster). ``--quick`` (default)
+over the rounds), and after / before: the median over the rounds of the before side's
+ratio to LSODA over the after side's, i.e. the time ratio of the two ecdsim versions with
+each measured against the same LSODA call in its own process (below 1: this checkout is
+faster). Normalised so, it does not depend on how loaded the machine was while each
+process ran, which the raw times (also printed) do. ``--quick`` (default)
 uses bench_dynamic's quick batch sizes (1,000 nonlinear, 10,000 linear cases).
 """
 
@@ -132,9 +135,9 @@ def compare(ref: str, rounds: int, quick: bool, repeats: int) -> int:
         before = [run["rows"][k] for run in runs["before"]]
         after = [run["rows"][k] for run in runs["after"]]
         pairs = [
-            a["ecdsim_s"] / b["ecdsim_s"]
+            b["ratio"] / a["ratio"]
             for a, b in zip(after, before, strict=True)
-            if a["ecdsim_s"] and b["ecdsim_s"]
+            if a["ratio"] and b["ratio"]
         ]
         errors = {row["error"] for row in before + after if row["error"]}
         print(

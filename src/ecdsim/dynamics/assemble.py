@@ -136,9 +136,8 @@ _FINAL = (L.OUT_ANGLE, L.OUT_SPEED, L.OUT_TEMPERATURE, L.OUT_ENGAGED, L.OUT_HOLD
 def _trajectory(
     packed: Packed, out: FloatArray, spans: FloatArray, points: FloatArray, single: bool
 ) -> TrajectoryData:
-    """What :meth:`DynamicResult.sample` needs: the spans (sorted by case and time) and
-    points, the cases' initial and final states and constants. One run's spans are in
-    that order already (its cases run in turn, each logging its spans in time)."""
+    """What :meth:`DynamicResult.sample` needs: the spans (sorted by case and time: one
+    run's are already) and points, the cases' initial and final states and constants."""
     n = out.shape[0]
     table = packed.table
     if not single and spans.size:

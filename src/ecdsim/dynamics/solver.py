@@ -198,10 +198,6 @@ def _check_known(problem: DynamicProblem, effects: FloatArray) -> None:
         raise TypeError(
             f"the dynamic kernel does not take DynamicProblem field(s) {sorted(unknown)}"
         )
-    if effects.shape[0] == 1:  # one deployment: its bits as an int (no array calls)
-        if int(effects[0]) & ~L.KERNEL_EFFECTS:
-            raise TypeError(f"the dynamic kernel does not model effect(s) {int(effects[0])}")
-        return
     outside = effects.astype(np.int64) & ~L.KERNEL_EFFECTS
     if np.any(outside):
         raise TypeError(f"the dynamic kernel does not model effect(s) {int(np.max(outside))}")
@@ -262,10 +258,8 @@ TABLE_ROWS = 1 << 20
 
 
 def _tables(cases: int, record: bool, points: int) -> list[FloatArray]:
-    """The kernel's output tables, sized for a typical run (they grow when needed): each
-    breakpoint of a spring table is an event and a segment, so a case gets a row per
-    breakpoint (a full table makes the kernel run its case again from the start, which
-    had cost a one-deployment run over P = 1,000 points 14 runs)."""
+    """The kernel's output tables, a row per spring breakpoint (an event and a segment
+    each) and case: a full table reruns the case (14 runs of one with P = 1,000)."""
     rows = min(cases * (points + 8), TABLE_ROWS)
     spans = rows if record else 1
     return [

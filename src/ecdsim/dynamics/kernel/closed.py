@@ -141,18 +141,12 @@ def _betas(seg: Segment) -> tuple[float, ...]:
     = 11): ``w0 h^2k / (2k)!`` for j = 2k, ``Q h^2k / (2k+1)!`` for j = 2k + 1, each
     from the one two below (``beta_j = beta_{j-2} h^2 / (j (j - 1))``)."""
     h2 = seg[7]
-    b0 = seg[4]
-    b1 = seg[13]
-    b2 = b0 * h2 / 2.0
-    b3 = b1 * h2 / 6.0
-    b4 = b2 * h2 / 12.0
-    b5 = b3 * h2 / 20.0
-    b6 = b4 * h2 / 30.0
-    b7 = b5 * h2 / 42.0
-    b8 = b6 * h2 / 56.0
-    b9 = b7 * h2 / 72.0
-    b10 = b8 * h2 / 90.0
-    b11 = b9 * h2 / 110.0
+    b0, b1 = seg[4], seg[13]
+    b2, b3 = b0 * h2 / 2.0, b1 * h2 / 6.0
+    b4, b5 = b2 * h2 / 12.0, b3 * h2 / 20.0
+    b6, b7 = b4 * h2 / 30.0, b5 * h2 / 42.0
+    b8, b9 = b6 * h2 / 56.0, b7 * h2 / 72.0
+    b10, b11 = b8 * h2 / 90.0, b9 * h2 / 110.0
     return (b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11)
 
 
