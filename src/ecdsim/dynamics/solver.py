@@ -193,7 +193,8 @@ def _unknown_fields(kind: type, known: frozenset[str]) -> frozenset[str]:
 
 def _check_known(problem: DynamicProblem, effects: FloatArray) -> None:
     """Refuse a problem with an input or an effect the kernel does not know."""
-    unknown = _unknown_fields(type(problem), KNOWN_FIELDS)
+    kind: type = type(problem)
+    unknown = _unknown_fields(kind, KNOWN_FIELDS)
     if unknown:
         raise TypeError(
             f"the dynamic kernel does not take DynamicProblem field(s) {sorted(unknown)}"
