@@ -62,8 +62,8 @@ class EddyLaw(Protocol):
         ...
 
     @property
-    def parameters(self) -> tuple[FloatArray, FloatArray]:
-        """``(a, b)``, the law's parameters in :mod:`ecdsim.physics.eddy`."""
+    def parameters(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(a, b, core)``, the law's parameters in :mod:`ecdsim.physics.eddy`."""
         ...
 
     def flattened(self, shape: tuple[int, ...]) -> Self:
@@ -143,9 +143,9 @@ class LinearEddy(_Broadcastable):
         return eddy.LINEAR
 
     @property
-    def parameters(self) -> tuple[FloatArray, FloatArray]:
-        """``(BD, 0)``."""
-        return np.asarray(self.damping_rate, dtype=float), np.zeros(())
+    def parameters(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(BD, 0, 0)``."""
+        return np.asarray(self.damping_rate, dtype=float), np.zeros(()), np.zeros(())
 
 
 @dataclass(frozen=True)
@@ -212,19 +212,83 @@ class KlossEddy(_Broadcastable):
         return eddy.KLOSS
 
     @property
-    def parameters(self) -> tuple[FloatArray, FloatArray]:
-        """``(T_peak, omega_peak_ref)``."""
+    def parameters(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(T_peak, omega_peak_ref, 0)``."""
         return (
             np.asarray(self.peak_torque, dtype=float),
             np.asarray(self.reference_peak_speed, dtype=float),
+            np.zeros(()),
         )
 
 
 def _at_factor(law: EddyLaw, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
     """The law's torque at a temperature factor, through :mod:`ecdsim.physics.eddy`."""
-    a, b = law.parameters
+    a, b, core = law.parameters
     w, f = np.asarray(speed, dtype=float), np.asarray(factor, dtype=float)
-    return as_float(eddy.eddy_torque(law.code, a, b, w, f))
+    return as_float(eddy.eddy_torque(law.code, a, b, core, w, f))
+
+
+@dataclass(frozen=True)
+class PowerLawDamper(_Broadcastable):
+    """A shear-thinning fluid damper, ``T = c max(|w|, w_l)^(n-1) w`` at its shaft
+    (:func:`ecdsim.physics.fluid.power_law_parts`; docs/qualification.md section 3).
+
+    ``c`` and ``n`` are the fluid's at each case's temperature (the Arrhenius-Andrade
+    consistency and n(T) of ``[fluid_damper.power_law]``, evaluated by the caller): the
+    law has no temperature factor, so the dynamic method refuses self-heating with it.
+
+    Attributes
+    ----------
+    power_coefficient : c [N*m*(s/rad)**n]
+    exponent : n [-]
+    linear_speed : omega_l, below which the torque is linear (the fluid's Newtonian
+        plateau; finite slope at rest) [rad/s], > 0
+    """
+
+    power_coefficient: float | FloatArray
+    exponent: float | FloatArray
+    linear_speed: float | FloatArray
+
+    @property
+    def name(self) -> str:
+        """Registry name."""
+        return "power_law"
+
+    @property
+    def reference_temperature(self) -> float | FloatArray:
+        """Unused: the law's c and n are already at the case's temperature [degC]."""
+        return 0.0
+
+    @property
+    def coefficient(self) -> FloatArray:
+        """0: no temperature factor [1/K]."""
+        return np.zeros(())
+
+    def factor(self, temperature: ArrayLike) -> FloatArray:
+        """1 at every temperature [-] (no temperature factor)."""
+        return as_float(np.ones_like(np.asarray(temperature, dtype=float)))
+
+    def torque(self, speed: ArrayLike, temperature: ArrayLike) -> FloatArray:
+        """The power-law torque [N*m] (c and n already at the case's temperature)."""
+        return _at_factor(self, speed, 1.0)
+
+    def torque_at_factor(self, speed: ArrayLike, factor: ArrayLike) -> FloatArray:
+        """The power-law torque [N*m]; the factor is unused."""
+        return _at_factor(self, speed, factor)
+
+    @property
+    def code(self) -> int:
+        """:data:`ecdsim.physics.eddy.POWER_LAW`."""
+        return eddy.POWER_LAW
+
+    @property
+    def parameters(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(c, n, omega_l)``."""
+        return (
+            np.asarray(self.power_coefficient, dtype=float),
+            np.asarray(self.exponent, dtype=float),
+            np.asarray(self.linear_speed, dtype=float),
+        )
 
 
 EDDY_LAWS: dict[str, type[LinearEddy] | type[KlossEddy]] = {

@@ -333,7 +333,14 @@ class DynamicResult:
         factor = 1.0 + t[:, lay.COEF] * (temperature - t[:, lay.TREF])  # Eq. 1's bracket
         law = int(t[0, lay.LAW]) if t.shape[0] else 0
         torque, _ = damper_side_torque(
-            law, t[:, lay.LA], t[:, lay.LB], t[:, lay.RATIO], t[:, lay.BG], speed, factor
+            law,
+            t[:, lay.LA],
+            t[:, lay.LB],
+            t[:, lay.LC],
+            t[:, lay.RATIO],
+            t[:, lay.BG],
+            speed,
+            factor,
         )
         damping = np.where(engaged, -torque, 0.0)
         shape = (grid.shape[0], *self.batch_shape)

@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.assemble import Packed, Run, result_of
-from ecdsim.dynamics.damping import KlossEddy, LinearEddy
+from ecdsim.dynamics.damping import KlossEddy, LinearEddy, PowerLawDamper
 from ecdsim.dynamics.kernel import layout as L
 from ecdsim.dynamics.kernel.build import Backend, backend
 from ecdsim.dynamics.kernel.record import COUNTS, OVERFLOW, START
@@ -78,6 +78,13 @@ def _law(problem: DynamicProblem) -> dict[int, Column]:
         columns[L.LAW] = float(eddy_laws.KLOSS)
         columns[L.LA] = np.asarray(law.peak_torque, float)
         columns[L.LB] = np.asarray(law.reference_peak_speed, float)
+    elif isinstance(law, PowerLawDamper):
+        if problem.thermal:
+            # The fluid's c(T) and n(T) are packed at ambient: the law has no factor
+            # for the kernel's heating state to act on (docs/dynamics.md).
+            raise TypeError("the dynamic kernel does not model self-heating of a fluid damper")
+        columns[L.LAW] = float(eddy_laws.POWER_LAW)
+        columns[L.LA], columns[L.LB], columns[L.LC] = law.parameters
     else:
         raise TypeError(f"the dynamic kernel has no eddy law {law.name!r}")
     coefficient = np.asarray(law.coefficient, float)
@@ -159,6 +166,7 @@ def _effects(problem: DynamicProblem, table: FloatArray) -> FloatArray:
         (L.EFFECT_REBOUND, table[:, L.REST] > 0.0),
         (L.EFFECT_WARM_START, (table[:, L.S0] != 0.0) | (table[:, L.H0] != 0.0)),
         (L.EFFECT_STOP_TIME, np.full(table.shape[0], math.isfinite(problem.stop_time))),
+        (L.EFFECT_POWER_LAW, table[:, L.LAW] == eddy_laws.POWER_LAW),
     ]
     effects = np.zeros(table.shape[0])
     for bit, present in bits:

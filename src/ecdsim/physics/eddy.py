@@ -11,7 +11,14 @@ every element of an array):
 * :data:`KLOSS` (the roll-off of :mod:`ecdsim.physics.rolloff`, Wouterse 1991,
   doi:10.1049/ip-b.1991.0019): ``T_eddy = 2 T_peak omega_d p / (omega_d^2 + p^2)`` with
   the peak speed ``p = omega_peak_ref f`` and ``f = 1 + alpha (T - T_ref)``; parameters
-  ``a = T_peak``, ``b = omega_peak_ref``.
+  ``a = T_peak``, ``b = omega_peak_ref``;
+* :data:`POWER_LAW` (a shear-thinning fluid damper, :mod:`ecdsim.physics.fluid`):
+  ``T = c max(|omega_d|, omega_l)^(n-1) omega_d``; parameters ``a = c``, ``b = n`` and
+  ``core = omega_l``, each at the case's temperature (the fluid's c(T) and n(T) are
+  evaluated when the case is packed; the law takes no temperature factor, so self-heating
+  is refused with it: ``ecdsim.dynamics.solver``).
+
+The ECD laws ignore ``core``.
 
 The laws are written once in the subset that numba compiles (the dynamic kernel) and
 that :mod:`ecdsim.fmu.ctranslate` turns into C (the damper FMU): arithmetic, ``if`` on
@@ -29,6 +36,7 @@ damper's conductor).
 """
 
 from ecdsim._types import Real
+from ecdsim.physics.fluid import power_law_parts
 from ecdsim.physics.rolloff import (
     kloss_peak_speed_derivative,
     kloss_power_per_peak_speed,
@@ -39,6 +47,7 @@ from ecdsim.physics.rolloff import (
 
 LINEAR = 0  # Eq. 1: BD_T omega_d
 KLOSS = 1  # the Kloss roll-off
+POWER_LAW = 2  # a shear-thinning fluid damper (physics.fluid)
 
 
 def temperature_factor(
@@ -121,24 +130,29 @@ def slow_shaft_damping_torque(
     )
 
 
-def eddy_torque(law: int, a: Real, b: Real, speed: Real, factor: Real) -> Real:
+def eddy_torque(law: int, a: Real, b: Real, core: Real, speed: Real, factor: Real) -> Real:
     """The eddy-current torque at the high-speed shaft [N*m] (Eq. 1, or the Kloss law).
 
     Parameters
     ----------
-    law : :data:`LINEAR` or :data:`KLOSS` [-]
-    a : BD at T_ref [N*m*s/rad] (linear), or T_peak [N*m] (Kloss)
-    b : unused [-] (linear), or omega_peak at T_ref [rad/s] (Kloss)
+    law : :data:`LINEAR`, :data:`KLOSS` or :data:`POWER_LAW` [-]
+    a : BD at T_ref [N*m*s/rad] (linear), T_peak [N*m] (Kloss), or c (power law)
+    b : unused [-] (linear), omega_peak at T_ref [rad/s] (Kloss), or n (power law)
+    core : omega_l [rad/s] (power law); unused otherwise
     speed : omega_d, the high-speed shaft's speed [rad/s]
-    factor : f, the law's temperature factor [-]
+    factor : f, the law's temperature factor [-] (unused by the power law)
 
-    >>> round(float(eddy_torque(LINEAR, 1.3e-4, 0.0, 1000.0, 0.5)), 12)  # BD f w
+    >>> round(float(eddy_torque(LINEAR, 1.3e-4, 0.0, 0.0, 1000.0, 0.5)), 12)  # BD f w
     0.065
-    >>> float(eddy_torque(KLOSS, 0.13, 2000.0, 2000.0, 1.0))  # at the peak: T_peak
+    >>> float(eddy_torque(KLOSS, 0.13, 2000.0, 0.0, 2000.0, 1.0))  # at the peak: T_peak
     0.13
+    >>> round(float(eddy_torque(POWER_LAW, 2.0, 0.5, 1e-6, 0.25, 1.0)), 12)  # c w^n
+    1.0
     """
     if law == LINEAR:
         return linear_eddy_torque(speed, a, factor)
+    if law == POWER_LAW:
+        return power_law_parts(speed, a, b, core)[0]
     return kloss_torque(speed, a, b * factor)
 
 
@@ -170,30 +184,39 @@ def rated_eddy_torque(
     """
     if rolloff:
         peak_torque = damping_rate * reference_peak_speed / 2.0
-        return float(eddy_torque(KLOSS, peak_torque, reference_peak_speed, shaft_speed, factor))
-    return float(eddy_torque(LINEAR, damping_rate, 0.0, shaft_speed, factor))
+        return float(
+            eddy_torque(KLOSS, peak_torque, reference_peak_speed, 0.0, shaft_speed, factor)
+        )
+    return float(eddy_torque(LINEAR, damping_rate, 0.0, 0.0, shaft_speed, factor))
 
 
 def eddy_torque_parts(
-    law: int, a: Real, b: Real, speed: Real, factor: Real
+    law: int, a: Real, b: Real, core: Real, speed: Real, factor: Real
 ) -> tuple[Real, Real, Real, Real, Real, Real]:
     """Torque, its derivatives, and the heating power over f with its derivatives.
 
     ``(T, dT/dw, dT/df, p, dp/dw, dp/df)`` with ``p = T w / f`` [W] (module notes; Eq. 1
-    of the ECD paper, or the Kloss law of Wouterse 1991): the terms of the dynamic
-    method's right-hand side and Jacobian.
+    of the ECD paper, the Kloss law of Wouterse 1991, or the fluid's power law): the
+    terms of the dynamic method's right-hand side and Jacobian. The power law has no
+    temperature factor (``dT/df = 0``; its power ``T w`` is returned as is, heating being
+    refused with it).
 
     Parameters
     ----------
-    law : :data:`LINEAR` or :data:`KLOSS` [-]
-    a : BD at T_ref [N*m*s/rad] (linear), or T_peak [N*m] (Kloss)
-    b : unused [-] (linear), or omega_peak at T_ref [rad/s] (Kloss)
+    law : :data:`LINEAR`, :data:`KLOSS` or :data:`POWER_LAW` [-]
+    a : BD at T_ref [N*m*s/rad] (linear), T_peak [N*m] (Kloss), or c (power law)
+    b : unused [-] (linear), omega_peak at T_ref [rad/s] (Kloss), or n (power law)
+    core : omega_l [rad/s] (power law); unused otherwise
     speed : omega_d [rad/s]
     factor : f [-]
     """
     if law == LINEAR:
         rate = a * factor
         return rate * speed, rate, a * speed, a * speed * speed, 2.0 * a * speed, 0.0 * speed
+    if law == POWER_LAW:
+        torque, slope = power_law_parts(speed, a, b, core)
+        zero = 0.0 * speed
+        return torque, slope, zero, torque * speed, slope * speed + torque, zero
     peak = b * factor
     by_speed, by_peak = kloss_power_per_peak_speed_derivatives(speed, a, peak)
     return (
@@ -207,8 +230,9 @@ def eddy_torque_parts(
 
 
 def damper_side_torque(
-    law: int, a: Real, b: Real, ratio: Real, gearbox_damping: Real, speed: Real, factor: Real
-) -> tuple[Real, Real]:
+    law: int, a: Real, b: Real, core: Real, ratio: Real, gearbox_damping: Real, speed: Real,
+    factor: Real,
+) -> tuple[Real, Real]:  # fmt: skip
     """``M_d = N (T_eddy(N w, f) + BG N w)`` at the slow shaft [N*m], and ``p`` [W].
 
     The ECD's damping torque referred to the input shaft (paper Eq. 3 with the eddy law
@@ -217,29 +241,33 @@ def damper_side_torque(
 
     Parameters
     ----------
-    law : :data:`LINEAR` or :data:`KLOSS` [-]
-    a : BD at T_ref [N*m*s/rad] (linear), or T_peak [N*m] (Kloss)
-    b : unused [-] (linear), or omega_peak at T_ref [rad/s] (Kloss)
+    law : :data:`LINEAR`, :data:`KLOSS` or :data:`POWER_LAW` [-]
+    a : BD at T_ref [N*m*s/rad] (linear), T_peak [N*m] (Kloss), or c (power law)
+    b : unused [-] (linear), omega_peak at T_ref [rad/s] (Kloss), or n (power law)
+    core : omega_l [rad/s] (power law); unused otherwise
     ratio : N, the gear ratio [-]
     gearbox_damping : BG at the high-speed shaft [N*m*s/rad]
     speed : w, the slow shaft's speed [rad/s]
     factor : f [-]
 
-    >>> torque, power = damper_side_torque(LINEAR, 1.3e-4, 0.0, 380.0, 3.38e-5, 0.1, 1.0)
+    >>> torque, power = damper_side_torque(LINEAR, 1.3e-4, 0.0, 0.0, 380.0, 3.38e-5, 0.1, 1.0)
     >>> round(float(torque), 9), round(float(power), 9)  # (BD + BG) N^2 w, BD (N w)^2
     (2.365272, 0.18772)
     """
     shaft = ratio * speed
-    eddy = eddy_torque(law, a, b, shaft, factor)
+    eddy = eddy_torque(law, a, b, core, shaft, factor)
     torque = slow_shaft_damping_torque(speed, ratio, eddy, gearbox_damping, 1.0)
     if law == LINEAR:
         return torque, a * shaft * shaft
+    if law == POWER_LAW:
+        return torque, eddy * shaft
     return torque, kloss_power_per_peak_speed(shaft, a, b * factor) * b
 
 
 def damper_side_parts(
-    law: int, a: Real, b: Real, ratio: Real, gearbox_damping: Real, speed: Real, factor: Real
-) -> tuple[Real, Real, Real, Real, Real, Real]:
+    law: int, a: Real, b: Real, core: Real, ratio: Real, gearbox_damping: Real, speed: Real,
+    factor: Real,
+) -> tuple[Real, Real, Real, Real, Real, Real]:  # fmt: skip
     """:func:`damper_side_torque` with the derivatives a Jacobian needs.
 
     ``(M_d, dM_d/dw, dM_d/df, p, dp/dw, dp/df)`` at the slow shaft (w its speed; paper
@@ -247,9 +275,10 @@ def damper_side_parts(
 
     Parameters
     ----------
-    law : :data:`LINEAR` or :data:`KLOSS` [-]
-    a : BD at T_ref [N*m*s/rad] (linear), or T_peak [N*m] (Kloss)
-    b : unused [-] (linear), or omega_peak at T_ref [rad/s] (Kloss)
+    law : :data:`LINEAR`, :data:`KLOSS` or :data:`POWER_LAW` [-]
+    a : BD at T_ref [N*m*s/rad] (linear), T_peak [N*m] (Kloss), or c (power law)
+    b : unused [-] (linear), omega_peak at T_ref [rad/s] (Kloss), or n (power law)
+    core : omega_l [rad/s] (power law); unused otherwise
     ratio : N [-]
     gearbox_damping : BG at the high-speed shaft [N*m*s/rad]
     speed : w [rad/s]
@@ -257,7 +286,7 @@ def damper_side_parts(
     """
     shaft = ratio * speed
     torque, by_speed, by_factor, power, power_speed, power_factor = eddy_torque_parts(
-        law, a, b, shaft, factor
+        law, a, b, core, shaft, factor
     )
     return (
         ratio * (torque + gearbox_damping * shaft),

@@ -16,13 +16,16 @@ that at +40 degC. The coefficient of ``T = c * omega**n`` is ``c = T_r / omega_r
 For a dynamic model the torque is given with a linear core below a small speed
 ``omega_l`` (``c * omega_l**(n-1) * omega``, continuous at omega_l), since the power law's
 slope is infinite at rest for n < 1; :func:`power_law_torque_slope` is its derivative.
+The dynamic kernel (:mod:`ecdsim.dynamics.kernel`, through :mod:`ecdsim.physics.eddy`)
+compiles :func:`power_law_parts`, the same law with its slope in one branch-free
+expression for floats, arrays and numba.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ecdsim._types import ArrayLike, FloatArray, as_float
+from ecdsim._types import ArrayLike, FloatArray, Real, as_float
 
 KELVIN_OFFSET = 273.15
 
@@ -135,6 +138,37 @@ def power_law_torque_slope(
     with np.errstate(divide="ignore"):
         outer = c * n * np.power(np.where(core, 1.0, w), n - 1.0)
     return as_float(np.where(core, c * np.power(safe, n - 1.0), outer))
+
+
+def power_law_parts(
+    speed: Real, coefficient: Real, exponent: Real, linear_speed: Real
+) -> tuple[Real, Real]:
+    """The regularised power law's torque and slope, ``(T, dT/d omega)``, for the dynamic
+    method (docs/qualification.md section 3, docs/dynamics.md).
+
+    ``T = c * max(|omega|, omega_l)**(n-1) * omega``: ``c sign(omega) |omega|**n`` above
+    omega_l, and ``c omega_l**(n-1) omega`` below it (the Newtonian plateau that real
+    shear-thinning fluids show at low shear, the Cross model's zero-shear viscosity:
+    M. M. Cross, J. Colloid Sci. 20 (1965) 417-437); continuous at omega_l, the values of
+    :func:`power_law_torque` and :func:`power_law_torque_slope`. One branch-free
+    expression, for floats, arrays and the compiled kernel alike.
+
+    Parameters
+    ----------
+    speed : omega [rad/s], either sign
+    coefficient : c [N*m*(s/rad)**n]
+    exponent : n [-]
+    linear_speed : omega_l > 0 [rad/s]
+
+    >>> [round(float(v), 12) for v in power_law_parts(0.4, 2.0, 0.5, 1e-6)]  # c w^n, c n w^(n-1)
+    [1.264911064067, 1.581138830084]
+    >>> [round(float(v), 9) for v in power_law_parts(-1e-8, 2.0, 0.5, 1e-6)]  # the core
+    [-2e-05, 2000.0]
+    """
+    size = np.abs(speed)
+    scale = coefficient * np.power(np.maximum(size, linear_speed), exponent - 1.0)
+    outer = size >= linear_speed
+    return scale * speed, scale * (1.0 + (exponent - 1.0) * outer)
 
 
 def power_law_segment_duration(

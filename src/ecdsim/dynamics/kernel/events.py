@@ -90,7 +90,7 @@ def indicator(cw: FloatArray, y: FloatArray, m: int, na: int) -> float:
     sigma = md[L.MD_SLIDE0]
     f = factor_at(par, y, m, na)
     torque = damper_side_torque(
-        int(par[L.LAW]), par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], y[1], f
+        int(par[L.LAW]), par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], y[1], f
     )[0]
     x = y[0]
     load = sigma * (sg[L.SG_T0] + sg[L.SG_SLOPE] * x) - par[L.FS]

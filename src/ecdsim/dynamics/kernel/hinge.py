@@ -120,7 +120,7 @@ def hinge_forces(
     if m == 1:
         eng = sg[L.SG_ENG]
         torque_, power = damper_side_torque(
-            law, par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], w, f
+            law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], w, f
         )
         torque = eng * float(torque_)
         q0 = load - sg[L.SG_MESH] * torque
@@ -131,7 +131,9 @@ def hinge_forces(
     sigma_d = md[L.MD_SLIDE1]
     tau = mesh_now(par, md, y[1], speed)
     g_d = excess_at(sigma_d * wd, sg[L.SG_EX1], par[L.WST])[0]
-    torque_, power = damper_side_torque(law, par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], wd, f)
+    torque_, power = damper_side_torque(
+        law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], wd, f
+    )
     torque = float(torque_)
     damper = tau - sigma_d * (sg[L.SG_FC1] + g_d) - torque
     dissipated = torque * wd + sigma * g * w + sigma_d * g_d * wd
@@ -233,7 +235,7 @@ def jacobian(
         eng = sg[L.SG_ENG]
         mesh = sg[L.SG_MESH] * eng
         torque, d_speed, d_factor, _, p_speed, p_factor = damper_side_parts(
-            law, par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], w, f
+            law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], w, f
         )
         stiffness = sg[L.SG_SLOPE]
         if par[L.GW] != 0.0:
@@ -268,7 +270,7 @@ def compliant_jacobian(
     g, g_slope = excess_at(sigma * w, sg[L.SG_EX0], par[L.WST])
     g_d, gd_slope = excess_at(sigma_d * wd, sg[L.SG_EX1], par[L.WST])
     torque, d_speed, d_factor, _, p_speed, p_factor = damper_side_parts(
-        law, par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], wd, f
+        law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], wd, f
     )
     stiffness = sg[L.SG_SLOPE]
     if par[L.GW] != 0.0:

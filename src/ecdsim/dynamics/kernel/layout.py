@@ -28,7 +28,8 @@ from __future__ import annotations
     W0,  # load speed at release [rad/s]
     LAW,  # eddy law code (ecdsim.physics.eddy)
     LA,  # its first parameter (BD or T_peak)
-    LB,  # its second (unused or omega_peak_ref)
+    LB,  # its second (unused, omega_peak_ref, or the power law's n)
+    LC,  # its third (the power law's linear-core speed omega_l [rad/s]; else unused)
     COEF,  # c, the law's temperature factor per kelvin [1/K]
     FA,  # f_a, the factor at the ambient temperature [-]
     RATIO,  # N [-]
@@ -52,7 +53,7 @@ from __future__ import annotations
     TREF,  # the damping law's reference temperature, where its factor is 1 [degC]
     EFFECTS,  # the effects the case has (EFFECT_* bits)
     COLUMNS,
-) = range(38)
+) = range(39)
 
 # --- effects: what a case has beyond the paper's rigid linear hinge ---------------------
 # Each path of the kernel lists the effects it models; a case with any other is refused
@@ -69,14 +70,17 @@ EFFECT_RESISTANCE = 256  # a resistive table
 EFFECT_REBOUND = 512  # a rebounding end stop
 EFFECT_WARM_START = 1024  # heat carried over from a previous deployment
 EFFECT_STOP_TIME = 2048  # a stop time
+EFFECT_POWER_LAW = 4096  # a shear-thinning fluid damper's power law (physics.fluid)
 # The effects the kernel models (every path together), and those a closed-form segment
 # takes: linear damping at a constant temperature, Coulomb friction, no gravity.
-KERNEL_EFFECTS = 4095
+KERNEL_EFFECTS = 8191
 CLOSED_FORM_EFFECTS = (
     EFFECT_LOSSY | EFFECT_LOST_MOTION | EFFECT_RESISTANCE | EFFECT_REBOUND | EFFECT_STOP_TIME
 )
 # Effects that act on a segment only while the damper side is engaged.
-ENGAGED_EFFECTS = EFFECT_ROLLOFF | EFFECT_HEATING | EFFECT_TWO_NODE | EFFECT_WARM_START
+ENGAGED_EFFECTS = (
+    EFFECT_ROLLOFF | EFFECT_HEATING | EFFECT_TWO_NODE | EFFECT_WARM_START | EFFECT_POWER_LAW
+)
 
 # --- run settings (a float array shared by the cases) -----------------------------------
 STOP, RTOL, MAX_EVENTS, RECORD, METHOD, SETTINGS = range(6)

@@ -135,9 +135,9 @@ def _flow(cw: FloatArray, y: FloatArray, factor: float, sigma: int) -> None:
         return
     speed0 = sigma * y[1] + 0.0
     law = int(par[L.LAW])
-    torque = damper_side_torque(law, par[L.LA], par[L.LB], par[L.RATIO], par[L.BG], speed0, factor)[
-        0
-    ]
+    torque = damper_side_torque(
+        law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], speed0, factor
+    )[0]
     felt = sigma * sg[L.SG_T0] - par[L.FS]
     if par[L.GW] != 0.0:
         felt -= sigma * gravity_torque(sg[L.SG_PHI], par[L.GW], par[L.GTH])
