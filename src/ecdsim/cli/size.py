@@ -278,8 +278,21 @@ def _size_failures(
     return reasons
 
 
+FluidMethodOpt = Annotated[
+    str,
+    typer.Option(
+        "--method",
+        "-m",
+        help="quasi-static (closed-form times) or dynamic (both dampers integrated with "
+        "inertia; needs a load inertia).",
+        metavar="METHOD",
+    ),
+]
+
+
 def compare_fluid(
     config: ConfigArg,
+    method: FluidMethodOpt = "quasi-static",
     as_json: JsonOpt = False,
     plot: PlotOpt = None,
     units: UnitsOpt = None,
@@ -302,10 +315,20 @@ def compare_fluid(
     assert spec is not None
     temps = np.asarray(loaded.temperatures, dtype=float)
     inertia = getattr(loaded.spec.load, "inertia", None)  # [load] inertia, if the schema has it
+    if method not in ("quasi-static", "dynamic"):
+        _fail([f"--method: {method!r} is not a method; use quasi-static or dynamic"])
     try:
-        comparison = run(loaded.system, spec, temps, inertia)
+        dynamics = loaded.spec.dynamics() if method == "dynamic" else None
+        comparison = run(loaded.system, spec, temps, inertia, method, dynamics)
         dense = (
-            run(loaded.system, spec, np.linspace(temps.min(), temps.max(), 57), inertia)
+            run(
+                loaded.system,
+                spec,
+                np.linspace(temps.min(), temps.max(), 57),
+                inertia,
+                method,
+                dynamics,
+            )
             if plot is not None and temps.min() < temps.max()
             else comparison
         )

@@ -36,6 +36,7 @@ from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim._version import __version__
 from ecdsim.config.sizing_schema import FluidDamperSpec
 from ecdsim.deployment import predict
+from ecdsim.dynamics.params import DynamicParameters
 from ecdsim.model import DeploymentSystem
 from ecdsim.physics.fluid import (
     arrhenius_factor,
@@ -51,6 +52,8 @@ from ecdsim.physics.quasistatic import locate_stall
 from ecdsim.solvers import EXACT, PAPER, QuasiStaticProblem
 
 KELVIN_OFFSET = 273.15
+# compare_fluid's methods: the quasi-static closed forms, or the dynamic core.
+METHODS = ("quasi-static", "dynamic")
 _M2S_PER_CST = 1e-6  # 1 mm^2/s (centistokes) = 1e-6 m^2/s
 _WALTHER_SHIFT = 0.7  # ASTM D341: Z = nu + 0.7 for nu >= 2 mm^2/s
 
@@ -604,6 +607,7 @@ class FluidComparison:
     fluid_exponent : n(T) [-]
     reference_speed : the speed at which both dampers' torques are shown [rad/s]
         (the power law's omega_r, else the matching speed, else None)
+    method : ``"quasi-static"`` or ``"dynamic"``, how both deployments were computed
     """
 
     temperatures: FloatArray
@@ -623,6 +627,7 @@ class FluidComparison:
     extrapolated: BoolArray
     fluid_exponent: FloatArray | None = None
     reference_speed: float | None = None
+    method: str = "quasi-static"
 
     @property
     def exponents(self) -> FloatArray:
@@ -702,6 +707,7 @@ class FluidComparison:
         exponents = self.exponents
         return {
             "ecdsim_version": __version__,
+            "method": self.method,
             "fluid_damper": {
                 "name": self.name,
                 "source": self.source,
@@ -741,6 +747,8 @@ def compare_fluid(
     spec: FluidDamperSpec,
     temperatures: ArrayLike,
     load_inertia: float | None = None,
+    method: str = "quasi-static",
+    dynamics: DynamicParameters | None = None,
 ) -> FluidComparison:
     """The ECD and a fluid damper over the temperatures [degC].
 
@@ -755,7 +763,14 @@ def compare_fluid(
     (e.g. the config's ``[load] inertia``), else none (free time not computed). Raises
     :class:`~ecdsim.deployment.ModelDomainError` where BECD <= 0 and ``ValueError`` if a
     deadband is not shorter than the travel or the load has gravity (a ground test).
+
+    ``method`` is ``"quasi-static"`` (the closed-form times above) or ``"dynamic"``: both
+    dampers' deployments integrated with inertia on the dynamic core
+    (:mod:`ecdsim.sizing.fluid_dynamic`), with ``dynamics`` (the config's dynamic
+    parameters, or only the load inertia) and the same load inertia as above (required).
     """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     gravity = system.load.gravity
     if gravity is not None and bool(np.any(gravity.amplitude > 0.0)):
         # The fluid side's deployment is the piecewise-linear exact solution: with a sine
@@ -811,8 +826,24 @@ def compare_fluid(
         problem.angles, problem.torques, fluid_friction + fs, fluid_c
     )
     inertia = spec.load_inertia if spec.load_inertia is not None else load_inertia
-    ecd_side = deploy_with_deadband(problem, fs, system.ecd.gearbox.lost_motion, 1.0, inertia)
-    fluid_side = deploy_with_deadband(fluid_problem, fs, spec.deadband, exponents, inertia)
+    if method == "dynamic":
+        from ecdsim.sizing import fluid_dynamic
+
+        if spec.deadband >= float(np.max(problem.travel)):
+            raise ValueError(f"the deadband ({spec.deadband:g} rad) is not shorter than the travel")
+        ecd_side, fluid_side = fluid_dynamic.dynamic_sides(
+            system,
+            temps,
+            fluid_dynamic.parameters_for(dynamics, inertia),
+            as_float(np.broadcast_to(fluid_c, temps.shape)),
+            as_float(np.broadcast_to(exponents, temps.shape)),
+            reference_speed if reference_speed is not None else 1.0,
+            fluid_friction,
+            spec.deadband,
+        )
+    else:
+        ecd_side = deploy_with_deadband(problem, fs, system.ecd.gearbox.lost_motion, 1.0, inertia)
+        fluid_side = deploy_with_deadband(fluid_problem, fs, spec.deadband, exponents, inertia)
     return FluidComparison(
         temperatures=temps,
         law=law,
@@ -831,4 +862,5 @@ def compare_fluid(
         extrapolated=law.out_of_range(temps),
         fluid_exponent=as_float(np.broadcast_to(exponents, temps.shape)),
         reference_speed=reference_speed,
+        method=method,
     )
