@@ -359,10 +359,10 @@ def test_laws_in_factor_form_match_their_temperature_form(law: LinearEddy | Klos
     # Eq. 1's bracket (and the resistivity factor) by hand.
     assert np.allclose(factor, 1.0 - 0.004 * (temps - 25.0), rtol=1e-14)
     torque = law.torque(speed, temps)
-    a, b = law.parameters
+    a, b, core = law.parameters
 
     def parts(w: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, ...]:
-        values = eddy.eddy_torque_parts(law.code, a, b, w, f)
+        values = eddy.eddy_torque_parts(law.code, a, b, core, w, f)
         return tuple(np.broadcast_to(v, np.broadcast(w, f).shape) for v in values)
 
     tau, d_w, d_f, power, p_w, p_f = parts(speed, factor)

@@ -37,23 +37,23 @@ def _problem(inertia: float = J, deadband: float = 0.0, core: float = OMEGA_L) -
     return DynamicProblem(
         angles=np.array([0.0, TRAVEL]),
         torques=np.array([T0, T1]),
-        friction=FRICTION,
+        friction=np.asarray(FRICTION),
         damping_rate=C * 0.1 ** (N - 1.0),
-        load_inertia=inertia,
-        damper_inertia=0.0,
-        ecd_friction=FRICTION,
-        system_friction=0.0,
-        static_friction_factor=1.0,
-        system_static_friction_factor=1.0,
-        restitution=0.0,
-        lost_motion=deadband,
-        initial_angle=0.0,
-        initial_speed=0.0,
-        ambient_temperature=25.0,
-        gear_ratio=1.0,
-        gearbox_damping_rate=0.0,
-        heat_capacity=math.inf,
-        thermal_resistance=math.inf,
+        load_inertia=np.asarray(inertia),
+        damper_inertia=np.asarray(0.0),
+        ecd_friction=np.asarray(FRICTION),
+        system_friction=np.asarray(0.0),
+        static_friction_factor=np.asarray(1.0),
+        system_static_friction_factor=np.asarray(1.0),
+        restitution=np.asarray(0.0),
+        lost_motion=np.asarray(deadband),
+        initial_angle=np.asarray(0.0),
+        initial_speed=np.asarray(0.0),
+        ambient_temperature=np.asarray(25.0),
+        gear_ratio=np.asarray(1.0),
+        gearbox_damping_rate=np.asarray(0.0),
+        heat_capacity=np.asarray(math.inf),
+        thermal_resistance=np.asarray(math.inf),
         eddy=PowerLawDamper(C, N, core),
         rtol=1e-10,
     )
@@ -91,14 +91,17 @@ def _reference(deadband: float, core: float = OMEGA_L) -> tuple[float, float]:
 
 def test_power_law_parts_matches_the_quasi_static_law_and_its_slope() -> None:
     # Above omega_l: c w^n and c n w^(n-1) by hand; below it the Newtonian core c w_l^(n-1) w.
-    torque, slope = power_law_parts(np.array([0.3, -2.0, 1e-9]), C, N, OMEGA_L)
+    torque, slope = (
+        np.asarray(v) for v in power_law_parts(np.array([0.3, -2.0, 1e-9]), C, N, OMEGA_L)
+    )
     assert torque[0] == pytest.approx(C * 0.3**N, rel=1e-14)  # rounding only
     assert torque[1] == pytest.approx(-C * 2.0**N, rel=1e-14)
     assert slope[1] == pytest.approx(C * N * 2.0 ** (N - 1.0), rel=1e-14)
     assert torque[2] == pytest.approx(C * OMEGA_L ** (N - 1.0) * 1e-9, rel=1e-14)
     assert slope[2] == pytest.approx(C * OMEGA_L ** (N - 1.0), rel=1e-14)
     # Continuous at omega_l.
-    inside, outside = power_law_parts(np.array([OMEGA_L * (1 - 1e-12), OMEGA_L]), C, N, OMEGA_L)[0]
+    edge = np.array([OMEGA_L * (1 - 1e-12), OMEGA_L])
+    inside, outside = np.asarray(power_law_parts(edge, C, N, OMEGA_L)[0])
     assert inside == pytest.approx(outside, rel=1e-11)
 
 
