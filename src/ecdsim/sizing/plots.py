@@ -218,7 +218,8 @@ def plot_fluid_comparison(comparison: FluidComparison, units: UnitSystem = "si")
         return _power_law_panels(comparison, fig, top, bottom, t, u)
     top.axvline(u.value(comparison.match_temperature, "temperature"), color="0.4", linestyle=":")
     top.set_title("ECD against a fluid damper matched at "
-                  f"{u.text(comparison.match_temperature, 'temperature')}")  # fmt: skip
+                  f"{u.text(comparison.match_temperature, 'temperature')}"
+                  + _method_note(comparison))  # fmt: skip
     top.legend(fontsize="small")
     # One axis for both: the ECD's rate is the n = 1 case of the fluid's c(T), and a
     # torque per speed^n converts as the torque does.
@@ -240,12 +241,17 @@ def plot_fluid_comparison(comparison: FluidComparison, units: UnitSystem = "si")
     return fig
 
 
+def _method_note(comparison: FluidComparison) -> str:
+    """The title's note of the dynamic method (the quasi-static one is the default)."""
+    return ", dynamic method" if comparison.method == "dynamic" else ""
+
+
 def _power_law_panels(
     comparison: FluidComparison, fig: Figure, top: Axes, bottom: Axes, t: FloatArray, u: Shown
 ) -> Figure:
     """The measured (power-law) fluid damper: not matched to the ECD, so the lower panel
     compares both dampers' damping torque at the law's reference speed."""
-    top.set_title("ECD against a fluid damper (measured power law)")
+    top.set_title("ECD against a fluid damper (measured power law)" + _method_note(comparison))
     # Times spread over decades: a log axis shows both dampers' spread.
     top.set_yscale("log")
     tested = getattr(comparison.law, "temperatures", ())
