@@ -615,13 +615,13 @@ def _heated_reference(
     r = math.inf if spec.thermal_resistance is None else spec.thermal_resistance
     c = float(np.ravel(eddy.coefficient)[0])
     f_a = float(np.ravel(eddy.factor(ambient))[0])
-    a, b = (float(np.ravel(v)[0]) for v in eddy.parameters)
+    a, b, core = (float(np.ravel(v)[0]) for v in eddy.parameters)
 
     def rate(t: float, y: np.ndarray) -> list[float]:
         shaft = n * speed(t)
         f = float(thermal.damping_factor_from_log(y[0], f_a, c))
         # The eddy power over f of the law the kernel compiles (physics.eddy).
-        p = float(eddy_law.eddy_torque_parts(eddy.code, a, b, shaft, f)[3])
+        p = float(eddy_law.eddy_torque_parts(eddy.code, a, b, core, shaft, f)[3])
         return [float(thermal.factor_log_rate(p, y[0], spec.heat_capacity, r, c))]
 
     solution = solve_ivp(
