@@ -36,7 +36,7 @@ damper's conductor).
 """
 
 from ecdsim._types import Real
-from ecdsim.physics.fluid import power_law_parts
+from ecdsim.physics.fluid import power_law_damper_torque, power_law_parts
 from ecdsim.physics.rolloff import (
     kloss_peak_speed_derivative,
     kloss_power_per_peak_speed,
@@ -152,7 +152,7 @@ def eddy_torque(law: int, a: Real, b: Real, core: Real, speed: Real, factor: Rea
     if law == LINEAR:
         return linear_eddy_torque(speed, a, factor)
     if law == POWER_LAW:
-        return power_law_parts(speed, a, b, core)[0]
+        return power_law_damper_torque(speed, a, b, core)
     return kloss_torque(speed, a, b * factor)
 
 

@@ -140,6 +140,29 @@ def power_law_torque_slope(
     return as_float(np.where(core, c * np.power(safe, n - 1.0), outer))
 
 
+def power_law_damper_torque(
+    speed: Real, coefficient: Real, exponent: Real, linear_speed: Real
+) -> Real:
+    """The regularised power law's torque ``c max(|omega|, omega_l)**(n-1) omega`` [N*m]
+    (:func:`power_law_parts`' first value), written in ``abs`` and ``**`` alone so that
+    floats, arrays, numba and the FMU's C translation (:mod:`ecdsim.fmu.ctranslate`,
+    which translates the damper laws :mod:`ecdsim.physics.eddy` dispatches) all take it.
+
+    Parameters
+    ----------
+    speed : omega [rad/s], either sign
+    coefficient : c [N*m*(s/rad)**n]
+    exponent : n [-]
+    linear_speed : omega_l > 0 [rad/s]
+
+    >>> round(float(power_law_damper_torque(-0.25, 2.0, 0.5, 1e-6)), 12)  # -c |w|^n
+    -1.0
+    """
+    size = abs(speed)
+    above = 0.5 * (size + linear_speed + abs(size - linear_speed))  # max(|w|, w_l)
+    return coefficient * above ** (exponent - 1.0) * speed
+
+
 def power_law_parts(
     speed: Real, coefficient: Real, exponent: Real, linear_speed: Real
 ) -> tuple[Real, Real]:
