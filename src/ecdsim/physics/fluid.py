@@ -158,9 +158,11 @@ def power_law_damper_torque(
     >>> round(float(power_law_damper_torque(-0.25, 2.0, 0.5, 1e-6)), 12)  # -c |w|^n
     -1.0
     """
-    size = abs(speed)
-    above = 0.5 * (size + linear_speed + abs(size - linear_speed))  # max(|w|, w_l)
-    return coefficient * above ** (exponent - 1.0) * speed
+    size: Real = abs(speed)  # type: ignore[assignment]  # abs of a float or an array
+    gap: Real = abs(size - linear_speed)  # type: ignore[assignment]
+    above = 0.5 * (size + linear_speed + gap)  # max(|w|, w_l)
+    torque: Real = coefficient * above ** (exponent - 1.0) * speed
+    return torque
 
 
 def power_law_parts(
