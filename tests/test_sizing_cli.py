@@ -249,6 +249,7 @@ def test_plot_to_unwritable_place_exits_2(tmp_path: Path) -> None:
         (
             "compare-fluid",
             {
+                "--method": "-m",
                 "--json": None,
                 "--plot": None,
                 "--units": None,

@@ -146,7 +146,8 @@ def power_law_damper_torque(
     """The regularised power law's torque ``c max(|omega|, omega_l)**(n-1) omega`` [N*m]
     (:func:`power_law_parts`' first value), written in ``abs`` and ``**`` alone so that
     floats, arrays, numba and the FMU's C translation (:mod:`ecdsim.fmu.ctranslate`,
-    which translates the damper laws :mod:`ecdsim.physics.eddy` dispatches) all take it.
+    which translates the damper laws :mod:`ecdsim.physics.eddy` dispatches) all take it
+    (docs/qualification.md section 3).
 
     Parameters
     ----------

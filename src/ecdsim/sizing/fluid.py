@@ -36,7 +36,9 @@ from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim._version import __version__
 from ecdsim.config.sizing_schema import FluidDamperSpec
 from ecdsim.deployment import predict
+from ecdsim.dynamics import fluid_damper
 from ecdsim.dynamics.params import DynamicParameters
+from ecdsim.dynamics.result import DynamicResult
 from ecdsim.model import DeploymentSystem
 from ecdsim.physics.fluid import (
     arrhenius_factor,
@@ -742,6 +744,23 @@ class FluidComparison:
         }
 
 
+def _integrated_side(result: DynamicResult, deadband: float) -> DeadbandDeployment:
+    """An integrated deployment as the comparison's side: free time to the engagement,
+    damped time from it to the arrival (inf where the load never arrives)."""
+    total = as_float(np.ravel(result.deployment_time))
+    arrived = np.isfinite(total)
+    free = as_float(np.ravel(result.engagement_time))
+    return DeadbandDeployment(
+        deadband=deadband,
+        damped_time=as_float(np.where(arrived, total - free, np.inf)),
+        free_time=free,
+        engage_speed=as_float(np.ravel(fluid_damper.engagement_speed(result))),
+        total_time=as_float(np.where(arrived, total, np.inf)),
+        end_speed=as_float(np.where(arrived, np.ravel(result.arrival_speed), 0.0)),
+        stalled=np.asarray(~arrived),
+    )
+
+
 def compare_fluid(
     system: DeploymentSystem,
     spec: FluidDamperSpec,
@@ -766,7 +785,7 @@ def compare_fluid(
 
     ``method`` is ``"quasi-static"`` (the closed-form times above) or ``"dynamic"``: both
     dampers' deployments integrated with inertia on the dynamic core
-    (:mod:`ecdsim.sizing.fluid_dynamic`), with ``dynamics`` (the config's dynamic
+    (:mod:`ecdsim.dynamics.fluid_damper`), with ``dynamics`` (the config's dynamic
     parameters, or only the load inertia) and the same load inertia as above (required).
     """
     if method not in METHODS:
@@ -826,24 +845,24 @@ def compare_fluid(
         problem.angles, problem.torques, fluid_friction + fs, fluid_c
     )
     inertia = spec.load_inertia if spec.load_inertia is not None else load_inertia
-    if method == "dynamic":
-        from ecdsim.sizing import fluid_dynamic
-
+    if method == METHODS[0]:
+        ecd_side = deploy_with_deadband(problem, fs, system.ecd.gearbox.lost_motion, 1.0, inertia)
+        fluid_side = deploy_with_deadband(fluid_problem, fs, spec.deadband, exponents, inertia)
+    else:
         if spec.deadband >= float(np.max(problem.travel)):
             raise ValueError(f"the deadband ({spec.deadband:g} rad) is not shorter than the travel")
-        ecd_side, fluid_side = fluid_dynamic.dynamic_sides(
-            system,
-            temps,
-            fluid_dynamic.parameters_for(dynamics, inertia),
+        params = fluid_damper.parameters_for(dynamics, inertia)
+        hinge = predict(system, temps, (), dynamics=params).problem  # the ECD's, unsolved
+        ecd_result, fluid_result = fluid_damper.deployments(
+            hinge,
             as_float(np.broadcast_to(fluid_c, temps.shape)),
             as_float(np.broadcast_to(exponents, temps.shape)),
             reference_speed if reference_speed is not None else 1.0,
             fluid_friction,
             spec.deadband,
         )
-    else:
-        ecd_side = deploy_with_deadband(problem, fs, system.ecd.gearbox.lost_motion, 1.0, inertia)
-        fluid_side = deploy_with_deadband(fluid_problem, fs, spec.deadband, exponents, inertia)
+        ecd_side = _integrated_side(ecd_result, system.ecd.gearbox.lost_motion)
+        fluid_side = _integrated_side(fluid_result, spec.deadband)
     return FluidComparison(
         temperatures=temps,
         law=law,

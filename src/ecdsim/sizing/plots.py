@@ -242,8 +242,8 @@ def plot_fluid_comparison(comparison: FluidComparison, units: UnitSystem = "si")
 
 
 def _method_note(comparison: FluidComparison) -> str:
-    """The title's note of the dynamic method (the quasi-static one is the default)."""
-    return ", dynamic method" if comparison.method == "dynamic" else ""
+    """The title's note of the method (the default, quasi-static, is not named)."""
+    return "" if comparison.method == "quasi-static" else f", {comparison.method} method"
 
 
 def _power_law_panels(

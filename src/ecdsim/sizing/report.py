@@ -443,8 +443,8 @@ def fluid_table(comparison: FluidComparison, u: Shown = SI) -> Table:
             ]
         rows.append(row)
     deadband = f"deadband {np.degrees(comparison.fluid.deadband):.3g} deg"
-    if comparison.method == "dynamic":
-        deadband += "; dynamic method"
+    if comparison.method != "quasi-static":  # the default is not named
+        deadband += f"; {comparison.method} method"
     if measured:
         title = (
             f"ECD against {comparison.name}, measured ({comparison.law.describe()}; {deadband}; "

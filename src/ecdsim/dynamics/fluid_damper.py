@@ -1,4 +1,4 @@
-"""The ECD and the fluid damper by the dynamic method (``compare-fluid -m dynamic``).
+"""The ECD and a fluid damper by the dynamic method (``compare-fluid -m dynamic``).
 
 The quasi-static comparison (:func:`ecdsim.sizing.fluid.compare_fluid`) balances each
 damper's torque against the net spring torque and treats the deadband as a separate free
@@ -20,12 +20,10 @@ import numpy as np
 
 from ecdsim._types import ArrayLike, FloatArray, as_float
 from ecdsim.dynamics.damping import PowerLawDamper
-from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.dynamics.params import DynamicParameters
 from ecdsim.dynamics.problem import DynamicProblem
 from ecdsim.dynamics.result import EVENT_KINDS, DynamicResult
-from ecdsim.model import DeploymentSystem
-from ecdsim.sizing.fluid import DeadbandDeployment
+from ecdsim.dynamics.solver import solve_dynamic
 
 # The power law's linear core: below omega_l = LINEAR_CORE * omega_r the fluid is taken
 # as Newtonian (docs/qualification.md section 3). The bench data never reach that far
@@ -118,54 +116,19 @@ def engagement_speed(result: DynamicResult) -> FloatArray:
     return as_float(speed.reshape(result.batch_shape))
 
 
-def solve(problem: DynamicProblem) -> DynamicSolution:
-    """The dynamic method's solution of ``problem`` (the registry's solver)."""
-    from ecdsim.methods import SOLVERS
-
-    solution = SOLVERS["dynamic"].solve(problem)
-    assert isinstance(solution, DynamicSolution)
-    return solution
-
-
-def _side(solution: DynamicSolution, deadband: float) -> DeadbandDeployment:
-    """A dynamic deployment as the comparison's side: free time to the engagement,
-    damped time from it to the arrival (inf where the load never arrives)."""
-    result = solution.result
-    total = as_float(np.ravel(result.deployment_time))
-    arrived = np.isfinite(total)
-    free = as_float(np.ravel(result.engagement_time))
-    return DeadbandDeployment(
-        deadband=deadband,
-        damped_time=as_float(np.where(arrived, total - free, np.inf)),
-        free_time=free,
-        engage_speed=as_float(np.ravel(engagement_speed(result))),
-        total_time=as_float(np.where(arrived, total, np.inf)),
-        end_speed=as_float(np.where(arrived, np.ravel(result.arrival_speed), 0.0)),
-        stalled=np.asarray(~arrived),
-    )
-
-
-def dynamic_sides(
-    system: DeploymentSystem,
-    temperatures: FloatArray,
-    params: DynamicParameters,
+def deployments(
+    hinge: object,
     coefficient: FloatArray,
     exponent: FloatArray,
     reference_speed: float,
     friction: FloatArray,
     deadband: float,
-) -> tuple[DeadbandDeployment, DeadbandDeployment]:
-    """The ECD's and the fluid damper's deployments by the dynamic method at the
-    temperatures [degC] (1-D): the ECD as the config has it, the fluid damper on the same
-    hinge (:func:`fluid_problem`). Raises :class:`~ecdsim.deployment.ModelDomainError`
-    where a dynamic parameter leaves its domain."""
-    from ecdsim.deployment import predict
-
-    run = predict(system, temperatures, ("dynamic",), dynamics=params)
-    ecd = run.solutions["dynamic"]
-    assert isinstance(ecd, DynamicSolution)
-    assert isinstance(run.problem, DynamicProblem)
-    fluid = solve(
-        fluid_problem(run.problem, coefficient, exponent, reference_speed, friction, deadband)
-    )
-    return _side(ecd, system.ecd.gearbox.lost_motion), _side(fluid, deadband)
+) -> tuple[DynamicResult, DynamicResult]:
+    """The ECD's and the fluid damper's deployments by the dynamic method: ``hinge`` is
+    the ECD's dynamic problem (as :func:`ecdsim.deployment.predict` builds it from the
+    config), the fluid damper's is the same hinge with it in the ECD's place
+    (:func:`fluid_problem`). Raises TypeError if ``hinge`` is not a DynamicProblem."""
+    if not isinstance(hinge, DynamicProblem):
+        raise TypeError("the fluid comparison's dynamic method needs a DynamicProblem")
+    fluid = fluid_problem(hinge, coefficient, exponent, reference_speed, friction, deadband)
+    return solve_dynamic(hinge, record=False), solve_dynamic(fluid, record=False)
