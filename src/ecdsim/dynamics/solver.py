@@ -189,6 +189,7 @@ def _case_effects(problem: DynamicProblem, row: list[float]) -> int:
         (L.EFFECT_REBOUND, row[L.REST] > 0.0),
         (L.EFFECT_WARM_START, row[L.S0] != 0.0 or row[L.H0] != 0.0),
         (L.EFFECT_STOP_TIME, math.isfinite(problem.stop_time)),
+        (L.EFFECT_POWER_LAW, row[L.LAW] == eddy_laws.POWER_LAW),
     )
     return sum(bit for bit, found in present if found)
 
