@@ -44,6 +44,7 @@ from ecdsim.config.units import (
     TORSIONAL_STIFFNESS,
     quoted,
 )
+from ecdsim.dynamics.kernel import effects as registered_effects
 from ecdsim.dynamics.params import INTEGRATORS, DynamicParameters, Rolloff, Thermal
 from ecdsim.methods import SOLVERS
 from ecdsim.model import (
@@ -574,6 +575,7 @@ class SpecBase(_Section):
             integrator=self.analysis.integrator,
             gear_stiffness=self.gearbox.stiffness,
             gear_mesh_damping=self.gearbox.mesh_damping,
+            effects=registered_effects.config_values(self),
         )
 
 

@@ -8,10 +8,12 @@ object can describe a whole Monte Carlo batch). See ``docs/dynamics.md``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from ecdsim.dynamics.kernel import effects as registry
 from ecdsim.model import Param
 
 INTEGRATORS = ("RODAS4", "Radau", "BDF", "LSODA")
@@ -128,6 +130,8 @@ class DynamicParameters:
         plastic engagement). Compliant backlash: :mod:`ecdsim.dynamics.backlash`
     gear_mesh_damping : damping of the gear mesh in contact, at the input shaft
         [N*m*s/rad], >= 0 (only with ``gear_stiffness``); None (the default) = 0
+    effects : the registered effects' parameters by name, SI
+        (:mod:`ecdsim.dynamics.kernel.effects`); an effect not given is absent
     """
 
     load_inertia: Param
@@ -147,8 +151,10 @@ class DynamicParameters:
     stribeck_speed: Param | None = None
     gear_stiffness: Param | None = None
     gear_mesh_damping: Param | None = None
+    effects: Mapping[str, Param] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        registry.check(self.effects)
         system_factor = (
             1.0 if self.system_static_friction_factor is None
             else self.system_static_friction_factor

@@ -11,6 +11,7 @@ physics functions as the quasi-static path.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from functools import cache
 from typing import Any
@@ -121,6 +122,8 @@ class DynamicProblem(QuasiStaticProblem):
     rtol : relative tolerance of the integrator for nonlinear segments [-]
     integrator : integrator for nonlinear segments ("RODAS4" batched, or a solve_ivp method)
     max_events : event limit per run
+    effects : the registered effects' parameters by name, each broadcast to the batch
+        (:mod:`ecdsim.dynamics.kernel.effects`); empty without any
     """
 
     load_inertia: FloatArray
@@ -155,9 +158,11 @@ class DynamicProblem(QuasiStaticProblem):
     rtol: float = 1e-8
     integrator: str = "RODAS4"
     max_events: int = 10_000
+    effects: Mapping[str, FloatArray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         own = [np.asarray(getattr(self, name), dtype=float) for name in _CASE_FIELDS]
+        registered = {k: np.asarray(v, dtype=float) for k, v in self.effects.items()}
         angles = np.asarray(self.angles, dtype=float)
         friction = np.asarray(self.friction, dtype=float)
         damping = np.asarray(self.damping_rate, dtype=float)
@@ -168,6 +173,7 @@ class DynamicProblem(QuasiStaticProblem):
             friction.shape,
             damping.shape,
             *(value.shape for value in own),
+            *(value.shape for value in registered.values()),
             # The eddy law's own arrays (a Monte Carlo batch of roll-off peak speeds).
             *(_shape(getattr(eddy, name)) for name in _field_names(type(eddy))),
         )
@@ -186,6 +192,8 @@ class DynamicProblem(QuasiStaticProblem):
         super().__post_init__()
         for name, value in zip(_CASE_FIELDS, own, strict=True):
             object.__setattr__(self, name, value)
+        effects = {k: broadcast(v, batch) for k, v in registered.items()}
+        object.__setattr__(self, "effects", effects)
 
     @property
     def nonlinear(self) -> bool:
@@ -261,8 +269,9 @@ def dynamic_problem(
         "rtol": params.rtol,
         "integrator": params.integrator,
         "max_events": params.max_events,
+        "effects": dict(params.effects),
     }
-    one = _one_case_problem(base, case, settings)
+    one = None if params.effects else _one_case_problem(base, case, settings)
     if one is not None:
         return one
     return DynamicProblem(
@@ -383,6 +392,7 @@ _SETTING_FIELDS = (
     "rtol",
     "integrator",
     "max_events",
+    "effects",  # empty: a problem with registered effects takes the general path
 )
 
 

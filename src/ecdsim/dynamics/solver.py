@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.assemble import Packed, Run, result_of
 from ecdsim.dynamics.damping import KlossEddy, LinearEddy, PowerLawDamper
+from ecdsim.dynamics.kernel import effects as registry
 from ecdsim.dynamics.kernel import layout as L
 from ecdsim.dynamics.kernel.build import Backend, backend
 from ecdsim.dynamics.kernel.record import COUNTS, OVERFLOW, START
@@ -144,6 +145,7 @@ KNOWN_FIELDS = frozenset(
         "rtol",
         "integrator",
         "max_events",
+        "effects",  # the registered effects' parameters (kernel/effects.py)
     }
 )
 
@@ -153,45 +155,39 @@ def _effects(problem: DynamicProblem, table: FloatArray) -> FloatArray:
     model to take it (``layout.KERNEL_EFFECTS``, ``layout.CLOSED_FORM_EFFECTS``)."""
     if table.shape[0] == 1:  # one deployment: its numbers as floats (no array calls)
         return np.array([float(_case_effects(problem, table[0].tolist()))])
-    bits = [
-        (L.EFFECT_ROLLOFF, table[:, L.LAW] == eddy_laws.KLOSS),
-        (L.EFFECT_HEATING, table[:, L.NODES] > 0),
-        (L.EFFECT_TWO_NODE, table[:, L.NODES] == 2),
-        (L.EFFECT_STRIBECK, np.isfinite(table[:, L.WST])),
-        (L.EFFECT_GRAVITY, table[:, L.GW] != 0.0),
-        (L.EFFECT_LOSSY, (table[:, L.ETAF] != 1.0) | (table[:, L.ETAB] != 1.0)),
-        (L.EFFECT_LOST_MOTION, table[:, L.GAP] > 0.0),
-        (L.EFFECT_COMPLIANT, np.isfinite(table[:, L.MC])),
-        (L.EFFECT_RESISTANCE, np.full(table.shape[0], problem.resistance is not None)),
-        (L.EFFECT_REBOUND, table[:, L.REST] > 0.0),
-        (L.EFFECT_WARM_START, (table[:, L.S0] != 0.0) | (table[:, L.H0] != 0.0)),
-        (L.EFFECT_STOP_TIME, np.full(table.shape[0], math.isfinite(problem.stop_time))),
-        (L.EFFECT_POWER_LAW, table[:, L.LAW] == eddy_laws.POWER_LAW),
-    ]
     effects = np.zeros(table.shape[0])
-    for bit, present in bits:
+    for bit, present in _presence(problem, table.T):
         effects += np.where(present, float(bit), 0.0)
     return effects
 
 
 def _case_effects(problem: DynamicProblem, row: list[float]) -> int:
     """:func:`_effects` of one case, from its row as floats (the same tests)."""
-    present = (
-        (L.EFFECT_ROLLOFF, row[L.LAW] == eddy_laws.KLOSS),
-        (L.EFFECT_HEATING, row[L.NODES] > 0),
-        (L.EFFECT_TWO_NODE, row[L.NODES] == 2),
-        (L.EFFECT_STRIBECK, math.isfinite(row[L.WST])),
-        (L.EFFECT_GRAVITY, row[L.GW] != 0.0),
-        (L.EFFECT_LOSSY, row[L.ETAF] != 1.0 or row[L.ETAB] != 1.0),
-        (L.EFFECT_LOST_MOTION, row[L.GAP] > 0.0),
-        (L.EFFECT_COMPLIANT, math.isfinite(row[L.MC])),
+    return sum(bit for bit, found in _presence(problem, row) if found)
+
+
+def _presence(problem: DynamicProblem, c: Any) -> list[tuple[int, Any]]:
+    """Each effect's bit and whether it is present, from one case's row of floats or
+    the table's columns (``table.T``): the same tests on either (``<`` for isfinite:
+    the columns tested are never NaN; ``|`` for ``or``); the registered effects' from
+    their declarations (:func:`ecdsim.dynamics.kernel.effects.presence`)."""
+    inf = math.inf
+    return [
+        (L.EFFECT_ROLLOFF, c[L.LAW] == eddy_laws.KLOSS),
+        (L.EFFECT_HEATING, c[L.NODES] > 0),
+        (L.EFFECT_TWO_NODE, c[L.NODES] == 2),
+        (L.EFFECT_STRIBECK, c[L.WST] < inf),
+        (L.EFFECT_GRAVITY, c[L.GW] != 0.0),
+        (L.EFFECT_LOSSY, (c[L.ETAF] != 1.0) | (c[L.ETAB] != 1.0)),
+        (L.EFFECT_LOST_MOTION, c[L.GAP] > 0.0),
+        (L.EFFECT_COMPLIANT, c[L.MC] < inf),
         (L.EFFECT_RESISTANCE, problem.resistance is not None),
-        (L.EFFECT_REBOUND, row[L.REST] > 0.0),
-        (L.EFFECT_WARM_START, row[L.S0] != 0.0 or row[L.H0] != 0.0),
+        (L.EFFECT_REBOUND, c[L.REST] > 0.0),
+        (L.EFFECT_WARM_START, (c[L.S0] != 0.0) | (c[L.H0] != 0.0)),
         (L.EFFECT_STOP_TIME, math.isfinite(problem.stop_time)),
-        (L.EFFECT_POWER_LAW, row[L.LAW] == eddy_laws.POWER_LAW),
-    )
-    return sum(bit for bit, found in present if found)
+        (L.EFFECT_POWER_LAW, c[L.LAW] == eddy_laws.POWER_LAW),
+        *registry.presence(c),
+    ]
 
 
 @cache
@@ -204,6 +200,8 @@ def _check_known(problem: DynamicProblem, effects: FloatArray) -> None:
     """Refuse a problem with an input or an effect the kernel does not know."""
     kind: type = type(problem)
     unknown = _unknown_fields(kind, KNOWN_FIELDS)
+    if problem.effects:  # a parameter no registered effect declares
+        unknown |= {f"effects[{k!r}]" for k in problem.effects if k not in registry.COLUMN}
     if unknown:
         raise TypeError(
             f"the dynamic kernel does not take DynamicProblem field(s) {sorted(unknown)}"
@@ -236,6 +234,7 @@ def pack(problem: DynamicProblem, record: bool) -> Packed:
     law = _law(problem)
     columns.update(law)
     columns.update(_derived(problem, law, nodes))
+    columns.update(registry.columns(problem.effects))
     table = _table(columns, shape, n)
     table[:, L.EFFECTS] = _effects(problem, table)
     _check_known(problem, table[:, L.EFFECTS])

@@ -60,6 +60,8 @@ INLINE = frozenset(
         "crossed",
         "_endpoint",
         "_extremes",
+        "registered_torque",  # the registered effects' sums (kernel/effects.py)
+        "registered_terms",
     }
 )
 

@@ -31,6 +31,7 @@ import math
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.kernel import layout as L
+from ecdsim.dynamics.kernel.effects import registered_terms, registered_torque
 from ecdsim.physics.eddy import damper_side_parts, damper_side_torque
 from ecdsim.physics.friction import stribeck_excess
 from ecdsim.physics.gravity import gravity_torque, gravity_torque_slope
@@ -114,7 +115,8 @@ def hinge_forces(
     w = y[m]
     sigma = md[L.MD_SLIDE0]
     g = excess_at(sigma * w, sg[L.SG_EX0], par[L.WST])[0]
-    load = load_spring(sg, phi) - sigma * (sg[L.SG_FC0] + g)
+    extra = registered_torque(cw, sg[L.SG_PHI] + phi, w)  # kernel/effects.py
+    load = load_spring(sg, phi) - sigma * (sg[L.SG_FC0] + g) + extra
     if par[L.GW] != 0.0:
         load -= float(gravity_torque(sg[L.SG_PHI] + phi, par[L.GW], par[L.GTH]))
     if m == 1:
@@ -124,7 +126,7 @@ def hinge_forces(
         )
         torque = eng * float(torque_)
         q0 = load - sg[L.SG_MESH] * torque
-        return q0, 0.0, torque, eng * float(power), torque * w + sigma * g * w, 0.0, f
+        return q0, 0.0, torque, eng * float(power), torque * w + sigma * g * w - extra * w, 0.0, f
     # A compliant mesh: q = (phi_L, delta), the damper side's speed w_L - delta'.
     speed = y[m + 1]
     wd = w - speed
@@ -136,7 +138,7 @@ def hinge_forces(
     )
     torque = float(torque_)
     damper = tau - sigma_d * (sg[L.SG_FC1] + g_d) - torque
-    dissipated = torque * wd + sigma * g * w + sigma_d * g_d * wd
+    dissipated = torque * wd + sigma * g * w + sigma_d * g_d * wd - extra * w
     return load - tau + damper, -damper, torque, float(power), dissipated, tau, f
 
 
@@ -237,17 +239,19 @@ def jacobian(
         torque, d_speed, d_factor, _, p_speed, p_factor = damper_side_parts(
             law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], w, f
         )
-        stiffness = sg[L.SG_SLOPE]
+        extra, x_angle, x_speed = registered_terms(cw, sg[L.SG_PHI] + phi, w)
+        stiffness = sg[L.SG_SLOPE] + x_angle
         if par[L.GW] != 0.0:
             stiffness -= gravity_torque_slope(sg[L.SG_PHI] + phi, par[L.GW], par[L.GTH])
         inv = cw[L.PINV]
         jac[1, 0] = inv * stiffness
-        jac[1, 1] = -inv * (g_slope + mesh * d_speed)
+        jac[1, 1] = -inv * (g_slope + mesh * d_speed - x_speed)
         if na > 0:
             jac[1, 2] = -inv * mesh * d_factor * c_f
             aux_jacobian(par, y, jac, eng * p_speed, eng * p_factor, f, m, na)
             jac[e, 2] = eng * d_factor * c_f * w
-        jac[e, 1] = eng * (d_speed * w + torque) + g_slope * w + sigma * g
+        jac[e, 0] = -x_angle * w
+        jac[e, 1] = eng * (d_speed * w + torque) + g_slope * w + sigma * g - extra - x_speed * w
         return
     compliant_jacobian(cw, y, jac, f, c_f, law, m, na)
 
@@ -272,12 +276,13 @@ def compliant_jacobian(
     torque, d_speed, d_factor, _, p_speed, p_factor = damper_side_parts(
         law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], wd, f
     )
-    stiffness = sg[L.SG_SLOPE]
+    extra, x_angle, x_speed = registered_terms(cw, sg[L.SG_PHI] + phi, w)
+    stiffness = sg[L.SG_SLOPE] + x_angle
     if par[L.GW] != 0.0:
         stiffness -= gravity_torque_slope(sg[L.SG_PHI] + phi, par[L.GW], par[L.GTH])
     damper_speed = gd_slope + d_speed  # d(damper friction and damping)/d(w_D)
     # d(load force)/d(phi, delta, w, speed) and d(damper force)/d(same), then Q = (L + D, -D).
-    load = (stiffness, -k_mesh, -g_slope, -d_mesh)
+    load = (stiffness, -k_mesh, x_speed - g_slope, -d_mesh)
     damper = (0.0, k_mesh, -damper_speed, d_mesh + damper_speed)
     for j in range(4):
         q0 = load[j] + damper[j]
@@ -292,7 +297,8 @@ def compliant_jacobian(
         aux_jacobian(par, y, jac, float(p_speed), float(p_factor), f, m, na)
         jac[e, 4] = d_factor * c_f * wd
     power_wd = d_speed * wd + torque + gd_slope * wd + sigma_d * g_d
-    jac[e, 2] = power_wd + g_slope * w + sigma * g
+    jac[e, 0] = -x_angle * w
+    jac[e, 2] = power_wd + g_slope * w + sigma * g - extra - x_speed * w
     jac[e, 3] = -power_wd
     mode = md[L.MD_MESH]
     if mode == L.PRESS and tau != 0.0:

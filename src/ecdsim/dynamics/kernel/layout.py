@@ -12,6 +12,8 @@ structure of several words), plus its spring tables. Event codes are the indices
 
 from __future__ import annotations
 
+from ecdsim.dynamics.kernel import effects as _registry
+
 # --- the case table: one row per case ---------------------------------------------------
 (
     JL,  # load inertia at the input shaft [kg*m^2]
@@ -52,8 +54,12 @@ from __future__ import annotations
     MD,  # mesh damping d [N*m*s/rad]
     TREF,  # the damping law's reference temperature, where its factor is 1 [degC]
     EFFECTS,  # the effects the case has (EFFECT_* bits)
-    COLUMNS,
+    BUILT_IN_COLUMNS,
 ) = range(39)
+# Then one column per parameter of the registered effects (ecdsim.dynamics.kernel.effects).
+COLUMNS = _registry.END_COLUMN
+if BUILT_IN_COLUMNS != _registry.FIRST_COLUMN:  # the registry's columns follow EFFECTS
+    raise ImportError("effects.FIRST_COLUMN must be layout.BUILT_IN_COLUMNS")
 
 # --- effects: what a case has beyond the paper's rigid linear hinge ---------------------
 # Each path of the kernel lists the effects it models; a case with any other is refused
@@ -71,12 +77,17 @@ EFFECT_REBOUND = 512  # a rebounding end stop
 EFFECT_WARM_START = 1024  # heat carried over from a previous deployment
 EFFECT_STOP_TIME = 2048  # a stop time
 EFFECT_POWER_LAW = 4096  # a shear-thinning fluid damper's power law (physics.fluid)
-# The effects the kernel models (every path together), and those a closed-form segment
-# takes: linear damping at a constant temperature, Coulomb friction, no gravity.
-KERNEL_EFFECTS = 8191
+# The effects the kernel models (every path together: the built-in ones and the
+# registered ones, whose bits follow), and those a closed-form segment takes: linear
+# damping at a constant temperature, Coulomb friction, no gravity, and the registered
+# effects that declare it.
+BUILT_IN_EFFECTS = 8191
+if BUILT_IN_EFFECTS + 1 != _registry.FIRST_BIT:
+    raise ImportError("effects.FIRST_BIT must follow layout.BUILT_IN_EFFECTS")
+KERNEL_EFFECTS = BUILT_IN_EFFECTS | _registry.REGISTERED_BITS
 CLOSED_FORM_EFFECTS = (
     EFFECT_LOSSY | EFFECT_LOST_MOTION | EFFECT_RESISTANCE | EFFECT_REBOUND | EFFECT_STOP_TIME
-)
+) | _registry.CLOSED_FORM_BITS
 # Effects that act on a segment only while the damper side is engaged.
 ENGAGED_EFFECTS = (
     EFFECT_ROLLOFF | EFFECT_HEATING | EFFECT_TWO_NODE | EFFECT_WARM_START | EFFECT_POWER_LAW
