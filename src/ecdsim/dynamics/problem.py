@@ -34,33 +34,7 @@ from ecdsim.model import DeploymentSystem, EcdState
 from ecdsim.physics import mechanics, rolloff
 from ecdsim.solvers.base import QuasiStaticProblem
 
-# Per-case array fields of DynamicProblem (broadcast to the batch shape together).
-_CASE_FIELDS = (
-    "load_inertia",
-    "damper_inertia",
-    "ecd_friction",
-    "system_friction",
-    "static_friction_factor",
-    "system_static_friction_factor",
-    "restitution",
-    "lost_motion",
-    "initial_angle",
-    "initial_speed",
-    "ambient_temperature",
-    "gear_ratio",
-    "gearbox_damping_rate",
-    "heat_capacity",
-    "thermal_resistance",
-    "stribeck_speed",
-    "gear_stiffness",
-    "gear_mesh_damping",
-    "housing_heat_capacity",
-    "housing_thermal_resistance",
-    "initial_rotor_rise",
-    "initial_housing_rise",
-    "forward_efficiency",
-    "backward_efficiency",
-)
+_QS_FIELDS = ("angles", "torques", "friction", "damping_rate")
 
 
 @cache
@@ -219,6 +193,13 @@ class DynamicProblem(QuasiStaticProblem):
     def total_inertia(self) -> FloatArray:
         """J_L + J_D [kg*m^2]."""
         return np.asarray(self.load_inertia + self.damper_inertia)
+
+
+# Per-case array fields of DynamicProblem, in its order (broadcast to the batch shape
+# together): its own FloatArray fields.
+_CASE_FIELDS = tuple(
+    f.name for f in fields(DynamicProblem) if f.type == "FloatArray" and f.name not in _QS_FIELDS
+)
 
 
 def dynamic_problem(
@@ -381,7 +362,7 @@ def _case_fields(
 # Every field of DynamicProblem by where _one_case_problem takes it from: the base
 # problem's breakpoints, friction and damping; the per-case numbers; the settings. A
 # field added to the class must be added here too (tests/test_fast_paths.py).
-_BASE_FIELDS = ("angles", "torques", "friction", "damping_rate")
+_BASE_FIELDS = _QS_FIELDS
 _NO_GRAVITY = ("gravity_amplitude", "gravity_angle")
 _SETTING_FIELDS = (
     "eddy",

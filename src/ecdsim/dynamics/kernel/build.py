@@ -60,8 +60,7 @@ INLINE = frozenset(
         "crossed",
         "_endpoint",
         "_extremes",
-        "registered_torque",  # the registered effects' sums (kernel/effects.py)
-        "registered_terms",
+        "registered_terms",  # the registered effects' sum (kernel/effects.py)
     }
 )
 

@@ -27,7 +27,7 @@ import math
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.kernel import layout as L
-from ecdsim.dynamics.kernel.effects import registered_torque
+from ecdsim.dynamics.kernel.effects import registered_terms
 from ecdsim.dynamics.kernel.friction import STICK_MARGIN, capacity, drives, stuck_flags
 from ecdsim.dynamics.kernel.hinge import factor_at, mesh_now
 from ecdsim.physics.eddy import damper_side_torque
@@ -94,7 +94,7 @@ def indicator(cw: FloatArray, y: FloatArray, m: int, na: int) -> float:
         int(par[L.LAW]), par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], y[1], f
     )[0]
     x = y[0]
-    spring = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_torque(cw, sg[L.SG_PHI] + x, y[1])
+    spring = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_terms(cw, sg[L.SG_PHI] + x, y[1])[0]
     load = sigma * spring - par[L.FS]
     if par[L.GW] != 0.0:
         load -= sigma * gravity_torque(sg[L.SG_PHI] + x, par[L.GW], par[L.GTH])
@@ -150,7 +150,7 @@ def rest_push(cw: FloatArray, x: float) -> float:
     while the load is short of its static equilibrium."""
     par = md = sg = cw
     sigma = md[L.MD_SLIDE0]
-    torque = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_torque(cw, sg[L.SG_PHI] + x, 0.0)
+    torque = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_terms(cw, sg[L.SG_PHI] + x, 0.0)[0]
     if par[L.GW] != 0.0:
         torque -= gravity_torque(sg[L.SG_PHI] + x, par[L.GW], par[L.GTH])
     value: float = sigma * torque - (sg[L.SG_FC0] + sg[L.SG_EX0])

@@ -31,7 +31,7 @@ import math
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.kernel import layout as L
-from ecdsim.dynamics.kernel.effects import registered_terms, registered_torque
+from ecdsim.dynamics.kernel.effects import registered_terms
 from ecdsim.physics.eddy import damper_side_parts, damper_side_torque
 from ecdsim.physics.friction import stribeck_excess
 from ecdsim.physics.gravity import gravity_torque, gravity_torque_slope
@@ -115,7 +115,7 @@ def hinge_forces(
     w = y[m]
     sigma = md[L.MD_SLIDE0]
     g = excess_at(sigma * w, sg[L.SG_EX0], par[L.WST])[0]
-    extra = registered_torque(cw, sg[L.SG_PHI] + phi, w)  # kernel/effects.py
+    extra = registered_terms(cw, sg[L.SG_PHI] + phi, w)[0]  # kernel/effects.py
     load = load_spring(sg, phi) - sigma * (sg[L.SG_FC0] + g) + extra
     if par[L.GW] != 0.0:
         load -= float(gravity_torque(sg[L.SG_PHI] + phi, par[L.GW], par[L.GTH]))

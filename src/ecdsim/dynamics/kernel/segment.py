@@ -14,7 +14,7 @@ import math
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.kernel import layout as L
-from ecdsim.dynamics.kernel.effects import registered_torque
+from ecdsim.dynamics.kernel.effects import registered_terms
 from ecdsim.dynamics.kernel.friction import projected_inverse, stuck_flags
 from ecdsim.physics.eddy import damper_side_torque
 from ecdsim.physics.gearing import power_flow_indicator
@@ -139,7 +139,7 @@ def _flow(cw: FloatArray, y: FloatArray, factor: float, sigma: int) -> None:
     torque = damper_side_torque(
         law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], speed0, factor
     )[0]
-    felt = sigma * (sg[L.SG_T0] + registered_torque(cw, sg[L.SG_PHI], y[1])) - par[L.FS]
+    felt = sigma * (sg[L.SG_T0] + registered_terms(cw, sg[L.SG_PHI], y[1])[0]) - par[L.FS]
     if par[L.GW] != 0.0:
         felt -= sigma * gravity_torque(sg[L.SG_PHI], par[L.GW], par[L.GTH])
     indicator = power_flow_indicator(par[L.JL], par[L.JD], torque + sg[L.SG_FQ], felt)
