@@ -15,7 +15,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from ecdsim.config.schema import SpecBase
+from ecdsim.config.schema import CoreConfigSpec
 from ecdsim.dynamics import DynamicParameters
 from ecdsim.dynamics.kernel import effects, layout, loop
 from ecdsim.dynamics.kernel.build import backend
@@ -56,7 +56,7 @@ def test_every_parameter_has_its_config_key(name: str) -> None:
     # `[section] key` exists in the config schema and reaches DynamicParameters.effects.
     for p in _effect(name).parameters:
         section, key = p.config.split(".")
-        spec_section = SpecBase.model_fields[section].annotation
+        spec_section = CoreConfigSpec.model_fields[section].annotation
         assert key in spec_section.model_fields, p.config  # type: ignore[union-attr]
 
 
