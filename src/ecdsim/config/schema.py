@@ -376,6 +376,9 @@ class LoadSpec(_Section):
     # Breakaway over kinetic FS_T (dynamic method); None = [damper] static_friction_factor.
     static_friction_factor: StaticFactor | None = None
     gravity: GravitySpec | None = None
+    # Viscous drag of the hinge's bearings, T = -c_b omega at the hinge (dynamic method;
+    # the registry's worked example, dynamics/kernel/effects.py); None = none.
+    bearing_drag: NonNegativeDamping | None = None
     # True in a file `ecdsim fit drop-test -o` wrote without --config: this [load] is a
     # stand-in, and every command flags its results until the line is deleted (issue 26).
     placeholder: bool = False

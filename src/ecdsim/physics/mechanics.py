@@ -174,3 +174,36 @@ def mesh_elastic_energy(relative_angle: Real, half_gap: Real, stiffness: Real) -
     """
     deflection = np.maximum(np.abs(relative_angle) - half_gap, 0.0)
     return 0.5 * stiffness * deflection * deflection
+
+
+def bearing_drag_torque(angle: float, speed: float, rate: float) -> float:
+    """Viscous drag of the hinge's bearings on the load, ``T = -c_b omega`` [N*m].
+
+    A lubricated journal bearing's friction torque at low speed is linear in speed
+    (Petroff's law, e.g. Shigley's *Mechanical Engineering Design*, 10th ed., Eq. 12-6:
+    ``T = 4 pi^2 r^3 l mu n / c``), lumped here into one rate c_b at the slow (hinge)
+    shaft. The worked example of an effect (docs/architecture.md, "How to add an effect").
+
+    Parameters
+    ----------
+    angle : the load's deployed angle [rad] (the drag does not depend on it)
+    speed : the load's speed omega [rad/s]
+    rate : c_b [N*m*s/rad], >= 0
+
+    >>> bearing_drag_torque(0.3, 2.0, 0.01)
+    -0.02
+    """
+    return -rate * speed
+
+
+def bearing_drag_slopes(angle: float, speed: float, rate: float) -> tuple[float, float]:
+    """``(dT/dangle, dT/dspeed)`` of :func:`bearing_drag_torque` (Petroff, Shigley Eq. 12-6:
+    see there): ``(0, -c_b)`` [N*m/rad, N*m*s/rad].
+
+    Parameters
+    ----------
+    angle : the load's deployed angle [rad]
+    speed : the load's speed omega [rad/s]
+    rate : c_b [N*m*s/rad], >= 0
+    """
+    return 0.0, -rate

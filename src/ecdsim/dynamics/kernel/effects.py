@@ -14,6 +14,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from ecdsim.physics.mechanics import bearing_drag_slopes, bearing_drag_torque
+
 FIRST_COLUMN, FIRST_BIT = 38, 8192  # after layout.EFFECTS and its bits (checked there)
 
 
@@ -41,7 +43,15 @@ class Effect:
     closed_form: bool = False  # the closed form's linear segment models it
 
 
-REGISTRY: tuple[Effect, ...] = ()
+REGISTRY: tuple[Effect, ...] = (
+    # The worked example of docs/architecture.md: a viscous hinge-bearing drag.
+    Effect(
+        "bearing_drag",
+        (Parameter("bearing_drag", "load.bearing_drag", "N*m*s/rad", example=0.5),),
+        bearing_drag_torque,
+        bearing_drag_slopes,
+    ),
+)
 
 PARAMETERS = tuple(p for e in REGISTRY for p in e.parameters)
 COLUMN = {p.name: FIRST_COLUMN + i for i, p in enumerate(PARAMETERS)}
