@@ -33,7 +33,8 @@ class EnergyBalance:
     damper_dissipation : energy dissipated by the ECD's damping (eddy currents and gearbox
         damping) [J]; with a Stribeck speed it also holds the dissipation of the friction
         above Coulomb, ``(F_brk - F_C) exp(-(w/w_St)^2)``, integrated with the damping
-        power in the one dissipation state (:mod:`ecdsim.dynamics.kernel.hinge`)
+        power in the one dissipation state (:mod:`ecdsim.dynamics.kernel.hinge`), and so
+        does a registered effect's, ``-T omega`` (a bearing drag: kernel/effects.py)
     friction_dissipation : energy dissipated by Coulomb friction (FECD and FS), the
         kinetic value times the path length [J]
     engagement_loss : kinetic energy lost when the lost motion closed [J]
