@@ -98,12 +98,20 @@ def _ours(value: object) -> bool:
 
 
 class _Compiler:
-    """Compiled copies of kernel functions, each calling the compiled copies of its own."""
+    """Compiled copies of kernel functions, each calling the compiled copies of its own.
 
-    def __init__(self) -> None:
+    With ``substitutes`` (a model other than the hinge: the wing) the named globals are
+    replaced by the given functions in every copy, every copy is compiled with numba's
+    reference-counted memory, and ``tag`` keeps its cache entries apart."""
+
+    def __init__(
+        self, substitutes: dict[str, Callable[..., Any]] | None = None, tag: str = ""
+    ) -> None:
         # numba with ecdsim's compile notice and compile count (ecdsim._numba).
         self._numba: Any = _numba.load()
         self._done: dict[Callable[..., Any], Any] = {}
+        self._substitutes = substitutes or {}
+        self._tag = tag
 
     def __call__(self, func: Callable[..., Any]) -> Any:
         done = self._done.get(func)
@@ -117,27 +125,30 @@ class _Compiler:
         copy.__module__ = func.__module__
         law = (func.__module__ or "").startswith(PHYSICS_PACKAGE)
         inline = "always" if func.__name__ in INLINE or law else "never"
-        nrt = func.__name__ in ALLOCATING
+        nrt = func.__name__ in ALLOCATING or bool(self._substitutes)
         njit: Any = self._numba.njit  # _nrt: numba's own option (ALLOCATING), not in its stubs
         dispatcher = njit(nogil=True, error_model="numpy", inline=inline, _nrt=nrt)(copy)
-        dispatcher._cache = _digest_cache(self._numba)(copy)  # cache=True, keyed below
+        dispatcher._cache = _digest_cache(self._numba, self._tag)(copy)  # cache=True, keyed
         _numba.note_cache(dispatcher._cache.cache_path)
         self._done[func] = dispatcher
         for name, value in list(namespace.items()):
-            if _ours(value):
+            if name in self._substitutes:
+                namespace[name] = self(self._substitutes[name])
+            elif _ours(value):
                 namespace[name] = self(value)
         return dispatcher
 
 
 @cache
-def _digest_cache(numba: Any) -> type:
-    """numba's function cache with the sources' digest in every entry's key."""
+def _digest_cache(numba: Any, tag: str = "") -> type:
+    """numba's function cache with the sources' digest (and a model's tag) in every
+    entry's key."""
     from numba.core.caching import FunctionCache
 
     class DigestCache(FunctionCache):
         def _index_key(self, sig: Any, codegen: Any) -> Any:
             base: tuple[Any, ...] = super()._index_key(sig, codegen)  # type: ignore[no-untyped-call]
-            return (*base, source_digest())
+            return (*base, source_digest(), tag)
 
     return DigestCache
 
@@ -211,11 +222,48 @@ def backend(name: str | None = None) -> Backend:
     Without a name: compiled when numba is installed and not switched off
     (``ECDSIM_NUMBA=0``), else plain.
     """
+    return _backend(resolve_name(name))
+
+
+@cache
+def substituted(func: Callable[..., Any], name: str, tag: str) -> Any:
+    """``func`` (a kernel entry point) with the kernel's hinge equations replaced by
+    another model's, recursively, in the backend ``name``: compiled (``"numba"``),
+    plain (``"python"``), or plain with scipy's steppers (``"scipy"``). The model's
+    substitutes are :data:`SUBSTITUTES` ``[tag]`` (the wing: ``"wing"``)."""
+    substitutes: dict[str, Callable[..., Any]] = dict(_substitutes(tag))
+    if name == "numba":
+        return _Compiler(substitutes, tag)(func)
+    if name == "scipy":
+        from ecdsim.dynamics import scipy_steppers
+
+        plain = _Substituter(substitutes)
+        substitutes["start_stepper"] = plain(scipy_steppers.start_stepper)
+        substitutes["attempt"] = scipy_steppers.attempt
+    return _Substituter(substitutes)(func)
+
+
+def _substitutes(tag: str) -> dict[str, Callable[..., Any]]:
+    """The functions a model puts in place of the hinge's (by global name)."""
+    if tag != "wing":
+        raise ValueError(f"no model {tag!r}")
+    from ecdsim.dynamics.kernel import wing_equations
+
+    return {
+        "derivatives": wing_equations.chain_derivatives,
+        "jacobian": wing_equations.chain_jacobian,
+        "event_value": wing_equations.chain_event_value,
+    }
+
+
+def resolve_name(name: str | None) -> str:
+    """The backend's name: as given, or ``"numba"`` where available and not switched
+    off, else ``"python"``."""
     if name is None:
-        name = "numba" if numba_requested() and _numba_available() else "python"
+        return "numba" if numba_requested() and _numba_available() else "python"
     if name not in ("numba", "python", "scipy"):
         raise ValueError(f"backend must be 'numba', 'python' or 'scipy', got {name!r}")
-    return _backend(name)
+    return name
 
 
 def _numba_available() -> bool:

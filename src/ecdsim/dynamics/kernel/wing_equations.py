@@ -1,0 +1,352 @@
+"""A wing's equations of motion on the kernel: the planar chain in its groups' coordinates.
+
+Lagrange's equations of the panel chain (:mod:`ecdsim.physics.chain`: ``M(q)``, the
+velocity terms ``h(q, q')``, the ground test's gravity), in each hinge's deployed angle
+``phi = s (q - q_stowed)`` (docs/wing.md):
+
+    M_phi = S M(q) S + diag(J_D),   F_j = T_j(phi_j) - B_j phi_j' - latch_j + cables - s_j h_j + s_j Q_g,j
+
+and in the groups' coordinates psi (hinges joined by rigid cables share one,
+``phi = P psi``): ``M_psi = P^T M_phi P``, ``Q_psi = P^T F - d F_k`` with each sliding
+group's kinetic friction F_k against its direction d. A held group (stuck, or latched) is
+a constraint ``psi_g'' = 0``; its holding torque, what its friction or latch supplies, is
+the constraint force (:mod:`ecdsim.dynamics.kernel.friction`'s constraint system, solved
+by its :func:`~ecdsim.dynamics.kernel.friction.solve_small`). The hinge laws are the
+single hinge's: the spring table, the ECD as ``BECD_T`` (Eq. 3) with its Coulomb
+``FECD_T`` (Eq. 4), the compliant latch's spring and damper, the cable's two strands
+(:func:`ecdsim.physics.cable.cable_torque`).
+
+The functions have the hinge's signatures (``derivatives(cw, y, dy, dm, da, dq)`` ...),
+so the kernel's RODAS4 step, its step control and its event locator run a wing unchanged
+(:mod:`ecdsim.dynamics.kernel.build` substitutes these for the hinge's). The Jacobian is
+taken by forward differences (the chain's ``dM/dq`` is not worth an analytic form; the
+stage matrix only needs it to the step's accuracy).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ecdsim._types import FloatArray
+from ecdsim.dynamics.kernel import wing_layout as W
+from ecdsim.dynamics.kernel.friction import solve_small
+from ecdsim.physics.cable import cable_torque
+from ecdsim.physics.chain import gravity_forces, mass_matrix, velocity_terms
+
+# Forward-difference steps of the Jacobian: sqrt(eps) relative, at least this much.
+FD_RELATIVE = 1.4901161193847656e-08
+FD_FLOOR = 1e-6
+# Relative rounding of a holding torque: below it, a holding torque is zero.
+ROUNDING = 1e-13
+
+
+def drive_torque(cw: FloatArray, j: int, phi: float) -> float:
+    """Hinge j's net drive at phi: its table (spring less resistive torque), linear
+    between breakpoints and continued with its end slopes beyond them [N*m]."""
+    k = int(cw[W.W_K])
+    last = int(cw[W.hinge(W.H_POINTS, j)]) - 1
+    p = 0
+    while p < last - 1 and phi > cw[W.table_angle(k, j, p + 1)]:
+        p += 1
+    a0 = cw[W.table_angle(k, j, p)]
+    a1 = cw[W.table_angle(k, j, p + 1)]
+    t0 = cw[W.table_torque(k, j, p)]
+    t1 = cw[W.table_torque(k, j, p + 1)]
+    return t0 + (t1 - t0) * (phi - a0) / (a1 - a0)
+
+
+def drive_work(cw: FloatArray, j: int, phi: float) -> float:
+    """The drive's work from 0 to phi [J] (exact for the piecewise-linear table)."""
+    k = int(cw[W.W_K])
+    last = int(cw[W.hinge(W.H_POINTS, j)]) - 1
+    total = 0.0
+    start = 0.0
+    for p in range(last):
+        a1 = cw[W.table_angle(k, j, p + 1)]
+        end = min(phi, a1) if p < last - 1 else phi
+        if end > start:
+            total += 0.5 * (drive_torque(cw, j, start) + drive_torque(cw, j, end)) * (end - start)
+            start = end
+    return total
+
+
+def hinge_angles(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, FloatArray]:
+    """Each hinge's deployed angle and speed at state y (``phi = P psi``)."""
+    n = int(cw[W.W_N])
+    phi = np.empty(n)
+    rate = np.empty(n)
+    for j in range(n):
+        g = int(cw[W.hinge(W.H_GROUP, j)])
+        factor = cw[W.hinge(W.H_FACTOR, j)]
+        phi[j] = factor * y[g]
+        rate[j] = factor * y[m + g]
+    return phi, rate
+
+
+def _panels(cw: FloatArray, field: int, n: int) -> FloatArray:
+    start = W.hinge(field, 0)
+    return cw[start : start + n]
+
+
+def relative(cw: FloatArray, phi: FloatArray, rate: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The relative angles q and their rates q' of deployed angles and speeds."""
+    n = phi.shape[0]
+    q = np.empty(n)
+    dq = np.empty(n)
+    for j in range(n):
+        s = cw[W.hinge(W.H_SIGN, j)]
+        q[j] = cw[W.hinge(W.H_STOWED, j)] + s * phi[j]
+        dq[j] = s * rate[j]
+    return q, dq
+
+
+def latch_torque(cw: FloatArray, j: int, phi: float, rate: float) -> float:
+    """Hinge j's engaged compliant latch: ``k (phi - travel) + c phi'`` [N*m] (0 if not)."""
+    if cw[W.hinge(W.H_ENGAGED, j)] == 0.0:
+        return 0.0
+    overshoot = phi - cw[W.hinge(W.H_TRAVEL, j)]
+    value: float = cw[W.hinge(W.H_LATCH_K, j)] * overshoot + cw[W.hinge(W.H_LATCH_C, j)] * rate
+    return value
+
+
+def cable_deflection(cw: FloatArray, c: int, phi: FloatArray) -> float:
+    """Elastic cable c's ``delta = phi_out - r phi_in`` [rad]."""
+    inboard = int(cw[W.cable(W.C_IN, c)])
+    value: float = phi[inboard + 1] - cw[W.cable(W.C_RATIO, c)] * phi[inboard]
+    return value
+
+
+def hinge_forces(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, FloatArray]:
+    """The mass matrix in deployed angles and the forces on them at state y, without
+    friction: ``(M_phi, F)`` (module notes)."""
+    n = int(cw[W.W_N])
+    phi, rate = hinge_angles(cw, y, m)
+    q, dq = relative(cw, phi, rate)
+    mass = _panels(cw, W.H_MASS, n)
+    cga = _panels(cw, W.H_CGA, n)
+    cgb = _panels(cw, W.H_CGB, n)
+    length = _panels(cw, W.H_LENGTH, n)
+    matrix = mass_matrix(q, mass, cga, cgb, _panels(cw, W.H_INERTIA, n), length)
+    velocity = velocity_terms(q, dq, mass, cga, cgb, length)
+    forces = np.empty(n)
+    for j in range(n):
+        s = cw[W.hinge(W.H_SIGN, j)]
+        forces[j] = (
+            drive_torque(cw, j, phi[j])
+            - cw[W.hinge(W.H_DAMPING, j)] * rate[j]
+            - latch_torque(cw, j, phi[j], rate[j])
+            - s * velocity[j]
+        )
+        for k in range(n):
+            matrix[j, k] *= s * cw[W.hinge(W.H_SIGN, k)]
+        matrix[j, j] += cw[W.hinge(W.H_JD, j)]
+    if cw[W.W_GX] != 0.0 or cw[W.W_GY] != 0.0:
+        weight = gravity_forces(
+            q, mass, cga, cgb, length, _panels(cw, W.H_OFFLOAD, n), cw[W.W_GX], cw[W.W_GY]
+        )
+        for j in range(n):
+            forces[j] += cw[W.hinge(W.H_SIGN, j)] * weight[j]
+    for c in range(int(cw[W.W_C])):
+        torque = cable_torque(
+            cable_deflection(cw, c, phi), cw[W.cable(W.C_K, c)], cw[W.cable(W.C_SLACK, c)]
+        )
+        inboard = int(cw[W.cable(W.C_IN, c)])
+        forces[inboard + 1] += torque
+        forces[inboard] -= cw[W.cable(W.C_RATIO, c)] * torque
+    return matrix, forces
+
+
+def group_system(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, FloatArray]:
+    """``M_psi`` and ``Q_psi`` (with the sliding groups' kinetic friction) at state y."""
+    n = int(cw[W.W_N])
+    matrix, forces = hinge_forces(cw, y, m)
+    mass = np.zeros((m, m))
+    rhs = np.zeros(m)
+    for j in range(n):
+        gj = int(cw[W.hinge(W.H_GROUP, j)])
+        fj = cw[W.hinge(W.H_FACTOR, j)]
+        rhs[gj] += fj * forces[j]
+        for k in range(n):
+            gk = int(cw[W.hinge(W.H_GROUP, k)])
+            mass[gj, gk] += fj * cw[W.hinge(W.H_FACTOR, k)] * matrix[j, k]
+    for g in range(m):
+        rhs[g] -= cw[W.group(W.G_DIR, g)] * cw[W.group(W.G_FRICTION, g)]
+    return mass, rhs
+
+
+def accelerations(cw: FloatArray, y: FloatArray, acc: FloatArray, holding: FloatArray, m: int) -> None:
+    """The groups' accelerations (held ones 0) and the held groups' holding torques
+    (``(M a)_g - Q_g``, what their friction or latch supplies; 0 for sliding ones)."""
+    mass, rhs = group_system(cw, y, m)
+    free = 0
+    for g in range(m):
+        if cw[W.group(W.G_DIR, g)] != 0.0:
+            free += 1
+    index = np.empty(free, dtype=np.int64)
+    i = 0
+    for g in range(m):
+        acc[g] = 0.0
+        if cw[W.group(W.G_DIR, g)] != 0.0:
+            index[i] = g
+            i += 1
+    if free > 0:
+        system = np.empty((free, free + 1))
+        for r in range(free):
+            for c in range(free):
+                system[r, c] = mass[index[r], index[c]]
+            system[r, free] = rhs[index[r]]
+        solution = np.empty(free)
+        solve_small(system, solution, free)
+        for r in range(free):
+            acc[index[r]] = solution[r]
+    scale = 0.0
+    for g in range(m):
+        scale = max(scale, abs(rhs[g]))
+    for g in range(m):
+        holding[g] = 0.0
+        if cw[W.group(W.G_DIR, g)] == 0.0:
+            value = -rhs[g]
+            for k in range(m):
+                value += mass[g, k] * acc[k]
+            holding[g] = value if abs(value) > ROUNDING * scale else 0.0
+
+
+def chain_derivatives(
+    cw: FloatArray, y: FloatArray, dy: FloatArray, dm: tuple[int, ...], da: tuple[int, ...],
+    dq: tuple[int, ...],
+) -> None:  # fmt: skip
+    """``dy/dt`` of the wing at state y: ``[psi', psi'', dissipated powers]``."""
+    m = len(dm)
+    n = int(cw[W.W_N])
+    acc = np.empty(m)
+    holding = np.empty(m)
+    accelerations(cw, y, acc, holding, m)
+    for g in range(m):
+        moving = cw[W.group(W.G_DIR, g)] != 0.0
+        dy[g] = y[m + g] if moving else 0.0
+        dy[m + g] = acc[g]
+    e = 2 * m + len(da)
+    for j in range(n):
+        g = int(cw[W.hinge(W.H_GROUP, j)])
+        rate = cw[W.hinge(W.H_FACTOR, j)] * y[m + g]
+        dy[e + j] = cw[W.hinge(W.H_DAMPING, j)] * rate * rate
+        dy[e + n + j] = cw[W.group(W.G_DIR, g)] * cw[W.hinge(W.H_FRICTION, j)] * rate
+        latch = cw[W.hinge(W.H_ENGAGED, j)] * cw[W.hinge(W.H_LATCH_C, j)]
+        dy[e + 2 * n + j] = latch * rate * rate
+
+
+def chain_jacobian(
+    cw: FloatArray, y: FloatArray, jac: FloatArray, dm: tuple[int, ...], da: tuple[int, ...],
+    dq: tuple[int, ...],
+) -> None:  # fmt: skip
+    """``d(dy/dt)/dy`` by forward differences over the coordinates and speeds (the
+    quadratures' columns are zero; the coordinates' rows ``q' = v`` the stepper knows)."""
+    m = len(dm)
+    size = 2 * m + len(da) + len(dq)
+    base = np.empty(size)
+    moved = np.empty(size)
+    chain_derivatives(cw, y, base, dm, da, dq)
+    trial = y.copy()
+    for c in range(size):
+        for r in range(m, size):
+            jac[r, c] = 0.0
+    for c in range(2 * m + len(da)):
+        step = FD_RELATIVE * max(abs(y[c]), FD_FLOOR)
+        trial[c] = y[c] + step
+        step = trial[c] - y[c]
+        chain_derivatives(cw, trial, moved, dm, da, dq)
+        trial[c] = y[c]
+        for r in range(m, size):
+            jac[r, c] = (moved[r] - base[r]) / step
+
+
+def kinetic(cw: FloatArray, y: FloatArray, m: int) -> float:
+    """The wing's kinetic energy ``psi'^T M_psi psi' / 2`` [J] (the rotors' included)."""
+    mass, _ = group_system(cw, y, m)
+    total = 0.0
+    for g in range(m):
+        for k in range(m):
+            total += 0.5 * y[m + g] * mass[g, k] * y[m + k]
+    return total
+
+
+def holding_margin(cw: FloatArray, g: int, holding: float, psi: float) -> float:
+    """How far stuck group g's holding torque is from its breakaway (> 0 holds); on its
+    stowed stop the stop holds any push back."""
+    limit = cw[W.group(W.G_BREAKAWAY, g)] * (1.0 + 1e-12)
+    if psi == 0.0:
+        value: float = holding + limit
+        return value
+    return limit - abs(holding)
+
+
+def chain_event_value(
+    cw: FloatArray, slot: int, y: FloatArray, scratch: FloatArray, column: FloatArray, m: int,
+    na: int,
+) -> float:  # fmt: skip
+    """Event ``slot``'s function at state y: > 0 inside the segment's mode, 0 at the event
+    (slots: :mod:`ecdsim.dynamics.kernel.wing_layout`)."""
+    if slot < W.NMAX:
+        g = slot
+        direction = cw[W.group(W.G_DIR, g)]
+        if direction != 0.0:
+            speed: float = direction * y[m + g]
+            return speed
+        acc = np.empty(m)
+        holding = np.empty(m)
+        accelerations(cw, y, acc, holding, m)
+        return holding_margin(cw, g, holding[g], y[g])
+    if slot < 2 * W.NMAX:
+        g = slot - W.NMAX
+        if cw[W.group(W.G_DIR, g)] > 0.0:
+            ahead: float = cw[W.group(W.G_TRAVEL, g)] - y[g]
+            return ahead
+        behind: float = y[g]
+        return behind
+    c = (slot - 2 * W.NMAX) // 2
+    phi, _ = hinge_angles(cw, y, m)
+    limit = cw[W.cable(W.C_SLACK, c)] / cw[W.cable(W.C_K, c)]
+    delta = cable_deflection(cw, c, phi)
+    if (slot - 2 * W.NMAX) % 2 == 0:
+        value: float = cw[W.cable(W.C_SIDE_A, c)] * (delta - limit)
+        return value
+    other: float = cw[W.cable(W.C_SIDE_B, c)] * (delta + limit)
+    return other
+
+
+def active_slots(cw: FloatArray, y: FloatArray, active: FloatArray, m: int) -> None:
+    """The slots a segment arms: each unlocked group's motion; each sliding group's latch
+    ahead (a rigid latch, or a compliant one not yet engaged) or stowed stop behind; both
+    slack points of each elastic cable, oriented to the side the cable starts on."""
+    for slot in range(W.SLOTS):
+        active[slot] = 0.0
+    for g in range(m):
+        direction = cw[W.group(W.G_DIR, g)]
+        if cw[W.group(W.G_LOCKED, g)] == 0.0:
+            active[g] = 1.0
+        first = int(cw[W.group(W.G_FIRST, g)])
+        engaged = cw[W.hinge(W.H_ENGAGED, first)] != 0.0
+        if direction > 0.0 and not engaged:
+            active[W.NMAX + g] = 1.0
+        elif direction < 0.0:
+            active[W.NMAX + g] = 1.0
+    phi, rate = hinge_angles(cw, y, m)
+    for c in range(int(cw[W.W_C])):
+        limit = cw[W.cable(W.C_SLACK, c)] / cw[W.cable(W.C_K, c)]
+        delta = cable_deflection(cw, c, phi)
+        inboard = int(cw[W.cable(W.C_IN, c)])
+        moving = rate[inboard + 1] - cw[W.cable(W.C_RATIO, c)] * rate[inboard]
+        cw[W.cable(W.C_SIDE_A, c)] = _side(delta - limit, moving)
+        cw[W.cable(W.C_SIDE_B, c)] = _side(delta + limit, moving)
+        active[2 * W.NMAX + 2 * c] = 1.0
+        active[2 * W.NMAX + 2 * c + 1] = 1.0
+
+
+def _side(value: float, moving: float) -> float:
+    """The orientation that makes an event function positive where it starts: its sign,
+    or at a crossing just taken (|value| at rounding) the way it moves."""
+    if abs(value) > 1e-12:
+        return 1.0 if value > 0.0 else -1.0
+    return 1.0 if moving >= 0.0 else -1.0

@@ -1,0 +1,304 @@
+"""A wing's deployment on the dynamic core: pack the wing, run the kernel, read it back.
+
+:func:`deploy_wing` solves a :class:`~ecdsim.wing.model.Wing` at each temperature with
+the kernel's event loop for N hinges (:mod:`ecdsim.dynamics.kernel.wing_loop`: the
+friction machine, RODAS4 and the dense-output locator, the chain's equations of
+:mod:`ecdsim.dynamics.kernel.wing_equations`) and returns a
+:class:`~ecdsim.wing.result.WingResult`.
+
+The wing's path models (gates closed by default, as every path of the kernel): per
+hinge a spring (linear or table, less a resistive table), the ECD's linear damping
+``BECD_T`` and Coulomb friction ``FECD_T`` with the hinge friction ``FS_T`` and their
+breakaway (stick-slip), the rotor and gear train reflected to the hinge, a rigid or
+compliant latch, the stowed stop; cables rigid or elastic; a ground test's gravity and
+offload. An ECD with an effect the wing's path does not model yet (roll-off, heating,
+Stribeck, lost motion, a lossy or compliant gear) is refused in one line naming the
+hinge and the key (:class:`WingUnsupported`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ecdsim._types import FloatArray
+from ecdsim.dynamics.kernel import wing_layout as W
+from ecdsim.dynamics.kernel.build import resolve_name, substituted
+from ecdsim.physics import chain
+from ecdsim.physics.cable import cable_energy
+from ecdsim.wing.model import Wing
+from ecdsim.wing.result import LatchEvent, WingCase, WingEnergy, WingEvent, WingResult
+
+DEFAULT_RTOL = 1e-8
+MAX_EVENTS = 2000
+# Absolute tolerances as fractions of rtol: angles [rad], speeds [rad/s], energies [J].
+ATOL_ANGLE = 1e-3
+ATOL_ENERGY = 1e-3
+POINTS = 20_000  # the points buffer's first size (enlarged and run again when full)
+
+
+class WingUnsupported(ValueError):
+    """A wing with an effect the wing's solver does not model (one line, the key named)."""
+
+
+@dataclass(frozen=True)
+class _Groups:
+    """Hinges joined by rigid cables: each hinge's group and factor (phi = factor psi)."""
+
+    of: tuple[int, ...]
+    factor: tuple[float, ...]
+    first: tuple[int, ...]
+
+    @property
+    def count(self) -> int:
+        return len(self.first)
+
+
+def _groups(wing: Wing) -> _Groups:
+    n = wing.size
+    root = list(range(n))
+    factor = [1.0] * n
+    for c in sorted(wing.cables, key=lambda c: c.inboard):
+        if c.rigid:
+            root[c.inboard + 1] = root[c.inboard]
+            factor[c.inboard + 1] = factor[c.inboard] * c.ratio
+    roots = sorted(set(root))
+    of = tuple(roots.index(r) for r in root)
+    return _Groups(of, tuple(factor), tuple(roots))
+
+
+def check_supported(wing: Wing) -> None:
+    """Refuse what the wing's solver does not model, in one line naming the key."""
+    if wing.size > W.NMAX:
+        raise WingUnsupported(f"wing.panels: {wing.size} panels; the wing's solver takes up to {W.NMAX}")
+    for i, hinge in enumerate(wing.hinges):
+        ecd = hinge.ecd
+        if ecd is None:
+            continue
+        at = f"wing.hinges[{i}] ({hinge.name}): its ECD's"
+        found = (
+            ("damper.rolloff", ecd.rolloff is not None),
+            ("damper.thermal", ecd.thermal is not None),
+            ("damper.stribeck_speed", ecd.stribeck_speed is not None),
+            ("gearbox.stiffness", ecd.gear_stiffness is not None),
+            ("gearbox.lost_motion", ecd.lost_motion > 0.0),
+            ("gearbox.efficiency", ecd.ecd.gearbox.efficiency is not None),
+        )
+        for key, present in found:
+            if present:
+                raise WingUnsupported(
+                    f"{at} {key} is not modelled by the wing's solver yet (docs/wing.md); "
+                    "remove it to solve the wing without it"
+                )
+
+
+def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) -> FloatArray:
+    """The wing's words at one temperature (:mod:`ecdsim.dynamics.kernel.wing_layout`)."""
+    n = wing.size
+    groups = _groups(wing)
+    tables = [h.load.drive.breakpoints(h.travel, temperature) for h in wing.hinges]
+    points = max(int(np.asarray(a).shape[0]) for a, _ in tables)
+    cw = np.zeros(W.words(points))
+    arrays = wing.chain_arrays()
+    elastic = [c for c in wing.cables if not c.rigid]
+    gravity = wing.ground_test.gravity if wing.ground_test is not None else (0.0, 0.0)
+    cw[W.W_N], cw[W.W_M], cw[W.W_C], cw[W.W_K] = n, groups.count, len(elastic), points
+    cw[W.W_GX], cw[W.W_GY] = gravity
+    cw[W.W_MAX_EVENTS] = max_events
+    cw[W.W_STOP] = stop_time
+    for j, hinge in enumerate(wing.hinges):
+        state = hinge.at(temperature)
+        values = {
+            W.H_MASS: arrays["mass"][j],
+            W.H_CGA: arrays["cg_along"][j],
+            W.H_CGB: arrays["cg_across"][j],
+            W.H_INERTIA: arrays["inertia"][j],
+            W.H_LENGTH: arrays["length"][j],
+            W.H_OFFLOAD: arrays["offload"][j],
+            W.H_STOWED: hinge.stowed_angle,
+            W.H_SIGN: hinge.direction,
+            W.H_TRAVEL: hinge.travel,
+            W.H_JD: hinge.ecd.reflected_inertia if hinge.ecd is not None else 0.0,
+            W.H_DAMPING: float(state.damping_rate),
+            W.H_FRICTION: float(state.kinetic_friction),
+            W.H_BREAKAWAY: float(state.breakaway_friction),
+            W.H_LATCH_K: hinge.latch.stiffness or 0.0,
+            W.H_LATCH_C: hinge.latch.damping,
+            W.H_RESTITUTION: hinge.latch.restitution,
+            W.H_GROUP: groups.of[j],
+            W.H_FACTOR: groups.factor[j],
+            W.H_POINTS: np.asarray(tables[j][0]).shape[0],
+        }
+        for field, value in values.items():
+            cw[W.hinge(field, j)] = value
+        angles, torques = (np.asarray(a, dtype=float).reshape(-1) for a in tables[j])
+        for p in range(points):
+            q = min(p, angles.shape[0] - 1)
+            cw[W.table_angle(points, j, p)] = angles[q]
+            cw[W.table_torque(points, j, p)] = torques[q]
+    for g, first in enumerate(groups.first):
+        members = [j for j in range(n) if groups.of[j] == g]
+        cw[W.group(W.G_FRICTION, g)] = sum(
+            groups.factor[j] * cw[W.hinge(W.H_FRICTION, j)] for j in members
+        )
+        cw[W.group(W.G_BREAKAWAY, g)] = sum(
+            groups.factor[j] * cw[W.hinge(W.H_BREAKAWAY, j)] for j in members
+        )
+        cw[W.group(W.G_TRAVEL, g)] = wing.hinges[first].travel / groups.factor[first]
+        cw[W.group(W.G_RIGID, g)] = 1.0 if wing.hinges[first].latch.rigid else 0.0
+        cw[W.group(W.G_FIRST, g)] = first
+    for c, item in enumerate(elastic):
+        cw[W.cable(W.C_IN, c)] = item.inboard
+        cw[W.cable(W.C_RATIO, c)] = item.ratio
+        cw[W.cable(W.C_K, c)] = item.stiffness
+        cw[W.cable(W.C_SLACK, c)] = item.slack_torque
+    return cw
+
+
+def _run(cw: FloatArray, rtol: float, backend: str, m: int, n: int) -> tuple[FloatArray, ...]:
+    """The kernel's run of one case, its buffers enlarged until they hold it."""
+    run = substituted_run(backend)
+    dm = (0,) * m
+    dq = (0,) * (3 * n)
+    atol = np.full(2 * m + 3 * n, rtol * ATOL_ANGLE)
+    atol[2 * m :] = rtol * ATOL_ENERGY
+    settings = np.array([rtol, 0.0 if backend != "scipy" else 1.0])
+    size = POINTS
+    while True:
+        words = cw.copy()
+        points = np.zeros((size, 1 + 2 * n))
+        events = np.zeros((4 * MAX_EVENTS + 16, W.EVENT_FIELDS))
+        latches = np.zeros((n, W.LATCH_FIELDS))
+        losses = np.zeros(n)
+        y = run(words, settings, atol, points, events, latches, losses, dm, (), dq)
+        if words[W.W_OVERFLOW] == 0.0:
+            return words, y, points, events, latches, losses
+        size *= 4
+
+
+def substituted_run(backend: str) -> object:
+    """The wing's entry point in a backend (compiled once per process)."""
+    from ecdsim.dynamics.kernel.wing_loop import run_wing
+
+    return substituted(run_wing, backend, "wing")
+
+
+def _case(wing: Wing, temperature: float, rtol: float, stop_time: float, backend: str) -> WingCase:
+    n = wing.size
+    cw = _words(wing, temperature, stop_time, MAX_EVENTS)
+    m = int(cw[W.W_M])
+    words, y, points, events, latches, losses = _run(cw, rtol, backend, m, n)
+    used = points[: int(words[W.W_POINTS])]
+    time, keep = np.unique(used[:, 0], return_index=True)
+    # The last point at a repeated time is the state after its event.
+    last = np.searchsorted(used[:, 0], time, side="right") - 1
+    del keep
+    angle = used[last, 1 : 1 + n]
+    speed = used[last, 1 + n :]
+    status = W.STATUS_NAMES[int(words[W.W_STATUS])]
+    event_rows = events[: int(words[W.W_EVENTS])]
+    found = tuple(
+        WingEvent(float(t), W.EVENT_NAMES[int(k)], None if h < 0 else int(h))
+        for t, k, h in event_rows
+    )
+    latch_events = []
+    for row in latches[: int(words[W.W_LATCHES])]:
+        j = int(row[W.LATCH_HINGE])
+        rigid = wing.hinges[j].latch.rigid
+        latch_events.append(
+            LatchEvent(
+                hinge=j,
+                time=float(row[W.LATCH_TIME]),
+                speed=float(row[W.LATCH_SPEED]),
+                kinetic_energy=float(row[W.LATCH_KE]),
+                impact_loss=float(row[W.LATCH_LOSS]),
+                peak_torque=None if rigid else float(words[W.hinge(W.H_PEAK, j)]),
+                impulse=float(row[W.LATCH_IMPULSE])
+                if rigid and math.isfinite(row[W.LATCH_IMPULSE])
+                else None,
+            )
+        )
+    final_phi = np.array([words[W.hinge(W.H_FACTOR, j)] * y[int(words[W.hinge(W.H_GROUP, j)])] for j in range(n)])
+    stuck = tuple(
+        j
+        for j in range(n)
+        if status != "latched"
+        and words[W.group(W.G_LOCKED, int(words[W.hinge(W.H_GROUP, j)]))] == 0.0
+        and words[W.hinge(W.H_ENGAGED, j)] == 0.0
+        and status == "stuck"
+    )
+    energy = _energy(wing, words, y, final_phi, losses, m, n)
+    return WingCase(
+        temperature=float(temperature),
+        time=time,
+        angle=angle,
+        speed=speed,
+        events=found,
+        latches=tuple(latch_events),
+        status=status,
+        stuck_hinges=stuck,
+        energy=energy,
+    )
+
+
+def _energy(
+    wing: Wing, words: FloatArray, y: FloatArray, phi: FloatArray, losses: FloatArray, m: int, n: int
+) -> WingEnergy:
+    """The account: the drives' work (exact on their tables), gravity's, the kernel's
+    dissipation quadratures, impact losses, the final kinetic and elastic energies."""
+    from ecdsim.dynamics.kernel.wing_equations import drive_work, kinetic
+
+    e = 2 * m
+    spring = np.array([drive_work(words, j, float(phi[j])) for j in range(n)])
+    arrays = wing.chain_arrays()
+    gravity_work = 0.0
+    if wing.ground_test is not None:
+        gx, gy = wing.ground_test.gravity
+        args = (arrays["mass"], arrays["cg_along"], arrays["cg_across"], arrays["length"], arrays["offload"], gx, gy)
+        gravity_work = chain.gravity_potential(wing.relative_angles(np.zeros(n)), *args) - chain.gravity_potential(
+            wing.relative_angles(phi), *args
+        )
+    cable_elastic = sum(
+        cable_energy(c.deflection(phi), float(c.stiffness), float(c.slack_torque))
+        for c in wing.cables
+        if not c.rigid
+    )
+    latch_elastic = sum(
+        0.5 * float(h.latch.stiffness) * (phi[j] - h.travel) ** 2
+        for j, h in enumerate(wing.hinges)
+        if words[W.hinge(W.H_ENGAGED, j)] != 0.0 and h.latch.stiffness is not None
+    )
+    return WingEnergy(
+        spring_work=spring,
+        damper_dissipation=y[e : e + n].copy(),
+        friction_dissipation=y[e + n : e + 2 * n].copy(),
+        latch_dissipation=y[e + 2 * n : e + 3 * n].copy(),
+        impact_loss=losses.copy(),
+        gravity_work=float(gravity_work),
+        final_kinetic=kinetic(words, y, m),
+        cable_elastic=float(cable_elastic),
+        latch_elastic=float(latch_elastic),
+    )
+
+
+def deploy_wing(
+    wing: Wing,
+    temperatures: Sequence[float],
+    *,
+    rtol: float = DEFAULT_RTOL,
+    stop_time: float = math.inf,
+    backend: str | None = None,
+) -> WingResult:
+    """The wing's deployment at each temperature [degC] (module notes).
+
+    ``backend``: ``"numba"`` (the default where available), ``"python"`` (the same
+    functions uncompiled) or ``"scipy"`` (scipy's Radau stepping the same equations).
+    """
+    check_supported(wing)
+    name = resolve_name(backend)
+    cases = tuple(_case(wing, float(t), rtol, stop_time, name) for t in temperatures)
+    hinges = tuple(h.name for h in wing.hinges)
+    return WingResult(wing.name, hinges, cases, source=f"ecdsim wing solver ({name})")
