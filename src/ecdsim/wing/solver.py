@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -73,7 +74,9 @@ def _groups(wing: Wing) -> _Groups:
 def check_supported(wing: Wing) -> None:
     """Refuse what the wing's solver does not model, in one line naming the key."""
     if wing.size > W.NMAX:
-        raise WingUnsupported(f"wing.panels: {wing.size} panels; the wing's solver takes up to {W.NMAX}")
+        raise WingUnsupported(
+            f"wing.panels: {wing.size} panels; the wing's solver takes up to {W.NMAX}"
+        )
     for i, hinge in enumerate(wing.hinges):
         ecd = hinge.ecd
         if ecd is None:
@@ -179,7 +182,7 @@ def _run(cw: FloatArray, rtol: float, backend: str, m: int, n: int) -> tuple[Flo
         size *= 4
 
 
-def substituted_run(backend: str) -> object:
+def substituted_run(backend: str) -> Any:
     """The wing's entry point in a backend (compiled once per process)."""
     from ecdsim.dynamics.kernel.wing_loop import run_wing
 
@@ -221,7 +224,9 @@ def _case(wing: Wing, temperature: float, rtol: float, stop_time: float, backend
                 else None,
             )
         )
-    final_phi = np.array([words[W.hinge(W.H_FACTOR, j)] * y[int(words[W.hinge(W.H_GROUP, j)])] for j in range(n)])
+    final_phi = np.array(
+        [words[W.hinge(W.H_FACTOR, j)] * y[int(words[W.hinge(W.H_GROUP, j)])] for j in range(n)]
+    )
     stuck = tuple(
         j
         for j in range(n)
@@ -245,7 +250,13 @@ def _case(wing: Wing, temperature: float, rtol: float, stop_time: float, backend
 
 
 def _energy(
-    wing: Wing, words: FloatArray, y: FloatArray, phi: FloatArray, losses: FloatArray, m: int, n: int
+    wing: Wing,
+    words: FloatArray,
+    y: FloatArray,
+    phi: FloatArray,
+    losses: FloatArray,
+    m: int,
+    n: int,
 ) -> WingEnergy:
     """The account: the drives' work (exact on their tables), gravity's, the kernel's
     dissipation quadratures, impact losses, the final kinetic and elastic energies."""
@@ -257,15 +268,22 @@ def _energy(
     gravity_work = 0.0
     if wing.ground_test is not None:
         gx, gy = wing.ground_test.gravity
-        args = (arrays["mass"], arrays["cg_along"], arrays["cg_across"], arrays["length"], arrays["offload"], gx, gy)
-        gravity_work = chain.gravity_potential(wing.relative_angles(np.zeros(n)), *args) - chain.gravity_potential(
-            wing.relative_angles(phi), *args
+        args = (
+            arrays["mass"],
+            arrays["cg_along"],
+            arrays["cg_across"],
+            arrays["length"],
+            arrays["offload"],
+            gx,
+            gy,
         )
-    cable_elastic = sum(
-        cable_energy(c.deflection(phi), float(c.stiffness), float(c.slack_torque))
-        for c in wing.cables
-        if not c.rigid
-    )
+        gravity_work = chain.gravity_potential(
+            wing.relative_angles(np.zeros(n)), *args
+        ) - chain.gravity_potential(wing.relative_angles(phi), *args)
+    cable_elastic = 0.0
+    for c in wing.cables:
+        if c.stiffness is not None and c.slack_torque is not None:
+            cable_elastic += cable_energy(c.deflection(phi), c.stiffness, c.slack_torque)
     latch_elastic = sum(
         0.5 * float(h.latch.stiffness) * (phi[j] - h.travel) ** 2
         for j, h in enumerate(wing.hinges)

@@ -4,7 +4,8 @@ Lagrange's equations of the panel chain (:mod:`ecdsim.physics.chain`: ``M(q)``, 
 velocity terms ``h(q, q')``, the ground test's gravity), in each hinge's deployed angle
 ``phi = s (q - q_stowed)`` (docs/wing.md):
 
-    M_phi = S M(q) S + diag(J_D),   F_j = T_j(phi_j) - B_j phi_j' - latch_j + cables - s_j h_j + s_j Q_g,j
+    M_phi = S M(q) S + diag(J_D)
+    F_j = T_j(phi_j) - B_j phi_j' - latch_j + cables_j - s_j h_j + s_j Q_g,j
 
 and in the groups' coordinates psi (hinges joined by rigid cables share one,
 ``phi = P psi``): ``M_psi = P^T M_phi P``, ``Q_psi = P^T F - d F_k`` with each sliding
@@ -25,13 +26,15 @@ stage matrix only needs it to the step's accuracy).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.kernel import wing_layout as W
 from ecdsim.dynamics.kernel.friction import solve_small
+from ecdsim.dynamics.kernel.wing_layout import cable as cable_at
+from ecdsim.dynamics.kernel.wing_layout import group as group_at
+from ecdsim.dynamics.kernel.wing_layout import hinge as hinge_at
+from ecdsim.dynamics.kernel.wing_layout import table_angle, table_torque
 from ecdsim.physics.cable import cable_torque
 from ecdsim.physics.chain import gravity_forces, mass_matrix, velocity_terms
 
@@ -46,25 +49,26 @@ def drive_torque(cw: FloatArray, j: int, phi: float) -> float:
     """Hinge j's net drive at phi: its table (spring less resistive torque), linear
     between breakpoints and continued with its end slopes beyond them [N*m]."""
     k = int(cw[W.W_K])
-    last = int(cw[W.hinge(W.H_POINTS, j)]) - 1
+    last = int(cw[hinge_at(W.H_POINTS, j)]) - 1
     p = 0
-    while p < last - 1 and phi > cw[W.table_angle(k, j, p + 1)]:
+    while p < last - 1 and phi > cw[table_angle(k, j, p + 1)]:
         p += 1
-    a0 = cw[W.table_angle(k, j, p)]
-    a1 = cw[W.table_angle(k, j, p + 1)]
-    t0 = cw[W.table_torque(k, j, p)]
-    t1 = cw[W.table_torque(k, j, p + 1)]
-    return t0 + (t1 - t0) * (phi - a0) / (a1 - a0)
+    a0 = cw[table_angle(k, j, p)]
+    a1 = cw[table_angle(k, j, p + 1)]
+    t0 = cw[table_torque(k, j, p)]
+    t1 = cw[table_torque(k, j, p + 1)]
+    value: float = t0 + (t1 - t0) * (phi - a0) / (a1 - a0)
+    return value
 
 
 def drive_work(cw: FloatArray, j: int, phi: float) -> float:
     """The drive's work from 0 to phi [J] (exact for the piecewise-linear table)."""
     k = int(cw[W.W_K])
-    last = int(cw[W.hinge(W.H_POINTS, j)]) - 1
+    last = int(cw[hinge_at(W.H_POINTS, j)]) - 1
     total = 0.0
     start = 0.0
     for p in range(last):
-        a1 = cw[W.table_angle(k, j, p + 1)]
+        a1 = cw[table_angle(k, j, p + 1)]
         end = min(phi, a1) if p < last - 1 else phi
         if end > start:
             total += 0.5 * (drive_torque(cw, j, start) + drive_torque(cw, j, end)) * (end - start)
@@ -78,15 +82,15 @@ def hinge_angles(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, Flo
     phi = np.empty(n)
     rate = np.empty(n)
     for j in range(n):
-        g = int(cw[W.hinge(W.H_GROUP, j)])
-        factor = cw[W.hinge(W.H_FACTOR, j)]
+        g = int(cw[hinge_at(W.H_GROUP, j)])
+        factor = cw[hinge_at(W.H_FACTOR, j)]
         phi[j] = factor * y[g]
         rate[j] = factor * y[m + g]
     return phi, rate
 
 
 def _panels(cw: FloatArray, field: int, n: int) -> FloatArray:
-    start = W.hinge(field, 0)
+    start = hinge_at(field, 0)
     return cw[start : start + n]
 
 
@@ -96,25 +100,25 @@ def relative(cw: FloatArray, phi: FloatArray, rate: FloatArray) -> tuple[FloatAr
     q = np.empty(n)
     dq = np.empty(n)
     for j in range(n):
-        s = cw[W.hinge(W.H_SIGN, j)]
-        q[j] = cw[W.hinge(W.H_STOWED, j)] + s * phi[j]
+        s = cw[hinge_at(W.H_SIGN, j)]
+        q[j] = cw[hinge_at(W.H_STOWED, j)] + s * phi[j]
         dq[j] = s * rate[j]
     return q, dq
 
 
 def latch_torque(cw: FloatArray, j: int, phi: float, rate: float) -> float:
     """Hinge j's engaged compliant latch: ``k (phi - travel) + c phi'`` [N*m] (0 if not)."""
-    if cw[W.hinge(W.H_ENGAGED, j)] == 0.0:
+    if cw[hinge_at(W.H_ENGAGED, j)] == 0.0:
         return 0.0
-    overshoot = phi - cw[W.hinge(W.H_TRAVEL, j)]
-    value: float = cw[W.hinge(W.H_LATCH_K, j)] * overshoot + cw[W.hinge(W.H_LATCH_C, j)] * rate
+    overshoot = phi - cw[hinge_at(W.H_TRAVEL, j)]
+    value: float = cw[hinge_at(W.H_LATCH_K, j)] * overshoot + cw[hinge_at(W.H_LATCH_C, j)] * rate
     return value
 
 
 def cable_deflection(cw: FloatArray, c: int, phi: FloatArray) -> float:
     """Elastic cable c's ``delta = phi_out - r phi_in`` [rad]."""
-    inboard = int(cw[W.cable(W.C_IN, c)])
-    value: float = phi[inboard + 1] - cw[W.cable(W.C_RATIO, c)] * phi[inboard]
+    inboard = int(cw[cable_at(W.C_IN, c)])
+    value: float = phi[inboard + 1] - cw[cable_at(W.C_RATIO, c)] * phi[inboard]
     return value
 
 
@@ -132,29 +136,29 @@ def hinge_forces(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, Flo
     velocity = velocity_terms(q, dq, mass, cga, cgb, length)
     forces = np.empty(n)
     for j in range(n):
-        s = cw[W.hinge(W.H_SIGN, j)]
+        s = cw[hinge_at(W.H_SIGN, j)]
         forces[j] = (
             drive_torque(cw, j, phi[j])
-            - cw[W.hinge(W.H_DAMPING, j)] * rate[j]
+            - cw[hinge_at(W.H_DAMPING, j)] * rate[j]
             - latch_torque(cw, j, phi[j], rate[j])
             - s * velocity[j]
         )
         for k in range(n):
-            matrix[j, k] *= s * cw[W.hinge(W.H_SIGN, k)]
-        matrix[j, j] += cw[W.hinge(W.H_JD, j)]
+            matrix[j, k] *= s * cw[hinge_at(W.H_SIGN, k)]
+        matrix[j, j] += cw[hinge_at(W.H_JD, j)]
     if cw[W.W_GX] != 0.0 or cw[W.W_GY] != 0.0:
         weight = gravity_forces(
             q, mass, cga, cgb, length, _panels(cw, W.H_OFFLOAD, n), cw[W.W_GX], cw[W.W_GY]
         )
         for j in range(n):
-            forces[j] += cw[W.hinge(W.H_SIGN, j)] * weight[j]
+            forces[j] += cw[hinge_at(W.H_SIGN, j)] * weight[j]
     for c in range(int(cw[W.W_C])):
         torque = cable_torque(
-            cable_deflection(cw, c, phi), cw[W.cable(W.C_K, c)], cw[W.cable(W.C_SLACK, c)]
+            cable_deflection(cw, c, phi), cw[cable_at(W.C_K, c)], cw[cable_at(W.C_SLACK, c)]
         )
-        inboard = int(cw[W.cable(W.C_IN, c)])
+        inboard = int(cw[cable_at(W.C_IN, c)])
         forces[inboard + 1] += torque
-        forces[inboard] -= cw[W.cable(W.C_RATIO, c)] * torque
+        forces[inboard] -= cw[cable_at(W.C_RATIO, c)] * torque
     return matrix, forces
 
 
@@ -165,30 +169,32 @@ def group_system(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, Flo
     mass = np.zeros((m, m))
     rhs = np.zeros(m)
     for j in range(n):
-        gj = int(cw[W.hinge(W.H_GROUP, j)])
-        fj = cw[W.hinge(W.H_FACTOR, j)]
+        gj = int(cw[hinge_at(W.H_GROUP, j)])
+        fj = cw[hinge_at(W.H_FACTOR, j)]
         rhs[gj] += fj * forces[j]
         for k in range(n):
-            gk = int(cw[W.hinge(W.H_GROUP, k)])
-            mass[gj, gk] += fj * cw[W.hinge(W.H_FACTOR, k)] * matrix[j, k]
+            gk = int(cw[hinge_at(W.H_GROUP, k)])
+            mass[gj, gk] += fj * cw[hinge_at(W.H_FACTOR, k)] * matrix[j, k]
     for g in range(m):
-        rhs[g] -= cw[W.group(W.G_DIR, g)] * cw[W.group(W.G_FRICTION, g)]
+        rhs[g] -= cw[group_at(W.G_DIR, g)] * cw[group_at(W.G_FRICTION, g)]
     return mass, rhs
 
 
-def accelerations(cw: FloatArray, y: FloatArray, acc: FloatArray, holding: FloatArray, m: int) -> None:
+def accelerations(
+    cw: FloatArray, y: FloatArray, acc: FloatArray, holding: FloatArray, m: int
+) -> None:
     """The groups' accelerations (held ones 0) and the held groups' holding torques
     (``(M a)_g - Q_g``, what their friction or latch supplies; 0 for sliding ones)."""
     mass, rhs = group_system(cw, y, m)
     free = 0
     for g in range(m):
-        if cw[W.group(W.G_DIR, g)] != 0.0:
+        if cw[group_at(W.G_DIR, g)] != 0.0:
             free += 1
     index = np.empty(free, dtype=np.int64)
     i = 0
     for g in range(m):
         acc[g] = 0.0
-        if cw[W.group(W.G_DIR, g)] != 0.0:
+        if cw[group_at(W.G_DIR, g)] != 0.0:
             index[i] = g
             i += 1
     if free > 0:
@@ -206,7 +212,7 @@ def accelerations(cw: FloatArray, y: FloatArray, acc: FloatArray, holding: Float
         scale = max(scale, abs(rhs[g]))
     for g in range(m):
         holding[g] = 0.0
-        if cw[W.group(W.G_DIR, g)] == 0.0:
+        if cw[group_at(W.G_DIR, g)] == 0.0:
             value = -rhs[g]
             for k in range(m):
                 value += mass[g, k] * acc[k]
@@ -224,16 +230,16 @@ def chain_derivatives(
     holding = np.empty(m)
     accelerations(cw, y, acc, holding, m)
     for g in range(m):
-        moving = cw[W.group(W.G_DIR, g)] != 0.0
+        moving = cw[group_at(W.G_DIR, g)] != 0.0
         dy[g] = y[m + g] if moving else 0.0
         dy[m + g] = acc[g]
     e = 2 * m + len(da)
     for j in range(n):
-        g = int(cw[W.hinge(W.H_GROUP, j)])
-        rate = cw[W.hinge(W.H_FACTOR, j)] * y[m + g]
-        dy[e + j] = cw[W.hinge(W.H_DAMPING, j)] * rate * rate
-        dy[e + n + j] = cw[W.group(W.G_DIR, g)] * cw[W.hinge(W.H_FRICTION, j)] * rate
-        latch = cw[W.hinge(W.H_ENGAGED, j)] * cw[W.hinge(W.H_LATCH_C, j)]
+        g = int(cw[hinge_at(W.H_GROUP, j)])
+        rate = cw[hinge_at(W.H_FACTOR, j)] * y[m + g]
+        dy[e + j] = cw[hinge_at(W.H_DAMPING, j)] * rate * rate
+        dy[e + n + j] = cw[group_at(W.G_DIR, g)] * cw[hinge_at(W.H_FRICTION, j)] * rate
+        latch = cw[hinge_at(W.H_ENGAGED, j)] * cw[hinge_at(W.H_LATCH_C, j)]
         dy[e + 2 * n + j] = latch * rate * rate
 
 
@@ -275,11 +281,12 @@ def kinetic(cw: FloatArray, y: FloatArray, m: int) -> float:
 def holding_margin(cw: FloatArray, g: int, holding: float, psi: float) -> float:
     """How far stuck group g's holding torque is from its breakaway (> 0 holds); on its
     stowed stop the stop holds any push back."""
-    limit = cw[W.group(W.G_BREAKAWAY, g)] * (1.0 + 1e-12)
+    limit = cw[group_at(W.G_BREAKAWAY, g)] * (1.0 + 1e-12)
     if psi == 0.0:
         value: float = holding + limit
         return value
-    return limit - abs(holding)
+    margin: float = limit - abs(holding)
+    return margin
 
 
 def chain_event_value(
@@ -290,7 +297,7 @@ def chain_event_value(
     (slots: :mod:`ecdsim.dynamics.kernel.wing_layout`)."""
     if slot < W.NMAX:
         g = slot
-        direction = cw[W.group(W.G_DIR, g)]
+        direction = cw[group_at(W.G_DIR, g)]
         if direction != 0.0:
             speed: float = direction * y[m + g]
             return speed
@@ -300,19 +307,19 @@ def chain_event_value(
         return holding_margin(cw, g, holding[g], y[g])
     if slot < 2 * W.NMAX:
         g = slot - W.NMAX
-        if cw[W.group(W.G_DIR, g)] > 0.0:
-            ahead: float = cw[W.group(W.G_TRAVEL, g)] - y[g]
+        if cw[group_at(W.G_DIR, g)] > 0.0:
+            ahead: float = cw[group_at(W.G_TRAVEL, g)] - y[g]
             return ahead
         behind: float = y[g]
         return behind
     c = (slot - 2 * W.NMAX) // 2
     phi, _ = hinge_angles(cw, y, m)
-    limit = cw[W.cable(W.C_SLACK, c)] / cw[W.cable(W.C_K, c)]
+    limit = cw[cable_at(W.C_SLACK, c)] / cw[cable_at(W.C_K, c)]
     delta = cable_deflection(cw, c, phi)
     if (slot - 2 * W.NMAX) % 2 == 0:
-        value: float = cw[W.cable(W.C_SIDE_A, c)] * (delta - limit)
+        value: float = cw[cable_at(W.C_SIDE_A, c)] * (delta - limit)
         return value
-    other: float = cw[W.cable(W.C_SIDE_B, c)] * (delta + limit)
+    other: float = cw[cable_at(W.C_SIDE_B, c)] * (delta + limit)
     return other
 
 
@@ -323,23 +330,21 @@ def active_slots(cw: FloatArray, y: FloatArray, active: FloatArray, m: int) -> N
     for slot in range(W.SLOTS):
         active[slot] = 0.0
     for g in range(m):
-        direction = cw[W.group(W.G_DIR, g)]
-        if cw[W.group(W.G_LOCKED, g)] == 0.0:
+        direction = cw[group_at(W.G_DIR, g)]
+        if cw[group_at(W.G_LOCKED, g)] == 0.0:
             active[g] = 1.0
-        first = int(cw[W.group(W.G_FIRST, g)])
-        engaged = cw[W.hinge(W.H_ENGAGED, first)] != 0.0
-        if direction > 0.0 and not engaged:
-            active[W.NMAX + g] = 1.0
-        elif direction < 0.0:
+        first = int(cw[group_at(W.G_FIRST, g)])
+        engaged = cw[hinge_at(W.H_ENGAGED, first)] != 0.0
+        if direction > 0.0 and not engaged or direction < 0.0:
             active[W.NMAX + g] = 1.0
     phi, rate = hinge_angles(cw, y, m)
     for c in range(int(cw[W.W_C])):
-        limit = cw[W.cable(W.C_SLACK, c)] / cw[W.cable(W.C_K, c)]
+        limit = cw[cable_at(W.C_SLACK, c)] / cw[cable_at(W.C_K, c)]
         delta = cable_deflection(cw, c, phi)
-        inboard = int(cw[W.cable(W.C_IN, c)])
-        moving = rate[inboard + 1] - cw[W.cable(W.C_RATIO, c)] * rate[inboard]
-        cw[W.cable(W.C_SIDE_A, c)] = _side(delta - limit, moving)
-        cw[W.cable(W.C_SIDE_B, c)] = _side(delta + limit, moving)
+        inboard = int(cw[cable_at(W.C_IN, c)])
+        moving = rate[inboard + 1] - cw[cable_at(W.C_RATIO, c)] * rate[inboard]
+        cw[cable_at(W.C_SIDE_A, c)] = _side(delta - limit, moving)
+        cw[cable_at(W.C_SIDE_B, c)] = _side(delta + limit, moving)
         active[2 * W.NMAX + 2 * c] = 1.0
         active[2 * W.NMAX + 2 * c + 1] = 1.0
 

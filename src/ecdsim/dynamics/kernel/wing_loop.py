@@ -51,6 +51,9 @@ from ecdsim.dynamics.kernel.wing_equations import (
     kinetic,
     latch_torque,
 )
+from ecdsim.dynamics.kernel.wing_layout import cable as cable_at
+from ecdsim.dynamics.kernel.wing_layout import group as group_at
+from ecdsim.dynamics.kernel.wing_layout import hinge as hinge_at
 
 HORIZON = 1e4  # [s] a segment's integration horizon without a stop time
 CAP = -2  # a segment that reached its end time
@@ -94,7 +97,7 @@ def record(cw: FloatArray, points: FloatArray, t: float, y: FloatArray, m: int) 
 def _log_group(cw: FloatArray, events: FloatArray, t: float, kind: int, g: int) -> None:
     """An event for every hinge of group g."""
     for j in range(int(cw[W.W_N])):
-        if int(cw[W.hinge(W.H_GROUP, j)]) == g:
+        if int(cw[hinge_at(W.H_GROUP, j)]) == g:
             log_event(cw, events, t, kind, j)
 
 
@@ -109,7 +112,7 @@ def resolve_rest(cw: FloatArray, y: FloatArray, t: float, events: FloatArray, m:
         worst = -1
         excess = 0.0
         for g in range(m):
-            if cw[W.group(W.G_DIR, g)] != 0.0 or cw[W.group(W.G_LOCKED, g)] != 0.0:
+            if cw[group_at(W.G_DIR, g)] != 0.0 or cw[group_at(W.G_LOCKED, g)] != 0.0:
                 continue
             margin = holding_margin(cw, g, holding[g], y[g])
             if margin < 0.0 and -margin > excess:
@@ -117,7 +120,7 @@ def resolve_rest(cw: FloatArray, y: FloatArray, t: float, events: FloatArray, m:
                 excess = -margin
         if worst < 0:
             return
-        cw[W.group(W.G_DIR, worst)] = -_sign(holding[worst])
+        cw[group_at(W.G_DIR, worst)] = -_sign(holding[worst])
         _log_group(cw, events, t, W.EV_BREAKAWAY, worst)
 
 
@@ -138,14 +141,16 @@ def inverse_mass(cw: FloatArray, y: FloatArray, m: int) -> FloatArray:
     return inverse
 
 
-def impact(cw: FloatArray, y: FloatArray, before: FloatArray, g: int, target: float, m: int) -> float:
+def impact(
+    cw: FloatArray, y: FloatArray, before: FloatArray, g: int, target: float, m: int
+) -> float:
     """A generalised impulse from the speeds ``before`` setting group g's speed to
     ``target``, the latched groups held and a group on its stowed stop held if pushed
     back; the speeds after go to y. Returns group g's angular impulse [N*m*s]."""
     inverse = inverse_mass(cw, y, m)
     held = np.zeros(m)
     for k in range(m):
-        held[k] = cw[W.group(W.G_LOCKED, k)]
+        held[k] = cw[group_at(W.G_LOCKED, k)]
     held[g] = 1.0
     impulse = np.zeros(m)
     for _ in range(m):
@@ -189,56 +194,74 @@ def impact(cw: FloatArray, y: FloatArray, before: FloatArray, g: int, target: fl
     return value
 
 
-def _latch_rows(cw: FloatArray, latches: FloatArray, t: float, y: FloatArray, g: int, ke: float, impulse: float, m: int) -> None:  # fmt: skip
+def _latch_rows(
+    cw: FloatArray,
+    latches: FloatArray,
+    t: float,
+    y: FloatArray,
+    g: int,
+    ke: float,
+    impulse: float,
+    m: int,
+) -> None:
     """The first arrival of group g: a latch row per hinge of the group, its first
     hinge's carrying the group's impulse."""
-    cw[W.group(W.G_LATCH_ROW, g)] = cw[W.W_LATCHES]
+    cw[group_at(W.G_LATCH_ROW, g)] = cw[W.W_LATCHES]
     for j in range(int(cw[W.W_N])):
-        if int(cw[W.hinge(W.H_GROUP, j)]) != g:
+        if int(cw[hinge_at(W.H_GROUP, j)]) != g:
             continue
         row = int(cw[W.W_LATCHES])
         latches[row, W.LATCH_HINGE] = j
         latches[row, W.LATCH_TIME] = t
-        latches[row, W.LATCH_SPEED] = cw[W.hinge(W.H_FACTOR, j)] * y[m + g]
+        latches[row, W.LATCH_SPEED] = cw[hinge_at(W.H_FACTOR, j)] * y[m + g]
         latches[row, W.LATCH_KE] = ke
         latches[row, W.LATCH_LOSS] = 0.0
-        first = j == int(cw[W.group(W.G_FIRST, g)])
+        first = j == int(cw[group_at(W.G_FIRST, g)])
         latches[row, W.LATCH_IMPULSE] = impulse if first else math.nan
         cw[W.W_LATCHES] = row + 1
 
 
-def rigid_latch(cw: FloatArray, y: FloatArray, t: float, g: int, events: FloatArray, latches: FloatArray, losses: FloatArray, m: int) -> None:  # fmt: skip
+def rigid_latch(
+    cw: FloatArray,
+    y: FloatArray,
+    t: float,
+    g: int,
+    events: FloatArray,
+    latches: FloatArray,
+    losses: FloatArray,
+    m: int,
+) -> None:
     """Group g reaches its rigid latch (module notes)."""
-    first = int(cw[W.group(W.G_FIRST, g)])
-    y[g] = cw[W.group(W.G_TRAVEL, g)]
+    first = int(cw[group_at(W.G_FIRST, g)])
+    y[g] = cw[group_at(W.G_TRAVEL, g)]
     before = y[m : 2 * m].copy()
     ke = kinetic(cw, y, m)
-    arriving = cw[W.group(W.G_ARRIVED, g)] == 0.0
+    arriving = cw[group_at(W.G_ARRIVED, g)] == 0.0
     if arriving:
-        cw[W.group(W.G_ARRIVED, g)] = 1.0
-        cw[W.group(W.G_ARRIVAL_KE, g)] = ke
-    e = cw[W.hinge(W.H_RESTITUTION, first)]
+        cw[group_at(W.G_ARRIVED, g)] = 1.0
+        cw[group_at(W.G_ARRIVAL_KE, g)] = ke
+    e = cw[hinge_at(W.H_RESTITUTION, first)]
     impulse = impact(cw, y, before, g, -e * before[g], m)
     settled = False
     if e > 0.0:
         rebound = 0.5 * y[m + g] * y[m + g] / _free_inverse(cw, y, g, m)
-        if rebound < SETTLE_FRACTION * cw[W.group(W.G_ARRIVAL_KE, g)]:
+        if rebound < SETTLE_FRACTION * cw[group_at(W.G_ARRIVAL_KE, g)]:
             impact(cw, y, before, g, 0.0, m)
             settled = True
     loss = ke - kinetic(cw, y, m)
     losses[first] += loss
     if arriving:
         _latch_rows(cw, latches, t, _with_speed(y, before, m), g, ke, impulse, m)
-    latches[int(cw[W.group(W.G_LATCH_ROW, g)]), W.LATCH_LOSS] += loss
+    latches[int(cw[group_at(W.G_LATCH_ROW, g)]), W.LATCH_LOSS] += loss
     if e == 0.0 or settled:
-        cw[W.group(W.G_LOCKED, g)] = 1.0
+        cw[group_at(W.G_LOCKED, g)] = 1.0
         y[m + g] = 0.0
         _log_group(cw, events, t, W.EV_LATCH if e == 0.0 else W.EV_SETTLE, g)
     else:
         log_event(cw, events, t, W.EV_REBOUND, first)
     for k in range(m):
-        locked = cw[W.group(W.G_LOCKED, k)] != 0.0
-        cw[W.group(W.G_DIR, k)] = 0.0 if locked else _sign(y[m + k])
+        locked = cw[group_at(W.G_LOCKED, k)] != 0.0
+        cw[group_at(W.G_DIR, k)] = 0.0 if locked else _sign(y[m + k])
 
 
 def _with_speed(y: FloatArray, before: FloatArray, m: int) -> FloatArray:
@@ -255,11 +278,11 @@ def _free_inverse(cw: FloatArray, y: FloatArray, g: int, m: int) -> float:
     mass, _ = group_system(cw, y, m)
     count = 0
     for k in range(m):
-        count += cw[W.group(W.G_LOCKED, k)] == 0.0 or k == g
+        count += cw[group_at(W.G_LOCKED, k)] == 0.0 or k == g
     index = np.empty(count, dtype=np.int64)
     i = 0
     for k in range(m):
-        if cw[W.group(W.G_LOCKED, k)] == 0.0 or k == g:
+        if cw[group_at(W.G_LOCKED, k)] == 0.0 or k == g:
             index[i] = k
             i += 1
     system = np.empty((count, count + 1))
@@ -276,28 +299,39 @@ def _free_inverse(cw: FloatArray, y: FloatArray, g: int, m: int) -> float:
     return found
 
 
-def start_stop(cw: FloatArray, y: FloatArray, t: float, g: int, events: FloatArray, losses: FloatArray, m: int) -> None:  # fmt: skip
+def start_stop(
+    cw: FloatArray, y: FloatArray, t: float, g: int, events: FloatArray, losses: FloatArray, m: int
+) -> None:
     """Group g, moving back, reaches its stowed stop: a plastic impact stops it."""
     y[g] = 0.0
     before = y[m : 2 * m].copy()
     ke = kinetic(cw, y, m)
     impact(cw, y, before, g, 0.0, m)
-    losses[int(cw[W.group(W.G_FIRST, g)])] += ke - kinetic(cw, y, m)
-    cw[W.group(W.G_DIR, g)] = 0.0
+    losses[int(cw[group_at(W.G_FIRST, g)])] += ke - kinetic(cw, y, m)
+    cw[group_at(W.G_DIR, g)] = 0.0
     _log_group(cw, events, t, W.EV_START_STOP, g)
 
 
-def _peaks(cw: FloatArray, y: FloatArray, f: FloatArray, y1: FloatArray, f1: FloatArray, h: float, stop: float, m: int) -> None:  # fmt: skip
+def _peaks(
+    cw: FloatArray,
+    y: FloatArray,
+    f: FloatArray,
+    y1: FloatArray,
+    f1: FloatArray,
+    h: float,
+    stop: float,
+    m: int,
+) -> None:
     """The engaged compliant latches' largest |torque| over a step (ends and interior
     maxima of the torque's cubic, both signs), up to the fraction ``stop``."""
     for j in range(int(cw[W.W_N])):
-        if cw[W.hinge(W.H_ENGAGED, j)] == 0.0:
+        if cw[hinge_at(W.H_ENGAGED, j)] == 0.0:
             continue
-        g = int(cw[W.hinge(W.H_GROUP, j)])
-        factor = cw[W.hinge(W.H_FACTOR, j)]
-        k = cw[W.hinge(W.H_LATCH_K, j)]
-        c = cw[W.hinge(W.H_LATCH_C, j)]
-        travel = cw[W.hinge(W.H_TRAVEL, j)]
+        g = int(cw[hinge_at(W.H_GROUP, j)])
+        factor = cw[hinge_at(W.H_FACTOR, j)]
+        k = cw[hinge_at(W.H_LATCH_K, j)]
+        c = cw[hinge_at(W.H_LATCH_C, j)]
+        travel = cw[hinge_at(W.H_TRAVEL, j)]
         a0 = k * (factor * y[g] - travel) + c * factor * y[m + g]
         a1 = k * (factor * y1[g] - travel) + c * factor * y1[m + g]
         d0 = factor * (k * f[g] + c * f[m + g])
@@ -305,7 +339,7 @@ def _peaks(cw: FloatArray, y: FloatArray, f: FloatArray, y1: FloatArray, f1: Flo
         top = max(abs(a0), abs(a1) if stop >= 1.0 else 0.0)
         top = max(top, interior_peak(a0, d0, a1, d1, h, stop))
         top = max(top, interior_peak(-a0, -d0, -a1, -d1, h, stop))
-        word = W.hinge(W.H_PEAK, j)
+        word = hinge_at(W.H_PEAK, j)
         cw[word] = max(cw[word], top)
 
 
@@ -313,7 +347,7 @@ def _end_peak(cw: FloatArray, y: FloatArray, m: int) -> None:
     """The engaged latches' |torque| at an event."""
     phi, rate = hinge_angles(cw, y, m)
     for j in range(int(cw[W.W_N])):
-        word = W.hinge(W.H_PEAK, j)
+        word = hinge_at(W.H_PEAK, j)
         cw[word] = max(cw[word], abs(latch_torque(cw, j, phi[j], rate[j])))
 
 
@@ -352,7 +386,9 @@ def advance(
                 continue
             g1[slot] = chain_event_value(cw, slot, y1, dummy, dummy, m, 0)
             if crossed(g0[slot], g1[slot]):
-                s = locate(cw, slot, y, f, y1, f1, h, g0[slot], g1[slot], trial, dummy, dummy, m, 0, n)
+                s = locate(
+                    cw, slot, y, f, y1, f1, h, g0[slot], g1[slot], trial, dummy, dummy, m, 0, n
+                )
                 if s < best:
                     best = s
                     hit = slot
@@ -378,68 +414,75 @@ def advance(
 
 
 def _all_held(cw: FloatArray, m: int) -> bool:
+    """Every group at rest (stuck or latched)."""
+    moving = 0
     for g in range(m):
-        if cw[W.group(W.G_DIR, g)] != 0.0:
-            return False
-    return True
+        moving += cw[group_at(W.G_DIR, g)] != 0.0
+    return moving == 0
 
 
 def _finish_status(cw: FloatArray, m: int) -> int:
     """latched when every group is latched or held by its engaged compliant latch."""
     for g in range(m):
-        if cw[W.group(W.G_LOCKED, g)] != 0.0:
+        if cw[group_at(W.G_LOCKED, g)] != 0.0:
             continue
-        first = int(cw[W.group(W.G_FIRST, g)])
-        if cw[W.hinge(W.H_ENGAGED, first)] == 0.0:
+        first = int(cw[group_at(W.G_FIRST, g)])
+        if cw[hinge_at(W.H_ENGAGED, first)] == 0.0:
             return W.ST_STUCK
     return W.ST_LATCHED
 
 
 def apply_event(
-    cw: FloatArray, y: FloatArray, t: float, slot: int, events: FloatArray,
-    latches: FloatArray, losses: FloatArray, m: int,
-) -> None:  # fmt: skip
+    cw: FloatArray,
+    y: FloatArray,
+    t: float,
+    slot: int,
+    events: FloatArray,
+    latches: FloatArray,
+    losses: FloatArray,
+    m: int,
+) -> None:
     """Apply the event of ``slot`` at time t (module notes)."""
     if slot < W.NMAX:
         g = slot
-        first = int(cw[W.group(W.G_FIRST, g)])
-        if cw[W.group(W.G_DIR, g)] != 0.0:
+        first = int(cw[group_at(W.G_FIRST, g)])
+        if cw[group_at(W.G_DIR, g)] != 0.0:
             y[m + g] = 0.0
-            cw[W.group(W.G_DIR, g)] = 0.0
+            cw[group_at(W.G_DIR, g)] = 0.0
             log_event(cw, events, t, W.EV_ZERO, first)
             resolve_rest(cw, y, t, events, m)
-            if cw[W.group(W.G_DIR, g)] == 0.0:
+            if cw[group_at(W.G_DIR, g)] == 0.0:
                 log_event(cw, events, t, W.EV_STICK, first)
             return
         acc = np.empty(m)
         holding = np.empty(m)
         accelerations(cw, y, acc, holding, m)
-        cw[W.group(W.G_DIR, g)] = -_sign(holding[g]) if holding[g] != 0.0 else 1.0
+        cw[group_at(W.G_DIR, g)] = -_sign(holding[g]) if holding[g] != 0.0 else 1.0
         _log_group(cw, events, t, W.EV_BREAKAWAY, g)
         resolve_rest(cw, y, t, events, m)
         return
     if slot < 2 * W.NMAX:
         g = slot - W.NMAX
-        if cw[W.group(W.G_DIR, g)] < 0.0:
+        if cw[group_at(W.G_DIR, g)] < 0.0:
             start_stop(cw, y, t, g, events, losses, m)
             resolve_rest(cw, y, t, events, m)
-        elif cw[W.group(W.G_RIGID, g)] != 0.0:
+        elif cw[group_at(W.G_RIGID, g)] != 0.0:
             rigid_latch(cw, y, t, g, events, latches, losses, m)
             resolve_rest(cw, y, t, events, m)
         else:
-            y[g] = cw[W.group(W.G_TRAVEL, g)]
+            y[g] = cw[group_at(W.G_TRAVEL, g)]
             for j in range(int(cw[W.W_N])):
-                if int(cw[W.hinge(W.H_GROUP, j)]) == g:
-                    cw[W.hinge(W.H_ENGAGED, j)] = 1.0
-            cw[W.group(W.G_ARRIVED, g)] = 1.0
+                if int(cw[hinge_at(W.H_GROUP, j)]) == g:
+                    cw[hinge_at(W.H_ENGAGED, j)] = 1.0
+            cw[group_at(W.G_ARRIVED, g)] = 1.0
             _latch_rows(cw, latches, t, y, g, kinetic(cw, y, m), math.nan, m)
             _log_group(cw, events, t, W.EV_ENGAGE, g)
         return
     c = (slot - 2 * W.NMAX) // 2
     phi, rate = hinge_angles(cw, y, m)
     delta = cable_deflection(cw, c, phi)
-    inboard = int(cw[W.cable(W.C_IN, c)])
-    moving = rate[inboard + 1] - cw[W.cable(W.C_RATIO, c)] * rate[inboard]
+    inboard = int(cw[cable_at(W.C_IN, c)])
+    moving = rate[inboard + 1] - cw[cable_at(W.C_RATIO, c)] * rate[inboard]
     log_event(cw, events, t, W.EV_SLACK if delta * moving > 0.0 else W.EV_TAUT, -1)
 
 
