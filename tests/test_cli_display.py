@@ -93,14 +93,10 @@ def _commands(folder: Path) -> list[list[str]]:
     ``folder`` holding a copy of examples/ (relative paths: short, like a user's)."""
     shutil.copytree(ROOT / "examples", folder / "examples")
     tomls = sorted(p.name for p in (folder / "examples").glob("*.toml"))
-    # A wing file is refused by deploy until the wing's solver lands (docs/wing.md); a
-    # catalogue and a torque budget are not deployment configs.
+    # A catalogue and a torque budget are not deployment configs (a wing file is: deploy
+    # solves it, docs/wing.md).
     not_configs = ("catalogue.toml", "torque_budget.toml")
-    runs = [
-        ["deploy", f"examples/{name}"]
-        for name in tomls
-        if name not in not_configs and "wing" not in name
-    ]
+    runs = [["deploy", f"examples/{name}"] for name in tomls if name not in not_configs]
     return [
         *runs,
         ["demo", "--out", "demo"],

@@ -332,10 +332,10 @@ def test_describe_wing_field_walks_lists_and_named_ecds() -> None:
     assert known == ["hinges", "ratio", "stiffness", "pretension", "pulley_radius"]
 
 
-def test_deploy_refuses_a_wing_file_in_one_line() -> None:
-    result = CliRunner().invoke(app, ["deploy", str(EXAMPLE)])
+def test_single_hinge_commands_refuse_a_wing_file_in_one_line(tmp_path: Path) -> None:
+    result = CliRunner().invoke(app, ["report", str(EXAMPLE), "-o", str(tmp_path / "r.html")])
     assert result.exit_code == 2
     assert result.stderr.strip().splitlines() == [
-        f"error: {EXAMPLE}: wing: this is a wing file (docs/wing.md); the wing's dynamics "
-        "are not built yet, so this command cannot solve it"
+        f"error: {EXAMPLE}: wing: this is a wing file (docs/wing.md); `ecdsim deploy` "
+        "solves it, this command takes a single hinge's file"
     ]

@@ -51,7 +51,7 @@ from validation.scipy_reference import (
     two_node_relaxed,
     two_node_time,
 )
-from validation.wing_cases import wing_one_panel_limit
+from validation.wing_cases import SOLVER_CASES, solver_rigid_cable_limit, wing_one_panel_limit
 
 HERE = Path(__file__).resolve().parent
 REFERENCES = HERE / "references"
@@ -1081,8 +1081,11 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     two_node_heating,
     lossy_gear,
     compliant_backlash,
-    # The wing (docs/wing.md): what runs before the wing's solver lands.
+    # The wing (docs/wing.md): the one-panel limit through the single hinge, then the
+    # wing's solver against the independent reference on every wing case.
     wing_one_panel_limit,
+    *SOLVER_CASES,
+    solver_rigid_cable_limit,
 )
 
 

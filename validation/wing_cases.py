@@ -28,7 +28,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +37,7 @@ from ecdsim.config.wing_schema import load_wing_config
 from ecdsim.deployment import predict
 from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.wing.result import LatchEvent, WingCase, WingEnergy, WingEvent, WingResult
+from ecdsim.wing.solver import deploy_wing
 from validation.checks import CaseResult, Check
 from validation.wing_reference import Cable, Hinge, Panel, Reference, Solution, Wing, ecd_at
 
@@ -585,11 +586,82 @@ def rigid_cable_limit(panels: int = 3) -> CaseResult:
     )
 
 
+def solve(item: WingValidationCase, backend: str | None = None) -> WingResult:
+    """ecdsim's wing solver on the case's file, at the case's temperatures."""
+    wing = load_wing_config(item.config).wing
+    return deploy_wing(wing, list(item.temperatures), stop_time=item.stop_time, backend=backend)
+
+
+def solver_case(name: str) -> Callable[[], CaseResult]:
+    """The validation case comparing ecdsim's wing solver with the reference on ``name``
+    (one entry of ``make validate``)."""
+
+    def run() -> CaseResult:
+        item = case(name)
+        return compare(item, solve(item))
+
+    run.__name__ = name
+    run.__doc__ = f"ecdsim's wing solver against the reference: {case(name).title}."
+    return run
+
+
+SOLVER_CASES: tuple[Callable[[], CaseResult], ...] = tuple(solver_case(c.name) for c in CASES)
+
+
+def solver_rigid_cable_limit() -> CaseResult:
+    """ecdsim's wing with stiffer and stiffer elastic cables approaches ecdsim's rigid
+    cable and the reference's: the three-panel synchronised wing at +25 degC."""
+    temperature = 25.0
+    item = case("wing_three_panel_synchronised")
+    rigid = reference(item.name, temperature).latches[0].time
+    config = load_wing_config(item.config).wing
+    mine_rigid = deploy_wing(config, [temperature]).cases[0].latches[0].time
+    differences = []
+    for stiffness in RIGID_LIMIT_STIFFNESSES:
+        slack = 2.0 * LIMIT_PRETENSION * 0.015
+        cables = tuple(replace(c, stiffness=stiffness, slack_torque=slack) for c in config.cables)
+        run = deploy_wing(replace(config, cables=cables), [temperature]).cases[0]
+        first = next(latch for latch in run.latches if latch.hinge == 0)
+        differences.append(first.time - mine_rigid)
+    checks = (
+        Check(
+            "ecdsim's rigid cable: root latch time",
+            "s",
+            rigid,
+            "wing reference (reduced coordinates)",
+            mine_rigid,
+            INTEGRATED_RTOL * rigid,
+            INTEGRATED_REASON,
+        ),
+        Check(
+            "ecdsim's root latch time's difference to its rigid cable, K = 1e4 over 1e3 N*m/rad",
+            "-",
+            0.1,
+            "1/K convergence",
+            differences[1] / differences[0],
+            0.1,
+            "1/K gives 0.1 per decade; +-0.1 accepts anything from no better than 1/K^0.7 "
+            "to faster",
+        ),
+    )
+    return CaseResult(
+        name="wing_solver_rigid_cable_limit",
+        title="ecdsim's elastic cables approach its rigid cable (three panels, +25 degC)",
+        source="validation/wing_reference.py and ecdsim's wing solver",
+        mapping=(
+            f"`{item.config.relative_to(HERE.parent)}`, its rigid cables replaced by elastic "
+            "ones of stiffness K and 500 N of pretension on 15 mm pulleys"
+        ),
+        checks=checks,
+    )
+
+
 def main() -> int:
     """``python -m validation.wing_cases``: run every reference case and its checks."""
     failed = False
     results = [reference_checks(item) for item in CASES]
     results += [rigid_cable_limit(), wing_one_panel_limit()]
+    results += [run() for run in SOLVER_CASES] + [solver_rigid_cable_limit()]
     for result in results:
         for check in result.checks:
             status = check.status
@@ -615,6 +687,7 @@ if __name__ == "__main__":
 
 __all__ = [
     "CASES",
+    "SOLVER_CASES",
     "WingValidationCase",
     "as_result",
     "compare",
@@ -622,4 +695,7 @@ __all__ = [
     "reference",
     "reference_checks",
     "rigid_cable_limit",
+    "solve",
+    "solver_case",
+    "solver_rigid_cable_limit",
 ]

@@ -195,9 +195,15 @@ def deploy(
     wide: WideOpt = False,
     plain: PlainOpt = False,
 ) -> None:
-    """Predict deployment time, speeds and stall at each temperature (paper Eq. 1-13)."""
+    """Predict deployment time, speeds and stall at each temperature (paper Eq. 1-13);
+    a wing file: each hinge's latching over temperature (docs/wing.md)."""
     display.configure(wide=wide, plain=plain)
     import_numpy_single_threaded()
+    from ecdsim.cli.wing import is_wing_file, run_wing
+
+    if is_wing_file(config):
+        run_wing(config, as_json, plot, temperature)
+        return
     conditions = failon.parse(fail_on)
     loaded = load_run(config, temperature, method)
     system = units_option(units, loaded)
