@@ -14,7 +14,8 @@ The package is layered (see ``docs/architecture.md``):
   the layers below and are used by the CLI.
 
 Importing :mod:`ecdsim` itself is cheap: it imports nothing heavy. The notebook API
-(:mod:`ecdsim.api`, docs/api.md) is exported lazily: ``ecdsim.deploy``, ``ecdsim.fit``,
+(:mod:`ecdsim.api`, docs/api.md) is exported lazily: ``ecdsim.deploy``, ``ecdsim.deploy_wing``,
+``ecdsim.fit``,
 ``ecdsim.size``, ``ecdsim.sweep`` and ``ecdsim.load`` import it on first use, and
 ``ecdsim.montecarlo`` (for ``ecdsim.montecarlo.open(folder)``) is imported when first named.
 """
@@ -26,11 +27,11 @@ from typing import TYPE_CHECKING, Any
 from ecdsim._version import __version__
 
 if TYPE_CHECKING:
-    from ecdsim.api import deploy, fit, load, size, sweep
+    from ecdsim.api import deploy, deploy_wing, fit, load, size, sweep
 
-__all__ = ["__version__", "deploy", "fit", "load", "size", "sweep"]
+__all__ = ["__version__", "deploy", "deploy_wing", "fit", "load", "size", "sweep"]
 
-_LAZY = {"deploy", "fit", "load", "size", "sweep"}
+_LAZY = {"deploy", "deploy_wing", "fit", "load", "size", "sweep"}
 
 
 def __getattr__(name: str) -> Any:

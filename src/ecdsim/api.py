@@ -54,6 +54,7 @@ if TYPE_CHECKING:
     from ecdsim.sizing.search import SearchResult
     from ecdsim.sweeps import SweepResult
     from ecdsim.units_display import UnitSystem
+    from ecdsim.wing.result import WingResult
 
 __all__ = [
     "DeployResults",
@@ -63,6 +64,7 @@ __all__ = [
     "SweepResults",
     "UnknownNameError",
     "deploy",
+    "deploy_wing",
     "fit",
     "load",
     "size",
@@ -679,6 +681,44 @@ def deploy(
     # With [load.gravity] the flight twin too, as `ecdsim deploy` shows it.
     prediction = with_flight(predict(config.system, temps, chosen, dynamics=dynamics), dynamics)
     return DeployResults(config, prediction)
+
+
+def deploy_wing(
+    path: str | os.PathLike[str],
+    temperatures: object = None,
+    *,
+    rtol: float | None = None,
+    stop_time: float | None = None,
+) -> WingResult:
+    """A wing file's deployment at each temperature (``ecdsim deploy WING.toml``).
+
+    Returns the :class:`~ecdsim.wing.result.WingResult`: per temperature each hinge's
+    angle and speed against time, the latching sequence, each latch's speed, kinetic
+    energy and peak torque or impulse, the stuck hinges and the energy account
+    (``to_dict()``, ``to_dataframe()``; docs/wing.md). ``temperatures`` as for
+    :func:`deploy` (default the file's ``[analysis] temperatures``); ``rtol`` and
+    ``stop_time`` [s] override the file's. Raises :class:`ConfigError`.
+
+    >>> r = deploy_wing("examples/wing_cc16_three_panel.toml", temperatures=25)
+    >>> [round(latch.time, 2) for latch in r.cases[0].latches]
+    [26.86, 53.75, 53.77]
+    """
+    from ecdsim.config.wing_schema import load_wing_config
+    from ecdsim.sizing.catalogue import load_catalogue
+    from ecdsim.wing.solver import WingUnsupported
+    from ecdsim.wing.solver import deploy_wing as solve
+
+    config = load_wing_config(Path(path), read_catalogue=load_catalogue)
+    temps = config.temperatures if temperatures is None else _temperatures(temperatures)
+    try:
+        return solve(
+            config.wing,
+            list(temps),
+            rtol=config.rtol if rtol is None else rtol,
+            stop_time=config.stop_time if stop_time is None else stop_time,
+        )
+    except WingUnsupported as exc:
+        raise ConfigError([str(exc)], str(path)) from None
 
 
 # ----------------------------------------------------------------------------- fit

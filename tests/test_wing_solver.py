@@ -1,0 +1,143 @@
+"""The wing's solver on the dynamic core (issue 25 items 2-4): against the independent
+reference (validation/wing_reference.py, sympy Lagrangian + scipy Radau rtol 1e-11) on a
+fast subset of the validation cases (``make validate`` runs all of them), against hand
+solutions, the one-panel wing against today's hinge, and its refusals."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from ecdsim.cli.app import app
+from ecdsim.config.wing_schema import load_wing_config
+from ecdsim.deployment import predict
+from ecdsim.dynamics.method import DynamicSolution
+from ecdsim.model import LinearSpring, Load
+from ecdsim.wing import Hinge, Panel, Wing
+from ecdsim.wing.solver import WingUnsupported, deploy_wing
+from validation.wing_cases import case, compare, solve
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "wing_cc16_three_panel.toml"
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "wing_two_panel_stick_slip",
+        "wing_three_panel_stick_slip_ground_test",
+        "wing_two_panel_latches",
+    ],
+)
+def test_solver_agrees_with_the_reference(name: str) -> None:
+    # compare() holds each latch's time, arrival speed and kinetic energy and each final
+    # angle to 1e-7 relative (ecdsim at rtol 1e-8, the reference at 1e-11), the latching
+    # sequence and the stuck hinges exactly, and ecdsim's energy balance to 1e-6.
+    item = case(name)
+    result = compare(item, solve(item))
+    failed = [(c.quantity, c.value, c.reference) for c in result.checks if c.failed]
+    assert not failed
+    assert len(result.checks) >= 5
+
+
+def _free_panel(torque: float, inertia: float, travel_deg: float) -> Wing:
+    """One panel about its hinge with a constant spring, no damper, no friction."""
+    travel = math.radians(travel_deg)
+    load = Load(LinearSpring(torque, torque), travel)
+    hinge = Hinge("root", travel, 0.0, load)
+    # A point mass at the centre of gravity plus its own inertia: J = I + m a^2.
+    panel = Panel("panel", 2.0, 1.0, 0.5, 0.0, inertia - 2.0 * 0.25)
+    return Wing("hand", (panel,), (hinge,))
+
+
+def test_constant_torque_panel_latches_at_the_hand_time() -> None:
+    # J phi'' = T from rest: phi = T t^2 / (2 J), so the latch at phi = travel comes at
+    # t = sqrt(2 J travel / T) with speed sqrt(2 T travel / J) (integrated at rtol 1e-8:
+    # 1e-7 relative).
+    torque, inertia, travel = 0.3, 0.7, 90.0
+    result = deploy_wing(_free_panel(torque, inertia, travel), [25.0])
+    latch = result.cases[0].latches[0]
+    angle = math.radians(travel)
+    assert latch.time == pytest.approx(math.sqrt(2 * inertia * angle / torque), rel=1e-7)
+    assert latch.speed == pytest.approx(math.sqrt(2 * torque * angle / inertia), rel=1e-7)
+    # Its kinetic energy on arrival is the spring's work T travel, all lost in the latch.
+    assert latch.kinetic_energy == pytest.approx(torque * angle, rel=1e-7)
+    assert latch.impact_loss == pytest.approx(torque * angle, rel=1e-7)
+    assert result.cases[0].energy.error < 1e-8
+
+
+def test_one_panel_wing_is_todays_hinge() -> None:
+    # The one-panel file solved by the wing's solver and by the single hinge's dynamic
+    # method (Wing.as_single_hinge): the two paths agree to their integration accuracy
+    # (the single hinge's flight case is in closed form; 1e-7 relative).
+    item = case("wing_one_panel")
+    wing = load_wing_config(item.config).wing
+    mine = deploy_wing(wing, list(item.temperatures))
+    system, dynamics = wing.as_single_hinge()
+    single = predict(system, list(item.temperatures), ["dynamic"], dynamics=dynamics)
+    solution = single.solutions["dynamic"]
+    assert isinstance(solution, DynamicSolution)
+    for i, wing_case in enumerate(mine.cases):
+        latch = wing_case.latches[0]
+        assert latch.time == pytest.approx(float(solution.result.deployment_time[i]), rel=1e-7)
+        assert latch.speed == pytest.approx(float(solution.result.arrival_speed[i]), rel=1e-7)
+
+
+def test_python_and_compiled_backends_agree() -> None:
+    # The same functions compiled by numba and run as plain Python: the same steps up to
+    # rounding (1e-9 relative on the latch times, far above rounding, far below rtol).
+    wing = load_wing_config(case("wing_two_panel_stick_slip").config).wing
+    plain = deploy_wing(wing, [25.0], backend="python").cases[0]
+    compiled = deploy_wing(wing, [25.0], backend="numba").cases[0]
+    assert plain.stuck_hinges == compiled.stuck_hinges
+    np.testing.assert_allclose(compiled.angle[-1], plain.angle[-1], rtol=1e-9)
+
+
+def test_stuck_wing_does_not_chatter() -> None:
+    # Three undamped hinges end stuck at once: a few dozen events, not thousands.
+    wing = load_wing_config(case("wing_three_panel_stick_slip").config).wing
+    run = deploy_wing(wing, [25.0]).cases[0]
+    assert run.status == "stuck"
+    assert run.stuck_hinges == (0, 1, 2)
+    assert len(run.events) < 60
+
+
+def test_unsupported_ecd_effects_are_refused_in_one_line() -> None:
+    wing = load_wing_config(EXAMPLE).wing
+    ecd = wing.hinges[1].ecd
+    assert ecd is not None
+    hinges = list(wing.hinges)
+    hinges[1] = replace(hinges[1], ecd=replace(ecd, stribeck_speed=0.01))
+    with pytest.raises(WingUnsupported) as info:
+        deploy_wing(replace(wing, hinges=tuple(hinges)), [25.0])
+    message = str(info.value)
+    assert "\n" not in message
+    assert "wing.hinges[1]" in message
+    assert "stribeck_speed" in message
+
+
+def test_cli_deploys_a_wing_with_json_and_plots(tmp_path: Path) -> None:
+    runner = CliRunner()
+    result = runner.invoke(app, ["deploy", str(EXAMPLE), "-T", "25", "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert json.dumps(data)  # JSON all the way down
+    shown = runner.invoke(app, ["deploy", str(EXAMPLE), "-T", "25", "--plot", str(tmp_path)])
+    assert shown.exit_code == 0, shown.output
+    assert "latch order: root > outer > middle" in shown.stdout
+    assert (tmp_path / "wing_hinge_angles.png").stat().st_size > 10_000
+    assert (tmp_path / "wing_shapes_p25C.png").exists()
+
+
+def test_api_returns_the_wing_result() -> None:
+    import ecdsim
+
+    result = ecdsim.deploy_wing(EXAMPLE, temperatures=[25, "212 degF"])
+    assert [c.temperature for c in result.cases] == [25.0, pytest.approx(100.0)]
+    assert all(c.status == "latched" for c in result.cases)
