@@ -52,7 +52,7 @@ from ecdsim._version import __version__  # noqa: E402
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results.json"
 # In the order run: the start-up processes first, before big arrays take the memory.
-BENCH_FILES = ("startup", "exact", "dynamic", "montecarlo", "csv", "webapp")
+BENCH_FILES = ("startup", "exact", "dynamic", "wing", "montecarlo", "csv", "webapp")
 
 
 def git_commit() -> str | None:
