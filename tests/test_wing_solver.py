@@ -18,6 +18,7 @@ from ecdsim.cli.app import app
 from ecdsim.config.wing_schema import load_wing_config
 from ecdsim.deployment import predict
 from ecdsim.dynamics.method import DynamicSolution
+from ecdsim.dynamics.params import Rolloff, Thermal
 from ecdsim.model import LinearSpring, Load
 from ecdsim.wing import Hinge, Panel, Wing
 from ecdsim.wing.solver import WingUnsupported, deploy_wing
@@ -40,7 +41,9 @@ def test_solver_agrees_with_the_reference(name: str) -> None:
     # angle to 1e-7 relative (ecdsim at rtol 1e-8, the reference at 1e-11), the latching
     # sequence and the stuck hinges exactly, and ecdsim's energy balance to 1e-6.
     item = case(name)
-    result = compare(item, solve(item))
+    # The plain-Python backend (the same functions as the compiled one, which
+    # test_python_and_compiled_backends_agree holds together): no compile in the suite.
+    result = compare(item, solve(item, backend="python"))
     failed = [(c.quantity, c.value, c.reference) for c in result.checks if c.failed]
     assert not failed
     assert len(result.checks) >= 5
@@ -141,3 +144,42 @@ def test_api_returns_the_wing_result() -> None:
     result = ecdsim.deploy_wing(EXAMPLE, temperatures=[25, "212 degF"])
     assert [c.temperature for c in result.cases] == [25.0, pytest.approx(100.0)]
     assert all(c.status == "latched" for c in result.cases)
+
+
+@pytest.mark.parametrize(
+    ("rolloff", "thermal"),
+    [
+        (Rolloff(peak_speed=20.0, resistivity_coefficient=0.0039), None),
+        (None, Thermal(heat_capacity=0.5, thermal_resistance=40.0)),
+        (Rolloff(peak_speed=20.0, resistivity_coefficient=0.0039), Thermal(heat_capacity=0.5)),
+    ],
+    ids=["rolloff", "heating", "both"],
+)
+def test_one_panel_with_rolloff_and_heating_is_todays_hinge(
+    rolloff: Rolloff | None, thermal: Thermal | None
+) -> None:
+    # Roll-off (the Kloss law at the rotor's 20 rad/s peak, reached at 0.05 rad/s of the
+    # hinge through 380:1) and self-heating (a small 0.5 J/K rotor, so that it heats by
+    # degrees) on the one-panel wing against the single hinge's dynamic method, which
+    # validation/cases.py holds to Modelica and scipy references: both integrate at rtol
+    # 1e-8 with different steppers' paths, so 1e-6 relative.
+    wing = load_wing_config(case("wing_one_panel").config).wing
+    ecd = wing.hinges[0].ecd
+    assert ecd is not None
+    hinge = replace(wing.hinges[0], ecd=replace(ecd, rolloff=rolloff, thermal=thermal))
+    wing = replace(wing, hinges=(hinge,))
+    temperatures = [-40.0, 100.0]
+    mine = deploy_wing(wing, temperatures, backend="python")
+    system, dynamics = wing.as_single_hinge()
+    single = predict(system, temperatures, ["dynamic"], dynamics=dynamics)
+    solution = single.solutions["dynamic"]
+    assert isinstance(solution, DynamicSolution)
+    plain = load_wing_config(case("wing_one_panel").config).wing
+    base = deploy_wing(plain, temperatures, backend="python")
+    for i, wing_case in enumerate(mine.cases):
+        latch = wing_case.latches[0]
+        assert latch.time == pytest.approx(float(solution.result.deployment_time[i]), rel=1e-6)
+        assert latch.speed == pytest.approx(float(solution.result.arrival_speed[i]), rel=1e-6)
+        # ...and the effect is there: the deployment differs from the linear, cold one.
+        assert abs(latch.time / base.cases[i].latches[0].time - 1.0) > 1e-4
+        assert wing_case.energy.error < 1e-6

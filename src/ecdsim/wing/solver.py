@@ -7,13 +7,14 @@ friction machine, RODAS4 and the dense-output locator, the chain's equations of
 :class:`~ecdsim.wing.result.WingResult`.
 
 The wing's path models (gates closed by default, as every path of the kernel): per
-hinge a spring (linear or table, less a resistive table), the ECD's linear damping
-``BECD_T`` and Coulomb friction ``FECD_T`` with the hinge friction ``FS_T`` and their
+hinge a spring (linear or table, less a resistive table), the ECD's damping through its
+gear ratio (Eq. 3 with the linear law or the Kloss roll-off, BG), its self-heating (one
+node), its Coulomb friction ``FECD_T`` with the hinge friction ``FS_T`` and their
 breakaway (stick-slip), the rotor and gear train reflected to the hinge, a rigid or
 compliant latch, the stowed stop; cables rigid or elastic; a ground test's gravity and
-offload. An ECD with an effect the wing's path does not model yet (roll-off, heating,
-Stribeck, lost motion, a lossy or compliant gear) is refused in one line naming the
-hinge and the key (:class:`WingUnsupported`).
+offload. An ECD with an effect the wing's path does not model yet (the housing as a
+second heat node, a warm start, Stribeck, lost motion, a lossy or compliant gear) is
+refused in one line naming the hinge and the key (:class:`WingUnsupported`).
 """
 
 from __future__ import annotations
@@ -26,11 +27,16 @@ from typing import Any
 import numpy as np
 
 from ecdsim._types import FloatArray
+from ecdsim.dynamics.damping import LinearEddy
 from ecdsim.dynamics.kernel import wing_layout as W
 from ecdsim.dynamics.kernel.build import resolve_name, substituted
+from ecdsim.dynamics.params import DynamicParameters
+from ecdsim.dynamics.problem import DynamicDomainError
+from ecdsim.dynamics.problem import _eddy_law as eddy_law
 from ecdsim.physics import chain
+from ecdsim.physics import eddy as eddy_laws
 from ecdsim.physics.cable import cable_energy
-from ecdsim.wing.model import Wing
+from ecdsim.wing.model import Hinge, Wing
 from ecdsim.wing.result import LatchEvent, WingCase, WingEnergy, WingEvent, WingResult
 
 DEFAULT_RTOL = 1e-8
@@ -38,6 +44,7 @@ MAX_EVENTS = 2000
 # Absolute tolerances as fractions of rtol: angles [rad], speeds [rad/s], energies [J].
 ATOL_ANGLE = 1e-3
 ATOL_ENERGY = 1e-3
+ATOL_LOG = 1e-2  # the damper's log temperature state [K]
 POINTS = 20_000  # the points buffer's first size (enlarged and run again when full)
 
 
@@ -82,9 +89,16 @@ def check_supported(wing: Wing) -> None:
         if ecd is None:
             continue
         at = f"wing.hinges[{i}] ({hinge.name}): its ECD's"
+        thermal = ecd.thermal
         found = (
-            ("damper.rolloff", ecd.rolloff is not None),
-            ("damper.thermal", ecd.thermal is not None),
+            (
+                "damper.thermal.housing_heat_capacity",
+                thermal is not None and thermal.housing_heat_capacity is not None,
+            ),
+            (
+                "damper.thermal.initial_rotor_rise",
+                thermal is not None and np.any(np.asarray(thermal.initial_rotor_rise) != 0.0),
+            ),
             ("damper.stribeck_speed", ecd.stribeck_speed is not None),
             ("gearbox.stiffness", ecd.gear_stiffness is not None),
             ("gearbox.lost_motion", ecd.lost_motion > 0.0),
@@ -98,6 +112,38 @@ def check_supported(wing: Wing) -> None:
                 )
 
 
+def _law(hinge: Hinge, temperature: float) -> dict[int, float]:
+    """Hinge j's ECD law at the hinge: the single hinge's eddy law (linear, or Kloss with
+    roll-off; :func:`ecdsim.dynamics.problem.eddy_law`), N, BG, and its heating."""
+    ecd = hinge.ecd
+    if ecd is None:
+        return {W.H_LAW: float(eddy_laws.LINEAR), W.H_RATIO: 1.0, W.H_FA: 1.0, W.H_HR: math.inf}
+    params = DynamicParameters(load_inertia=1.0, rolloff=ecd.rolloff, thermal=ecd.thermal)
+    try:
+        law = eddy_law(ecd.ecd.damper, params, np.asarray([temperature]))
+    except DynamicDomainError as exc:
+        raise WingUnsupported(f"wing.hinges ({hinge.name}): {exc}") from None
+    state = ecd.ecd.at(temperature)
+    values = {
+        W.H_RATIO: float(np.asarray(state.gear_ratio)),
+        W.H_BG: float(np.asarray(state.gearbox_damping_rate)),
+        W.H_COEF: float(np.asarray(law.coefficient)),
+        W.H_FA: max(float(np.asarray(law.factor(temperature))), 0.0),
+        W.H_HR: math.inf,
+    }
+    if isinstance(law, LinearEddy):
+        values[W.H_LAW] = float(eddy_laws.LINEAR)
+        values[W.H_LA] = float(np.asarray(law.damping_rate))
+    else:
+        values[W.H_LAW] = float(eddy_laws.KLOSS)
+        values[W.H_LA] = float(np.asarray(law.peak_torque))
+        values[W.H_LB] = float(np.asarray(law.reference_peak_speed))
+    if ecd.thermal is not None:
+        values[W.H_HC] = float(np.asarray(ecd.thermal.heat_capacity))
+        values[W.H_HR] = float(np.asarray(ecd.thermal.thermal_resistance))
+    return values
+
+
 def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) -> FloatArray:
     """The wing's words at one temperature (:mod:`ecdsim.dynamics.kernel.wing_layout`)."""
     n = wing.size
@@ -109,10 +155,19 @@ def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) ->
     elastic = [c for c in wing.cables if not c.rigid]
     gravity = wing.ground_test.gravity if wing.ground_test is not None else (0.0, 0.0)
     cw[W.W_N], cw[W.W_M], cw[W.W_C], cw[W.W_K] = n, groups.count, len(elastic), points
+    cw[W.W_AUX] = sum(1 for h in wing.hinges if h.ecd is not None and h.ecd.thermal is not None)
     cw[W.W_GX], cw[W.W_GY] = gravity
     cw[W.W_MAX_EVENTS] = max_events
     cw[W.W_STOP] = stop_time
+    heated = 0
     for j, hinge in enumerate(wing.hinges):
+        law = _law(hinge, temperature)
+        for field, value in law.items():
+            cw[W.hinge(field, j)] = value
+        cw[W.hinge(W.H_AUX, j)] = -1.0
+        if hinge.ecd is not None and hinge.ecd.thermal is not None:
+            cw[W.hinge(W.H_AUX, j)] = 2 * groups.count + heated
+            heated += 1
         state = hinge.at(temperature)
         values = {
             W.H_MASS: arrays["mass"][j],
@@ -161,13 +216,17 @@ def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) ->
     return cw
 
 
-def _run(cw: FloatArray, rtol: float, backend: str, m: int, n: int) -> tuple[FloatArray, ...]:
+def _run(
+    cw: FloatArray, rtol: float, backend: str, m: int, n: int, na: int
+) -> tuple[FloatArray, ...]:
     """The kernel's run of one case, its buffers enlarged until they hold it."""
     run = substituted_run(backend)
     dm = (0,) * m
+    da = (0,) * na
     dq = (0,) * (3 * n)
-    atol = np.full(2 * m + 3 * n, rtol * ATOL_ANGLE)
-    atol[2 * m :] = rtol * ATOL_ENERGY
+    atol = np.full(2 * m + na + 3 * n, rtol * ATOL_ANGLE)
+    atol[2 * m : 2 * m + na] = rtol * ATOL_LOG
+    atol[2 * m + na :] = rtol * ATOL_ENERGY
     settings = np.array([rtol, 0.0 if backend != "scipy" else 1.0])
     size = POINTS
     while True:
@@ -176,7 +235,7 @@ def _run(cw: FloatArray, rtol: float, backend: str, m: int, n: int) -> tuple[Flo
         events = np.zeros((4 * MAX_EVENTS + 16, W.EVENT_FIELDS))
         latches = np.zeros((n, W.LATCH_FIELDS))
         losses = np.zeros(n)
-        y = run(words, settings, atol, points, events, latches, losses, dm, (), dq)
+        y = run(words, settings, atol, points, events, latches, losses, dm, da, dq)
         if words[W.W_OVERFLOW] == 0.0:
             return words, y, points, events, latches, losses
         size *= 4
@@ -193,7 +252,8 @@ def _case(wing: Wing, temperature: float, rtol: float, stop_time: float, backend
     n = wing.size
     cw = _words(wing, temperature, stop_time, MAX_EVENTS)
     m = int(cw[W.W_M])
-    words, y, points, events, latches, losses = _run(cw, rtol, backend, m, n)
+    na = int(cw[W.W_AUX])
+    words, y, points, events, latches, losses = _run(cw, rtol, backend, m, n, na)
     used = points[: int(words[W.W_POINTS])]
     time, keep = np.unique(used[:, 0], return_index=True)
     # The last point at a repeated time is the state after its event.
@@ -235,7 +295,7 @@ def _case(wing: Wing, temperature: float, rtol: float, stop_time: float, backend
         and words[W.hinge(W.H_ENGAGED, j)] == 0.0
         and status == "stuck"
     )
-    energy = _energy(wing, words, y, final_phi, losses, m, n)
+    energy = _energy(wing, words, y, final_phi, losses, m, n, 2 * m + na)
     return WingCase(
         temperature=float(temperature),
         time=time,
@@ -257,12 +317,12 @@ def _energy(
     losses: FloatArray,
     m: int,
     n: int,
+    e: int,
 ) -> WingEnergy:
     """The account: the drives' work (exact on their tables), gravity's, the kernel's
     dissipation quadratures, impact losses, the final kinetic and elastic energies."""
     from ecdsim.dynamics.kernel.wing_equations import drive_work, kinetic
 
-    e = 2 * m
     spring = np.array([drive_work(words, j, float(phi[j])) for j in range(n)])
     arrays = wing.chain_arrays()
     gravity_work = 0.0

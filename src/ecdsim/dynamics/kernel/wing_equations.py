@@ -26,6 +26,8 @@ stage matrix only needs it to the step's accuracy).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ecdsim._types import FloatArray
@@ -37,6 +39,12 @@ from ecdsim.dynamics.kernel.wing_layout import hinge as hinge_at
 from ecdsim.dynamics.kernel.wing_layout import table_angle, table_torque
 from ecdsim.physics.cable import cable_torque
 from ecdsim.physics.chain import gravity_forces, mass_matrix, velocity_terms
+from ecdsim.physics.eddy import damper_side_torque
+from ecdsim.physics.thermal import (
+    damping_factor_from_log,
+    factor_log_cooling,
+    factor_log_heating,
+)
 
 # Forward-difference steps of the Jacobian: sqrt(eps) relative, at least this much.
 FD_RELATIVE = 1.4901161193847656e-08
@@ -106,6 +114,26 @@ def relative(cw: FloatArray, phi: FloatArray, rate: FloatArray) -> tuple[FloatAr
     return q, dq
 
 
+def damper_torque(cw: FloatArray, j: int, rate: float, y: FloatArray) -> tuple[float, float]:
+    """Hinge j's ECD torque at the hinge and its eddy-current power over the factor f:
+    :func:`ecdsim.physics.eddy.damper_side_torque` (Eq. 3 with the linear or Kloss law,
+    BG), at the factor of the damper's temperature (its log state when heated)."""
+    aux = int(cw[hinge_at(W.H_AUX, j)])
+    factor = cw[hinge_at(W.H_FA, j)]
+    if aux >= 0:
+        factor = damping_factor_from_log(y[aux], factor, cw[hinge_at(W.H_COEF, j)])
+    torque, power = damper_side_torque(
+        int(cw[hinge_at(W.H_LAW, j)]),
+        cw[hinge_at(W.H_LA, j)],
+        cw[hinge_at(W.H_LB, j)],
+        cw[hinge_at(W.H_RATIO, j)],
+        cw[hinge_at(W.H_BG, j)],
+        rate,
+        factor,
+    )
+    return torque, power
+
+
 def latch_torque(cw: FloatArray, j: int, phi: float, rate: float) -> float:
     """Hinge j's engaged compliant latch: ``k (phi - travel) + c phi'`` [N*m] (0 if not)."""
     if cw[hinge_at(W.H_ENGAGED, j)] == 0.0:
@@ -139,7 +167,7 @@ def hinge_forces(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, Flo
         s = cw[hinge_at(W.H_SIGN, j)]
         forces[j] = (
             drive_torque(cw, j, phi[j])
-            - cw[hinge_at(W.H_DAMPING, j)] * rate[j]
+            - damper_torque(cw, j, rate[j], y)[0]
             - latch_torque(cw, j, phi[j], rate[j])
             - s * velocity[j]
         )
@@ -237,7 +265,20 @@ def chain_derivatives(
     for j in range(n):
         g = int(cw[hinge_at(W.H_GROUP, j)])
         rate = cw[hinge_at(W.H_FACTOR, j)] * y[m + g]
-        dy[e + j] = cw[hinge_at(W.H_DAMPING, j)] * rate * rate
+        torque, power = damper_torque(cw, j, rate, y)
+        dy[e + j] = torque * rate
+        aux = int(cw[hinge_at(W.H_AUX, j)])
+        if aux >= 0:
+            # The damper's log state: Incropera Eq. 5.2 in the log form of
+            # ecdsim.physics.thermal (the single hinge's aux_rates, one node).
+            capacity = cw[hinge_at(W.H_HC, j)]
+            resistance = cw[hinge_at(W.H_HR, j)]
+            heating = factor_log_heating(power, capacity)
+            if resistance < math.inf:
+                heating -= factor_log_cooling(
+                    y[aux], capacity, resistance, cw[hinge_at(W.H_COEF, j)]
+                )
+            dy[aux] = heating
         dy[e + n + j] = cw[group_at(W.G_DIR, g)] * cw[hinge_at(W.H_FRICTION, j)] * rate
         latch = cw[hinge_at(W.H_ENGAGED, j)] * cw[hinge_at(W.H_LATCH_C, j)]
         dy[e + 2 * n + j] = latch * rate * rate

@@ -6,8 +6,9 @@ wing's equations read is one float array ``cw``: a header, then per-hinge, per-g
 per-cable fields stored field by field (``cw[base + field * NMAX + j]``), then each
 hinge's drive table. Groups are the hinges joined by rigid cables (one coordinate psi
 each; ``phi_j = factor_j psi_group``); a wing without rigid cables has one group per
-hinge. The state is ``y = [psi (m), psi' (m), quadratures (3 n)]``: each hinge's damper,
-friction and latch-damper dissipation.
+hinge. The state is ``y = [psi (m), psi' (m), z (a), quadratures (3 n)]``: ``z`` the
+heated dampers' log temperature states (:mod:`ecdsim.physics.thermal`), the quadratures
+each hinge's damper, friction and latch-damper dissipation.
 """
 
 from __future__ import annotations
@@ -32,8 +33,9 @@ NMAX = 8  # the most hinges (and groups, and cables) a wing case holds
     W_POINTS,  # points written
     W_OVERFLOW,  # 1 when a buffer was full
     W_SETTLE,  # the settle fraction of a rebound's energy
+    W_AUX,  # heated dampers (auxiliary states)
     HEADER,
-) = range(17)
+) = range(18)
 
 # --- per hinge (field * NMAX + j) ----------------------------------------------------------
 (
@@ -58,8 +60,18 @@ NMAX = 8  # the most hinges (and groups, and cables) a wing case holds
     H_ENGAGED,  # 1 once its compliant latch engaged
     H_POINTS,  # its table's points
     H_PEAK,  # its compliant latch's peak |torque| so far [N*m]
+    H_LAW,  # its ECD's eddy law code (ecdsim.physics.eddy; linear with BD = 0: none)
+    H_LA,  # the law's first parameter (BD or T_peak)
+    H_LB,  # its second (unused or omega_peak_ref)
+    H_RATIO,  # N
+    H_BG,  # BG at the high-speed shaft [N*m*s/rad]
+    H_FA,  # the law's temperature factor at the ambient temperature [-]
+    H_COEF,  # c, the factor's fractional change per kelvin [1/K]
+    H_AUX,  # the state index of its damper's log temperature state; -1: not heated
+    H_HC,  # the damper's heat capacity [J/K]
+    H_HR,  # its thermal resistance to ambient [K/W] (inf: adiabatic)
     HFIELDS,
-) = range(22)
+) = range(32)
 HINGES = HEADER
 
 # --- per group ------------------------------------------------------------------------------
