@@ -1,9 +1,9 @@
 """A wing's deployment on the dynamic core: pack the wing, run the kernel, read it back.
 
 :func:`deploy_wing` solves a :class:`~ecdsim.wing.model.Wing` at each temperature with
-the kernel's event loop for N hinges (:mod:`ecdsim.dynamics.kernel.wing_loop`: the
+the kernel's event loop for N hinges (:mod:`ecdsim.wing.kernel.loop`: the
 friction machine, RODAS4 and the dense-output locator, the chain's equations of
-:mod:`ecdsim.dynamics.kernel.wing_equations`) and returns a
+:mod:`ecdsim.wing.kernel.equations`) and returns a
 :class:`~ecdsim.wing.result.WingResult`.
 
 The wing's path models (gates closed by default, as every path of the kernel): per
@@ -27,8 +27,7 @@ from typing import Any
 import numpy as np
 
 from ecdsim._types import FloatArray
-from ecdsim.dynamics.damping import LinearEddy
-from ecdsim.dynamics.kernel import wing_layout as W
+from ecdsim.dynamics.damping import KlossEddy, LinearEddy
 from ecdsim.dynamics.kernel.build import resolve_name, substituted
 from ecdsim.dynamics.params import DynamicParameters
 from ecdsim.dynamics.problem import DynamicDomainError
@@ -36,6 +35,7 @@ from ecdsim.dynamics.problem import _eddy_law as eddy_law
 from ecdsim.physics import chain
 from ecdsim.physics import eddy as eddy_laws
 from ecdsim.physics.cable import cable_energy
+from ecdsim.wing.kernel import layout as W
 from ecdsim.wing.model import Hinge, Wing
 from ecdsim.wing.result import LatchEvent, WingCase, WingEnergy, WingEvent, WingResult
 
@@ -134,7 +134,7 @@ def _law(hinge: Hinge, temperature: float) -> dict[int, float]:
     if isinstance(law, LinearEddy):
         values[W.H_LAW] = float(eddy_laws.LINEAR)
         values[W.H_LA] = float(np.asarray(law.damping_rate))
-    else:
+    elif isinstance(law, KlossEddy):
         values[W.H_LAW] = float(eddy_laws.KLOSS)
         values[W.H_LA] = float(np.asarray(law.peak_torque))
         values[W.H_LB] = float(np.asarray(law.reference_peak_speed))
@@ -145,7 +145,7 @@ def _law(hinge: Hinge, temperature: float) -> dict[int, float]:
 
 
 def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) -> FloatArray:
-    """The wing's words at one temperature (:mod:`ecdsim.dynamics.kernel.wing_layout`)."""
+    """The wing's words at one temperature (:mod:`ecdsim.wing.kernel.layout`)."""
     n = wing.size
     groups = _groups(wing)
     tables = [h.load.drive.breakpoints(h.travel, temperature) for h in wing.hinges]
@@ -243,9 +243,15 @@ def _run(
 
 def substituted_run(backend: str) -> Any:
     """The wing's entry point in a backend (compiled once per process)."""
-    from ecdsim.dynamics.kernel.wing_loop import run_wing
+    from ecdsim.wing.kernel import equations
+    from ecdsim.wing.kernel.loop import run_wing
 
-    return substituted(run_wing, backend, "wing")
+    substitutes = (
+        ("derivatives", equations.chain_derivatives),
+        ("jacobian", equations.chain_jacobian),
+        ("event_value", equations.chain_event_value),
+    )
+    return substituted(run_wing, backend, "wing", substitutes)
 
 
 def _case(wing: Wing, temperature: float, rtol: float, stop_time: float, backend: str) -> WingCase:
@@ -321,7 +327,7 @@ def _energy(
 ) -> WingEnergy:
     """The account: the drives' work (exact on their tables), gravity's, the kernel's
     dissipation quadratures, impact losses, the final kinetic and elastic energies."""
-    from ecdsim.dynamics.kernel.wing_equations import drive_work, kinetic
+    from ecdsim.wing.kernel.equations import drive_work, kinetic
 
     spring = np.array([drive_work(words, j, float(phi[j])) for j in range(n)])
     arrays = wing.chain_arrays()

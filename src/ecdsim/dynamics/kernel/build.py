@@ -39,6 +39,9 @@ from ecdsim import _numba
 # The kernel's modules and the physics modules whose functions it compiles.
 KERNEL_PACKAGE = "ecdsim.dynamics.kernel"
 PHYSICS_PACKAGE = "ecdsim.physics"
+# Models built on the kernel (their functions compiled with it, by :func:`substituted`);
+# named, not imported: they sit in a layer above.
+MODEL_PACKAGES = ("ecdsim.wing.kernel",)
 # Functions inlined into their callers when compiled: the right-hand side, Jacobian and
 # stage solve of a step, and the laws they evaluate (numba counts references to every
 # array passed between compiled functions with atomic operations; inlined, the stage
@@ -82,7 +85,7 @@ def source_digest() -> str:
     """SHA-256 of every kernel and physics source file (the compiled code's real inputs)."""
     root = Path(__file__).resolve().parents[2]
     digest = hashlib.sha256()
-    for folder in ("dynamics/kernel", "physics"):
+    for folder in ("dynamics/kernel", "physics", "wing/kernel"):
         for path in sorted((root / folder).glob("*.py")):
             digest.update(path.name.encode())
             digest.update(path.read_bytes())
@@ -94,7 +97,7 @@ def _ours(value: object) -> bool:
     if not isinstance(value, types.FunctionType):
         return False
     module = value.__module__ or ""
-    return module.startswith((KERNEL_PACKAGE, PHYSICS_PACKAGE))
+    return module.startswith((KERNEL_PACKAGE, PHYSICS_PACKAGE, *MODEL_PACKAGES))
 
 
 class _Compiler:
@@ -226,34 +229,24 @@ def backend(name: str | None = None) -> Backend:
 
 
 @cache
-def substituted(func: Callable[..., Any], name: str, tag: str) -> Any:
-    """``func`` (a kernel entry point) with the kernel's hinge equations replaced by
-    another model's, recursively, in the backend ``name``: compiled (``"numba"``),
-    plain (``"python"``), or plain with scipy's steppers (``"scipy"``). The model's
-    substitutes are :data:`SUBSTITUTES` ``[tag]`` (the wing: ``"wing"``)."""
-    substitutes: dict[str, Callable[..., Any]] = dict(_substitutes(tag))
+def substituted(
+    func: Callable[..., Any], name: str, tag: str, substitutes: tuple[tuple[str, Any], ...]
+) -> Any:
+    """``func`` (a model's entry point, in a package of :data:`MODEL_PACKAGES`) with the
+    kernel's hinge equations replaced by the model's, recursively, in the backend
+    ``name``: compiled (``"numba"``), plain (``"python"``), or plain with scipy's steppers
+    (``"scipy"``). ``substitutes`` pairs global names (``"derivatives"``, ``"jacobian"``,
+    ``"event_value"``) with the model's functions; ``tag`` (``"wing"``) keeps its
+    compiled code's cache entries apart from the hinge's."""
+    replace: dict[str, Callable[..., Any]] = dict(substitutes)
     if name == "numba":
-        return _Compiler(substitutes, tag)(func)
+        return _Compiler(replace, tag)(func)
     if name == "scipy":
         from ecdsim.dynamics import scipy_steppers
 
-        plain = _Substituter(substitutes)
-        substitutes["start_stepper"] = plain(scipy_steppers.start_stepper)
-        substitutes["attempt"] = scipy_steppers.attempt
-    return _Substituter(substitutes)(func)
-
-
-def _substitutes(tag: str) -> dict[str, Callable[..., Any]]:
-    """The functions a model puts in place of the hinge's (by global name)."""
-    if tag != "wing":
-        raise ValueError(f"no model {tag!r}")
-    from ecdsim.dynamics.kernel import wing_equations
-
-    return {
-        "derivatives": wing_equations.chain_derivatives,
-        "jacobian": wing_equations.chain_jacobian,
-        "event_value": wing_equations.chain_event_value,
-    }
+        replace["start_stepper"] = _Substituter(dict(replace))(scipy_steppers.start_stepper)
+        replace["attempt"] = scipy_steppers.attempt
+    return _Substituter(replace)(func)
 
 
 def resolve_name(name: str | None) -> str:

@@ -5,7 +5,7 @@ groups at rest are resolved by the friction machine (every group at rest taken a
 the one whose holding torque exceeds its breakaway the most breaks away the way it is
 pushed, the rest solved again until every stuck one holds: the active-set pass of
 :mod:`ecdsim.dynamics.kernel.friction`, its holding torques the constraint forces of
-:func:`~ecdsim.dynamics.kernel.wing_equations.accelerations`); the segment is stepped by
+:func:`~ecdsim.wing.kernel.equations.accelerations`); the segment is stepped by
 the kernel's RODAS4 (:func:`ecdsim.dynamics.kernel.integrate.attempt`, the wing's
 equations substituted for the hinge's by :mod:`ecdsim.dynamics.kernel.build`) to its
 first event, located on the step's dense output by the kernel's locator
@@ -31,15 +31,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ecdsim._types import FloatArray
-from ecdsim.dynamics.kernel import wing_layout as W
 from ecdsim.dynamics.kernel.dense import crossed, interior_peak, interpolate
 from ecdsim.dynamics.kernel.friction import solve_small
 from ecdsim.dynamics.kernel.impacts import SETTLE_FRACTION
 from ecdsim.dynamics.kernel.integrate import attempt, locate, start_stepper
 from ecdsim.dynamics.kernel.rodas import new_work
-from ecdsim.dynamics.kernel.wing_equations import (
+from ecdsim.wing.kernel import layout as W
+from ecdsim.wing.kernel.equations import (
     accelerations,
     active_slots,
     cable_deflection,
@@ -51,9 +52,9 @@ from ecdsim.dynamics.kernel.wing_equations import (
     kinetic,
     latch_torque,
 )
-from ecdsim.dynamics.kernel.wing_layout import cable as cable_at
-from ecdsim.dynamics.kernel.wing_layout import group as group_at
-from ecdsim.dynamics.kernel.wing_layout import hinge as hinge_at
+from ecdsim.wing.kernel.layout import cable as cable_at
+from ecdsim.wing.kernel.layout import group as group_at
+from ecdsim.wing.kernel.layout import hinge as hinge_at
 
 HORIZON = 1e4  # [s] a segment's integration horizon without a stop time
 CAP = -2  # a segment that reached its end time
@@ -141,6 +142,41 @@ def inverse_mass(cw: FloatArray, y: FloatArray, m: int) -> FloatArray:
     return inverse
 
 
+def _indices(flags: FloatArray) -> NDArray[np.int64]:
+    """The positions of the nonzero flags."""
+    count = 0
+    for k in range(flags.shape[0]):
+        count += flags[k] != 0.0
+    index = np.empty(count, dtype=np.int64)
+    i = 0
+    for k in range(flags.shape[0]):
+        if flags[k] != 0.0:
+            index[i] = k
+            i += 1
+    return index
+
+
+def _impulses(
+    inverse: FloatArray, before: FloatArray, held: FloatArray, g: int, target: float
+) -> FloatArray:
+    """The impulses on the held groups that bring group g's speed to ``target`` and the
+    other held groups' to 0: ``(E^T M^-1 E) lambda = v_target - E^T v``."""
+    index = _indices(held)
+    count = index.shape[0]
+    system = np.empty((count, count + 1))
+    for r in range(count):
+        for c in range(count):
+            system[r, c] = inverse[index[r], index[c]]
+        wanted = target if index[r] == g else 0.0
+        system[r, count] = wanted - before[index[r]]
+    solution = np.empty(count)
+    solve_small(system, solution, count)
+    impulse = np.zeros(held.shape[0])
+    for r in range(count):
+        impulse[index[r]] = solution[r]
+    return impulse
+
+
 def impact(
     cw: FloatArray, y: FloatArray, before: FloatArray, g: int, target: float, m: int
 ) -> float:
@@ -154,27 +190,7 @@ def impact(
     held[g] = 1.0
     impulse = np.zeros(m)
     for _ in range(m):
-        count = 0
-        for k in range(m):
-            count += held[k] != 0.0
-        index = np.empty(count, dtype=np.int64)
-        i = 0
-        for k in range(m):
-            if held[k] != 0.0:
-                index[i] = k
-                i += 1
-        system = np.empty((count, count + 1))
-        for r in range(count):
-            for c in range(count):
-                system[r, c] = inverse[index[r], index[c]]
-            wanted = target if index[r] == g else 0.0
-            system[r, count] = wanted - before[index[r]]
-        solution = np.empty(count)
-        solve_small(system, solution, count)
-        for k in range(m):
-            impulse[k] = 0.0
-        for r in range(count):
-            impulse[index[r]] = solution[r]
+        impulse = _impulses(inverse, before, held, g, target)
         pushed = False
         for k in range(m):
             after = before[k]
@@ -186,10 +202,9 @@ def impact(
                 pushed = True
         if not pushed:
             break
-    y[m + g] = target
     for k in range(m):
-        if held[k] != 0.0 and k != g:
-            y[m + k] = 0.0
+        if held[k] != 0.0:
+            y[m + k] = target if k == g else 0.0
     value: float = impulse[g]
     return value
 

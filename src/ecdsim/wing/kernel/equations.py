@@ -31,12 +31,7 @@ import math
 import numpy as np
 
 from ecdsim._types import FloatArray
-from ecdsim.dynamics.kernel import wing_layout as W
 from ecdsim.dynamics.kernel.friction import solve_small
-from ecdsim.dynamics.kernel.wing_layout import cable as cable_at
-from ecdsim.dynamics.kernel.wing_layout import group as group_at
-from ecdsim.dynamics.kernel.wing_layout import hinge as hinge_at
-from ecdsim.dynamics.kernel.wing_layout import table_angle, table_torque
 from ecdsim.physics.cable import cable_torque
 from ecdsim.physics.chain import gravity_forces, mass_matrix, velocity_terms
 from ecdsim.physics.eddy import damper_side_torque
@@ -45,6 +40,11 @@ from ecdsim.physics.thermal import (
     factor_log_cooling,
     factor_log_heating,
 )
+from ecdsim.wing.kernel import layout as W
+from ecdsim.wing.kernel.layout import cable as cable_at
+from ecdsim.wing.kernel.layout import group as group_at
+from ecdsim.wing.kernel.layout import hinge as hinge_at
+from ecdsim.wing.kernel.layout import table_angle, table_torque
 
 # Forward-difference steps of the Jacobian: sqrt(eps) relative, at least this much.
 FD_RELATIVE = 1.4901161193847656e-08
@@ -131,7 +131,7 @@ def damper_torque(cw: FloatArray, j: int, rate: float, y: FloatArray) -> tuple[f
         rate,
         factor,
     )
-    return torque, power
+    return float(torque), float(power)
 
 
 def latch_torque(cw: FloatArray, j: int, phi: float, rate: float) -> float:
@@ -335,7 +335,7 @@ def chain_event_value(
     na: int,
 ) -> float:  # fmt: skip
     """Event ``slot``'s function at state y: > 0 inside the segment's mode, 0 at the event
-    (slots: :mod:`ecdsim.dynamics.kernel.wing_layout`)."""
+    (slots: :mod:`ecdsim.wing.kernel.layout`)."""
     if slot < W.NMAX:
         g = slot
         direction = cw[group_at(W.G_DIR, g)]
