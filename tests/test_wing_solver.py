@@ -183,3 +183,13 @@ def test_one_panel_with_rolloff_and_heating_is_todays_hinge(
         # ...and the effect is there: the deployment differs from the linear, cold one.
         assert abs(latch.time / base.cases[i].latches[0].time - 1.0) > 1e-4
         assert wing_case.energy.error < 1e-6
+
+
+def test_cli_refuses_single_hinge_options_with_a_wing_file() -> None:
+    # Never silently ignored: each option a wing's table does not take, one line each.
+    result = CliRunner().invoke(app, ["deploy", str(EXAMPLE), "--units", "us", "-m", "exact"])
+    assert result.exit_code == 2
+    assert result.stderr.strip().splitlines() == [
+        "error: --method: not taken with a wing file (its table is SI; docs/wing.md)",
+        "error: --units: not taken with a wing file (its table is SI; docs/wing.md)",
+    ]

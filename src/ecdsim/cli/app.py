@@ -202,6 +202,20 @@ def deploy(
     from ecdsim.cli.wing import is_wing_file, run_wing
 
     if is_wing_file(config):
+        given = {
+            "--method": bool(method),
+            "--timeseries": timeseries is not None,
+            "--fail-on": bool(fail_on),
+            "--units": units is not None and units.strip().lower() != "si",
+        }
+        refused = [name for name, present in given.items() if present]
+        if refused:
+            fail(
+                [
+                    f"{option}: not taken with a wing file (its table is SI; docs/wing.md)"
+                    for option in refused
+                ]
+            )
         run_wing(config, as_json, plot, temperature)
         return
     conditions = failon.parse(fail_on)
