@@ -23,6 +23,7 @@ from ecdsim.model import LinearSpring, Load
 from ecdsim.wing import Hinge, Panel, Wing
 from ecdsim.wing.solver import WingUnsupported, deploy_wing
 from validation.wing_cases import case, compare, solve
+from validation.wing_reference import Reference
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "wing_cc16_three_panel.toml"
@@ -193,3 +194,17 @@ def test_cli_refuses_single_hinge_options_with_a_wing_file() -> None:
         "error: --method: not taken with a wing file (its table is SI; docs/wing.md)",
         "error: --units: not taken with a wing file (its table is SI; docs/wing.md)",
     ]
+
+
+def test_stop_time_ends_the_run_where_the_reference_does() -> None:
+    # Both stop at 10 s, short of every latch: the angles there agree to 1e-7 relative
+    # (ecdsim at rtol 1e-8, the reference at 1e-11).
+    item = case("wing_two_panel_free")
+    wing = load_wing_config(item.config).wing
+    mine = deploy_wing(wing, [25.0], stop_time=10.0, backend="python").cases[0]
+    ref = Reference(item.build(25.0)).run(10.0)
+    assert mine.status == "stop_time"
+    assert ref.status == "stop_time"
+    assert mine.time[-1] == pytest.approx(10.0, rel=1e-12)
+    np.testing.assert_allclose(mine.angle[-1], ref.final_angle, rtol=1e-7)
+    assert mine.latches == ()

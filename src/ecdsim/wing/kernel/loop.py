@@ -58,6 +58,7 @@ from ecdsim.wing.kernel.layout import hinge as hinge_at
 
 HORIZON = 1e4  # [s] a segment's integration horizon without a stop time
 CAP = -2  # a segment that reached its end time
+FAILED = -3  # the stepper could not take a step (MAX_STEPS rejections)
 
 
 def _sign(value: float) -> float:
@@ -390,7 +391,7 @@ def advance(
     while True:
         h, h_next = attempt(stepper, cw, y, f, h, t, limit, rtol, atol, ws, dm, da, dq)
         if h <= 0.0:
-            return CAP, start + t, h_next
+            return FAILED, start + t, h_next
         y1 = ws[0][8]
         cw[W.W_STEPS] += 1
         chain_derivatives(cw, y1, f1, dm, da, dq)
@@ -533,6 +534,10 @@ def run_wing(
         end = min(stop, t + HORIZON)
         slot, t, h = advance(cw, y, t, end, h, settings, atol, ws, points, dm, da, dq)
         passes += 1
+        if slot == FAILED:  # cut short, as at the event limit (never a wrong answer)
+            cw[W.W_STATUS] = W.ST_EVENT_LIMIT
+            log_event(cw, events, t, W.EV_EVENT_LIMIT, -1)
+            break
         if slot == CAP:
             if t >= stop * (1.0 - 1e-15):
                 cw[W.W_STATUS] = W.ST_STOP_TIME
