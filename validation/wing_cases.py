@@ -528,6 +528,19 @@ RIGID_LIMIT_STIFFNESSES = (1e3, 1e4)  # [N*m/rad]
 LIMIT_PRETENSION = 500.0  # [N]
 
 
+def _one_over_k(quantity: str, differences: list[float]) -> Check:
+    """The difference to the rigid cable at K = 1e4 over K = 1e3 N*m/rad: 0.1 for 1/K."""
+    return Check(
+        quantity,
+        "-",
+        0.1,
+        "1/K convergence",
+        differences[1] / differences[0],
+        0.1,
+        "1/K gives 0.1 per decade; +-0.1 accepts anything from no better than 1/K^0.7 to faster",
+    )
+
+
 def rigid_cable_limit(panels: int = 3) -> CaseResult:
     """Stiff elastic cables approach the rigid cable (the reference against itself).
 
@@ -549,15 +562,9 @@ def rigid_cable_limit(panels: int = 3) -> CaseResult:
         differences.append(first.time - rigid)
         checks.append(_energy_check(f"with K = {stiffness:g} N*m/rad", run.energy_error))
     checks.append(
-        Check(
+        _one_over_k(
             "root latch time's difference to the rigid cable, K = 1e4 over K = 1e3 N*m/rad",
-            "-",
-            0.1,
-            "1/K convergence",
-            differences[1] / differences[0],
-            0.1,
-            "1/K gives 0.1 per decade; +-0.1 accepts anything from no better than 1/K^0.7 "
-            "to faster",
+            differences,
         )
     )
     checks.append(
@@ -633,15 +640,9 @@ def solver_rigid_cable_limit() -> CaseResult:
             INTEGRATED_RTOL * rigid,
             INTEGRATED_REASON,
         ),
-        Check(
+        _one_over_k(
             "ecdsim's root latch time's difference to its rigid cable, K = 1e4 over 1e3 N*m/rad",
-            "-",
-            0.1,
-            "1/K convergence",
-            differences[1] / differences[0],
-            0.1,
-            "1/K gives 0.1 per decade; +-0.1 accepts anything from no better than 1/K^0.7 "
-            "to faster",
+            differences,
         ),
     )
     return CaseResult(

@@ -38,6 +38,7 @@ from ecdsim.dynamics.kernel.dense import crossed, interior_peak, interpolate
 from ecdsim.dynamics.kernel.friction import solve_small
 from ecdsim.dynamics.kernel.impacts import SETTLE_FRACTION
 from ecdsim.dynamics.kernel.integrate import attempt, locate, start_stepper
+from ecdsim.dynamics.kernel.loop import _sign
 from ecdsim.dynamics.kernel.rodas import new_work
 from ecdsim.wing.kernel import layout as W
 from ecdsim.wing.kernel.equations import (
@@ -59,14 +60,6 @@ from ecdsim.wing.kernel.layout import hinge as hinge_at
 HORIZON = 1e4  # [s] a segment's integration horizon without a stop time
 CAP = -2  # a segment that reached its end time
 FAILED = -3  # the stepper could not take a step (MAX_STEPS rejections)
-
-
-def _sign(value: float) -> float:
-    if value > 0.0:
-        return 1.0
-    if value < 0.0:
-        return -1.0
-    return 0.0
 
 
 def log_event(cw: FloatArray, events: FloatArray, t: float, kind: int, hinge: int) -> None:
