@@ -51,7 +51,7 @@ from validation.scipy_reference import (
     two_node_relaxed,
     two_node_time,
 )
-from validation.wing_cases import SOLVER_CASES, solver_rigid_cable_limit, wing_one_panel_limit
+from validation.wing_cases import SOLVER_CASES, wing_one_panel_limit, wing_solver_rigid_cable_limit
 
 HERE = Path(__file__).resolve().parent
 REFERENCES = HERE / "references"
@@ -1085,7 +1085,7 @@ CASES: tuple[Callable[[], CaseResult], ...] = (
     # wing's solver against the independent reference on every wing case.
     wing_one_panel_limit,
     *SOLVER_CASES,
-    solver_rigid_cable_limit,
+    wing_solver_rigid_cable_limit,
 )
 
 

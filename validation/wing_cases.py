@@ -615,7 +615,7 @@ def solver_case(name: str) -> Callable[[], CaseResult]:
 SOLVER_CASES: tuple[Callable[[], CaseResult], ...] = tuple(solver_case(c.name) for c in CASES)
 
 
-def solver_rigid_cable_limit() -> CaseResult:
+def wing_solver_rigid_cable_limit() -> CaseResult:
     """ecdsim's wing with stiffer and stiffer elastic cables approaches ecdsim's rigid
     cable and the reference's: the three-panel synchronised wing at +25 degC."""
     temperature = 25.0
@@ -662,7 +662,7 @@ def main() -> int:
     failed = False
     results = [reference_checks(item) for item in CASES]
     results += [rigid_cable_limit(), wing_one_panel_limit()]
-    results += [run() for run in SOLVER_CASES] + [solver_rigid_cable_limit()]
+    results += [run() for run in SOLVER_CASES] + [wing_solver_rigid_cable_limit()]
     for result in results:
         for check in result.checks:
             status = check.status
@@ -698,5 +698,5 @@ __all__ = [
     "rigid_cable_limit",
     "solve",
     "solver_case",
-    "solver_rigid_cable_limit",
+    "wing_solver_rigid_cable_limit",
 ]
