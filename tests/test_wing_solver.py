@@ -184,6 +184,20 @@ def test_one_panel_with_rolloff_and_heating_is_todays_hinge(
         # ...and the effect is there: the deployment differs from the linear, cold one.
         assert abs(latch.time / base.cases[i].latches[0].time - 1.0) > 1e-4
         assert wing_case.energy.error < 1e-6
+        # The peak damper temperature, where heating is on, is the single hinge's
+        # max_damper_temperature (the same heat balance). With a thermal resistance the
+        # peak lies inside the motion, where cooling balances heating, and each solver
+        # takes it at its own steps: 1e-3 of the rise (the temperature moves by less than
+        # that over a step near its flat maximum; seen: 4e-5).
+        peak = wing_case.peak_damper_temperature
+        if thermal is None:
+            assert peak == (None,)
+        else:
+            single_peak = float(solution.result.max_damper_temperature[i])
+            assert single_peak > temperatures[i] + 0.5  # it heats (0.65 to 1.7 K here)
+            rise = single_peak - temperatures[i]
+            assert peak[0] is not None
+            assert peak[0] == pytest.approx(single_peak, abs=1e-3 * rise)
 
 
 def test_cli_refuses_single_hinge_options_with_a_wing_file() -> None:

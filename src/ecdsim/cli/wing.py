@@ -103,6 +103,14 @@ def format_case(result: WingResult, case: WingCase) -> list[str]:
         )
     for j in case.stuck_hinges:
         lines.append(f"  stuck: {names[j]} at {case.angle[-1, j]:.4g} rad (short of its latch)")
+    peaks = [
+        f"{names[j]} {peak:.4g} degC"
+        for j, peak in enumerate(case.peak_damper_temperature)
+        if peak is not None
+    ]
+    if peaks:
+        lines.extend(textwrap.wrap("peak damper temperature: " + ", ".join(peaks), 78,
+                                   initial_indent="  ", subsequent_indent="    "))
     lines.append(f"  energy balance closes to {case.energy.error:.1e}")
     return lines
 

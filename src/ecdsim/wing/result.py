@@ -211,6 +211,9 @@ class WingCase:
     stuck_hinges : the hinges at rest for good short of their latch at the end, root
         first (empty when every hinge latched)
     energy : the energy account
+    peak_damper_temperature : each hinge's damper's peak temperature [degC] over the
+        run where its heating is modelled (``[damper.thermal]``), None where it is not
+        (empty: not computed, e.g. by a reference)
     """
 
     temperature: float
@@ -222,6 +225,7 @@ class WingCase:
     status: str
     stuck_hinges: tuple[int, ...]
     energy: WingEnergy
+    peak_damper_temperature: tuple[float | None, ...] = ()
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
@@ -318,6 +322,11 @@ class WingResult:
             },
             "max_speed_rad_s": {
                 name: float(v) for name, v in zip(names, case.max_speed, strict=True)
+            },
+            "peak_damper_temperature_C": {
+                name: peak
+                for name, peak in zip(names, case.peak_damper_temperature, strict=False)
+                if peak is not None
             },
             "energy_J": case.energy.to_dict(names),
             "energy_balance_error": case.energy.error,

@@ -35,6 +35,7 @@ from ecdsim.dynamics.problem import _eddy_law as eddy_law
 from ecdsim.physics import chain
 from ecdsim.physics import eddy as eddy_laws
 from ecdsim.physics.cable import cable_energy
+from ecdsim.physics.thermal import temperature_from_factor_log
 from ecdsim.wing.kernel import layout as W
 from ecdsim.wing.model import Hinge, Wing
 from ecdsim.wing.result import LatchEvent, WingCase, WingEnergy, WingEvent, WingResult
@@ -303,6 +304,7 @@ def _case(wing: Wing, temperature: float, rtol: float, stop_time: float, backend
     )
     energy = _energy(wing, words, y, final_phi, losses, m, n, 2 * m + na)
     return WingCase(
+        peak_damper_temperature=_peak_temperatures(words, temperature, n),
         temperature=float(temperature),
         time=time,
         angle=angle,
@@ -313,6 +315,28 @@ def _case(wing: Wing, temperature: float, rtol: float, stop_time: float, backend
         stuck_hinges=stuck,
         energy=energy,
     )
+
+
+def _peak_temperatures(words: FloatArray, temperature: float, n: int) -> tuple[float | None, ...]:
+    """Each heated damper's peak temperature [degC] (None: not heated), from its largest
+    log temperature state over the run's steps and events (the temperature grows with
+    the state: dT/ds = f > 0, :mod:`ecdsim.physics.thermal`)."""
+    peaks: list[float | None] = []
+    for j in range(n):
+        if words[W.hinge(W.H_AUX, j)] < 0.0:
+            peaks.append(None)
+            continue
+        peaks.append(
+            float(
+                temperature_from_factor_log(
+                    words[W.hinge(W.H_PEAK_LOG, j)],
+                    temperature,
+                    words[W.hinge(W.H_FA, j)],
+                    words[W.hinge(W.H_COEF, j)],
+                )
+            )
+        )
+    return tuple(peaks)
 
 
 def _energy(

@@ -70,8 +70,9 @@ NMAX = 8  # the most hinges (and groups, and cables) a wing case holds
     H_AUX,  # the state index of its damper's log temperature state; -1: not heated
     H_HC,  # the damper's heat capacity [J/K]
     H_HR,  # its thermal resistance to ambient [K/W] (inf: adiabatic)
+    H_PEAK_LOG,  # the largest log temperature state of its damper so far [K] (0: ambient)
     HFIELDS,
-) = range(32)
+) = range(33)
 HINGES = HEADER
 
 # --- per group ------------------------------------------------------------------------------

@@ -75,12 +75,18 @@ def log_event(cw: FloatArray, events: FloatArray, t: float, kind: int, hinge: in
 
 
 def record(cw: FloatArray, points: FloatArray, t: float, y: FloatArray, m: int) -> None:
-    """Append a point: time, each hinge's deployed angle and speed."""
+    """Append a point: time, each hinge's deployed angle and speed; keep each heated
+    damper's largest log temperature state (the temperature grows with it)."""
+    n = int(cw[W.W_N])
+    for j in range(n):
+        aux = int(cw[hinge_at(W.H_AUX, j)])
+        if aux >= 0:
+            word = hinge_at(W.H_PEAK_LOG, j)
+            cw[word] = max(cw[word], y[aux])
     row = int(cw[W.W_POINTS])
     if row >= points.shape[0]:
         cw[W.W_OVERFLOW] = 1.0
         return
-    n = int(cw[W.W_N])
     phi, rate = hinge_angles(cw, y, m)
     points[row, 0] = t
     for j in range(n):
