@@ -84,9 +84,18 @@ class Vary:
         return key_column(self.key, self.unit)
 
 
-def _si(key: str, value: object) -> float:
-    from ecdsim.config.overrides import config_value, field_kind
+def _fields(key: str) -> Any:
+    """The module that knows ``key``'s kind: a wing file's key paths
+    (:mod:`ecdsim.config.wing_keys`, ``wing.hinges[1].friction.at_0C``), else a single
+    hinge's dotted keys (:mod:`ecdsim.config.overrides`)."""
+    from ecdsim.config import overrides, wing_keys
 
+    return wing_keys if wing_keys.is_wing_key(key) else overrides
+
+
+def _si(key: str, value: object) -> float:
+    fields = _fields(key)
+    config_value, field_kind = fields.config_value, fields.field_kind
     kind = field_kind(key)
     if kind is None:
         return float(value) if isinstance(value, int | float) else math.nan
@@ -101,13 +110,13 @@ def parse_vary(text: str, option: str = "--vary") -> Vary:
     key = key.strip()
     shown = key or text
     syntax = "expected KEY=START:STOP:N [UNIT] or KEY=V1,V2,... (e.g. gearbox.ratio=200:600:21)"
-    if not sep or not _KEY.match(key):
+    from ecdsim.config.wing_keys import is_wing_key
+
+    if not sep or not (_KEY.match(key) or is_wing_key(key)):
         raise SweepError([f"{option} {text!r}: {shown!r} is not a config key; {syntax}"])
     if not spec.strip():
         raise SweepError([f"{option} {key}: no values; {syntax}"])
-    from ecdsim.config.overrides import field_unit
-
-    unit = field_unit(key)
+    unit = _fields(key).field_unit(key)
     low: object | None = None
     high: object | None = None
     match = _RANGE.match(spec)
@@ -865,3 +874,81 @@ def run_sweep(
         text = json.dumps(raw, sort_keys=True, default=str)
         config_sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
     return SweepResult(rows, list(varies), title, chosen_methods, errors, config_sha256)
+
+
+def run_wing_sweep(
+    raw: Mapping[str, Any],
+    source: str,
+    varies: Sequence[Vary],
+    points: Sequence[Mapping[str, tuple[object, float]]],
+    temperatures: Sequence[float] | None = None,
+    config_sha256: str = "",
+    *,
+    base: Path | None = None,
+    read_catalogue: Any = None,
+) -> SweepResult:
+    """A sweep of a wing file (docs/wing.md, studies): each point's wing solved by
+    :func:`ecdsim.wing.solver.deploy_wing` at every temperature, one row per (point,
+    temperature) with :meth:`ecdsim.wing.result.WingResult.summary_rows`'s columns and
+    ``method = "wing"``.
+
+    The keys are the file's paths (``wing.panels[2].mass``); every point is validated as
+    a file (and checked against what the wing's solver models) before anything runs
+    (:class:`SweepError`, one line each); a point the solver cannot evaluate gives rows
+    with ``error`` set. ``read_catalogue`` reads the file's catalogue entries
+    (:func:`ecdsim.sizing.catalogue.load_catalogue`), ``base`` their folder.
+    """
+    from ecdsim.config import ConfigError
+    from ecdsim.config.wing_keys import key_problem, set_values
+    from ecdsim.config.wing_schema import wing_config_from_document
+    from ecdsim.wing.solver import WingUnsupported, check_supported, deploy_wing
+
+    problems = [
+        f"--vary {problem}" for v in varies if (problem := key_problem(v.key)) is not None
+    ]
+    if problems:
+        raise SweepError(problems)
+    configs: list[Any] = []
+    seen: set[str] = set()
+    folder = base if base is not None else Path(source).parent
+    for point in points:
+        values = {k: value for k, (value, _) in point.items()}
+        shown = ", ".join(f"{k}={v}" for k, v in values.items())
+        try:
+            config = wing_config_from_document(
+                set_values(raw, values), source, folder, read_catalogue, config_sha256
+            )
+            check_supported(config.wing)
+        except (ConfigError, WingUnsupported) as exc:
+            lines = exc.problems if isinstance(exc, ConfigError) else [str(exc)]
+            for line in lines:
+                if line not in seen:
+                    seen.add(line)
+                    problems.append(f"--vary: {line} (at {shown})")
+            if len(problems) >= 20:
+                break
+            continue
+        configs.append(config)
+    if problems:
+        raise SweepError(problems)
+    rows: list[dict[str, Any]] = []
+    errors: list[tuple[int, str]] = []
+    title = ""
+    for index, (point, config) in enumerate(zip(points, configs, strict=True)):
+        title = config.spec.title
+        temps = tuple(temperatures) if temperatures else config.temperatures
+        head: dict[str, Any] = {"point": index}
+        head.update({v.column: point[v.key][1] for v in varies})
+        try:
+            result = deploy_wing(
+                config.wing, temps, rtol=config.rtol, stop_time=config.stop_time
+            )
+        except WingUnsupported as exc:  # a law the solver cannot take at a temperature
+            errors.append((index, str(exc)))
+            rows.extend(
+                {**head, "temperature_C": t, "method": "wing", "error": str(exc)} for t in temps
+            )
+            continue
+        for row in result.summary_rows():
+            rows.append({**head, "temperature_C": row.pop("temperature_C"), "method": "wing", **row})
+    return SweepResult(rows, list(varies), title, ("wing",), errors, config_sha256)

@@ -114,10 +114,18 @@ def sweep(
     from ecdsim.config import ConfigError
     from ecdsim.config.loader import parse_toml, read_config_text
     from ecdsim.config.seeds import seed_problem
+    from ecdsim.cli.wing import is_wing_file
     from ecdsim.sweeps import SweepError, design, parse_vary, run_sweep
 
-    loaded = load_run(config, temperature, method)  # the base config, checked once
-    system = units_option(units, loaded)
+    wing = is_wing_file(config)
+    if wing:  # a wing file: its keys are the file's paths (docs/wing.md, studies)
+        from ecdsim.cli.wing import load_wing_run
+
+        wing_run = load_wing_run(config, temperature, method, units)
+        system = wing_run.units
+    else:
+        loaded = load_run(config, temperature, method)  # the base config, checked once
+        system = units_option(units, loaded)
     try:
         raw = parse_toml(read_config_text(config), str(config))
     except ConfigError as exc:  # pragma: no cover - load_run read it
@@ -138,9 +146,23 @@ def sweep(
         fail(problems)
     try:
         points = design(varies, latin, seed)
-        result = run_sweep(
-            raw, str(config), varies, points, loaded.temperatures, loaded.methods, loaded.sha256
-        )
+        if wing:
+            from ecdsim.sizing.catalogue import load_catalogue
+            from ecdsim.sweeps import run_wing_sweep
+
+            result = run_wing_sweep(
+                raw,
+                str(config),
+                varies,
+                points,
+                wing_run.temperatures,
+                wing_run.config.sha256,
+                read_catalogue=load_catalogue,
+            )
+        else:
+            result = run_sweep(
+                raw, str(config), varies, points, loaded.temperatures, loaded.methods, loaded.sha256
+            )
     except SweepError as exc:
         fail(exc.problems)
     if output is not None:

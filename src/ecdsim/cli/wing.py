@@ -14,12 +14,18 @@ from __future__ import annotations
 import json
 import math
 import textwrap
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from ecdsim.cli.common import fail, parse_temperature
 from ecdsim.wing.result import WingCase, WingResult
+
+if TYPE_CHECKING:
+    from ecdsim.config.wing_schema import WingConfig
+    from ecdsim.units_display import UnitSystem
 
 
 def is_wing_file(path: Path) -> bool:
@@ -35,29 +41,66 @@ def is_wing_file(path: Path) -> bool:
         return False
 
 
-def run_wing(path: Path, as_json: bool, plot: Path | None, temperatures: list[str] | None) -> None:
-    """Solve and print a wing file (module notes); user errors exit with code 2."""
+@dataclass(frozen=True)
+class WingRun:
+    """A wing file read for a command: the config, the temperatures [degC] (``-T`` or
+    the file's) and the display units (``--units`` or the file's ``[output]``)."""
+
+    config: WingConfig
+    temperatures: tuple[float, ...]
+    units: UnitSystem
+
+
+def load_wing_run(
+    path: Path,
+    temperatures: list[str] | None,
+    methods: list[str] | None = None,
+    units: str | None = None,
+) -> WingRun:
+    """Read a wing file for ``sweep``, ``montecarlo`` or ``report``; every problem (the
+    file's, a bad ``-T``, a ``--method``, which a wing does not take) exits with code 2,
+    one line each."""
     from ecdsim.config import ConfigError
     from ecdsim.config.units import QuantityError
     from ecdsim.config.wing_schema import load_wing_config
     from ecdsim.sizing.catalogue import load_catalogue
-    from ecdsim.wing.solver import WingUnsupported, deploy_wing
+    from ecdsim.units_display import UnitSystemError, check_system
 
     try:
         config = load_wing_config(path, read_catalogue=load_catalogue)
     except ConfigError as exc:
         fail(str(exc).splitlines())
+    problems = []
+    if methods:
+        problems.append(
+            "--method: not taken with a wing file (one solver: the wing's dynamics; "
+            "docs/wing.md)"
+        )
     temps = list(config.temperatures)
     if temperatures:
-        problems = []
         temps = []
         for text in temperatures:
             try:
                 temps.append(parse_temperature(text))
             except QuantityError as exc:
                 problems.append(f"--temperature: {exc}")
-        if problems:
-            fail(problems)
+    system: UnitSystem = "si"
+    try:
+        system = check_system(units or config.spec.output.units, "--units" if units else "output.units")
+    except UnitSystemError as exc:
+        problems.append(str(exc))
+    if problems:
+        fail(problems)
+    return WingRun(config, tuple(temps), system)
+
+
+def run_wing(path: Path, as_json: bool, plot: Path | None, temperatures: list[str] | None) -> None:
+    """Solve and print a wing file (module notes); user errors exit with code 2."""
+    from ecdsim.wing.solver import WingUnsupported, deploy_wing
+
+    run = load_wing_run(path, temperatures)
+    config = run.config
+    temps = list(run.temperatures)
     try:
         result = deploy_wing(config.wing, temps, rtol=config.rtol, stop_time=config.stop_time)
     except WingUnsupported as exc:

@@ -604,6 +604,19 @@ def parse_wing_config(
     ``base``: the folder catalogue files are read from; ``read_catalogue``: reads one.
     """
     raw = parse_toml(text, source)  # invalid TOML, deep nesting, a 4,300-digit integer
+    sha256 = hashlib.sha256(text.encode("utf-8")).hexdigest()
+    return wing_config_from_document(raw, source, base, read_catalogue, sha256)
+
+
+def wing_config_from_document(
+    raw: dict[str, Any],
+    source: str = "<string>",
+    base: Path = Path(),
+    read_catalogue: CatalogueReader | None = None,
+    sha256: str = "",
+) -> WingConfig:
+    """Validate a parsed wing document (a file's, or one with keys set by a sweep:
+    :mod:`ecdsim.config.wing_keys`); :class:`ConfigError` lists every problem."""
     spec = validate_wing(raw, source)
     try:
         wing = build_wing(spec, base, read_catalogue)
@@ -619,7 +632,7 @@ def parse_wing_config(
         rtol=analysis.rtol,
         spec=spec,
         source=source,
-        sha256=hashlib.sha256(text.encode("utf-8")).hexdigest(),
+        sha256=sha256,
     )
 
 

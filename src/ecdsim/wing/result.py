@@ -359,6 +359,50 @@ class WingResult:
             "cases": [self._case_dict(case, series) for case in self.cases],
         }
 
+    def summary_rows(self) -> list[dict[str, Any]]:
+        """One row per temperature: what a sweep's or a Monte Carlo study's table holds
+        (SI, units in the column names as everywhere, NaN where there is no value).
+
+        ``status``, ``latched``, ``stalled``, ``deployment_time_s`` (NaN unless every
+        hinge latched), ``stuck_hinges`` (how many), ``energy_balance_error``, and per
+        hinge j (counted from 0, as the file's ``wing.hinges[j]``): ``hinge_j_latch_time_s``,
+        ``hinge_j_latch_speed_rad_s``, ``hinge_j_latch_kinetic_energy_J`` (the wing's, on
+        its arrival), ``hinge_j_peak_latch_torque_Nm`` (a compliant latch's),
+        ``hinge_j_stuck`` and, where its damper heats, ``hinge_j_peak_damper_temperature_C``.
+        """
+        rows = []
+        for case in self.cases:
+            row: dict[str, Any] = {
+                "temperature_C": case.temperature,
+                "status": case.status,
+                "latched": case.status == "latched",
+                "stalled": case.stalled,
+                "deployment_time_s": case.deployment_time
+                if math.isfinite(case.deployment_time)
+                else math.nan,
+                "stuck_hinges": len(case.stuck_hinges),
+                "energy_balance_error": float(case.energy.error),
+            }
+            first = {}
+            for latch in case.latches:
+                first.setdefault(latch.hinge, latch)
+            peaks = case.peak_damper_temperature
+            for j in range(case.hinges):
+                head = f"hinge_{j}_"
+                latch = first.get(j)
+                row[head + "latch_time_s"] = float(latch.time) if latch else math.nan
+                row[head + "latch_speed_rad_s"] = float(latch.speed) if latch else math.nan
+                row[head + "latch_kinetic_energy_J"] = (
+                    float(latch.kinetic_energy) if latch else math.nan
+                )
+                torque = latch.peak_torque if latch else None
+                row[head + "peak_latch_torque_Nm"] = math.nan if torque is None else float(torque)
+                row[head + "stuck"] = j in case.stuck_hinges
+                if j < len(peaks) and peaks[j] is not None:
+                    row[head + "peak_damper_temperature_C"] = float(peaks[j])
+            rows.append(row)
+        return rows
+
     def to_dataframe(self) -> Any:
         """The tidy time series: one row per temperature, hinge and time (pandas).
 
