@@ -131,6 +131,31 @@ def montecarlo(
 ) -> None:
     """Monte Carlo tolerance study: percentiles, stall probability, sensitivities."""
     display.configure(wide=wide, plain=plain)
+    from ecdsim.cli.wing import is_wing_file
+
+    if is_wing_file(config):  # the wing's study (docs/wing.md, studies)
+        from ecdsim.cli.wing import run_wing_montecarlo
+
+        run_wing_montecarlo(
+            config,
+            samples,
+            seed=seed,
+            sampling=sampling,
+            temperatures=temperature,
+            out=out,
+            plot=plot,
+            no_plot=no_plot,
+            as_json=as_json,
+            units=units,
+            refused={
+                "--method": method != "exact",
+                "--workers": workers is not None,
+                "--scheduler": scheduler is not None,
+                "--resume": resume,
+                "--chunk-size": chunk_size is not None,
+            },
+        )
+        return
     from ecdsim.config import ConfigError
     from ecdsim.deployment import ModelDomainError
     from ecdsim.montecarlo import (

@@ -25,6 +25,7 @@ from ecdsim.wing.result import WingCase, WingResult
 
 if TYPE_CHECKING:
     from ecdsim.config.wing_schema import WingConfig
+    from ecdsim.montecarlo.wing import WingStudy
     from ecdsim.units_display import UnitSystem
 
 
@@ -165,3 +166,174 @@ def format_wing(result: WingResult) -> str:
         lines.append("")
         lines.extend(format_case(result, case))
     return "\n".join(lines)
+
+
+def run_wing_montecarlo(
+    path: Path,
+    samples: int,
+    *,
+    seed: int | None,
+    sampling: str | None,
+    temperatures: list[str] | None,
+    out: Path | None,
+    plot: Path | None,
+    no_plot: bool,
+    as_json: bool,
+    units: str | None,
+    refused: dict[str, bool],
+) -> None:
+    """``ecdsim montecarlo WING.toml``: the wing's tolerance study (docs/wing.md, studies;
+    :mod:`ecdsim.montecarlo.wing`). Writes ``samples.csv``, ``summary.json`` and the
+    plots into the run's folder; prints the statistics per temperature (80 columns) or,
+    with ``--json``, the summary. ``refused``: the single hinge's options given (each
+    refused in one line)."""
+    from ecdsim import atomic
+    from ecdsim.config import ConfigError
+    from ecdsim.config.loader import parse_toml, read_config_text
+    from ecdsim.config.seeds import seed_problem
+    from ecdsim.montecarlo import wing as study_of
+    from ecdsim.sizing.catalogue import load_catalogue
+
+    problems = [
+        f"{option}: not taken with a wing file (its samples run in one process; docs/wing.md)"
+        for option, given in refused.items()
+        if given
+    ]
+    if seed is not None and (bad := seed_problem(seed)) is not None:
+        problems.append(f"--seed {seed}: {bad}")
+    if sampling is not None and sampling not in ("random", "lhs", "sobol"):
+        problems.append(f"--sampling {sampling!r}: expected random, lhs or sobol")
+    if problems:
+        fail(problems)
+    run = load_wing_run(path, temperatures, None, units)
+    raw = parse_toml(read_config_text(path), str(path))
+    try:
+        study = study_of.run(
+            run.config,
+            raw,
+            samples,
+            seed=seed,
+            sampling=sampling,
+            temperatures=run.temperatures,
+            read_catalogue=load_catalogue,
+        )
+    except ConfigError as exc:
+        fail(str(exc).splitlines())
+    summary = study.summary()
+    folder = out if out is not None else Path(f"{path.stem}-montecarlo")
+    written = []
+    try:
+        written.append(study.table().write(folder / "samples.csv"))
+        text = json.dumps(summary, indent=2, allow_nan=False)
+        written.append(atomic.write_text(folder / "summary.json", text + "\n"))
+        if not no_plot:
+            written.extend(write_study_plots(study, summary, plot or folder / "plots"))
+    except OSError as exc:
+        fail([f"--out {folder}: cannot write ({exc.strerror or exc})"])
+    for message in {m for _, m in study.errors}:
+        typer.echo(f"warning: {message}", err=True)
+    if as_json:
+        typer.echo(json.dumps(summary, indent=2, allow_nan=False))
+    else:
+        typer.echo(format_study(summary))
+    for target in written:
+        typer.echo(f"wrote {target}", err=as_json)
+
+
+def _stat(block: dict[str, object] | None, name: str) -> str:
+    """A statistic of a :func:`ecdsim.montecarlo.stats.describe` block, 4 digits."""
+    if not block:
+        return "-"
+    value: object
+    if name in ("mean", "std", "max", "min"):
+        value = block.get(name)
+    else:
+        found = block.get("percentiles")
+        value = found.get(name, {}).get("value") if isinstance(found, dict) else None
+    return f"{value:.4g}" if isinstance(value, float | int) else "-"
+
+
+def format_study(summary: dict[str, object]) -> str:
+    """The study's statistics per temperature, at 80 columns."""
+    cases = summary["cases"]
+    assert isinstance(cases, list)
+    lines = textwrap.wrap(
+        f"{summary['system']}: {summary['samples']:,} samples, {summary['sampling']} "
+        f"sampling, seed {summary['seed']}",
+        80,
+    )
+    for case in cases:
+        times = case["deployment_time_s"]
+        missed = case["not_latched"]
+        lines.append("")
+        lines.append(
+            f"{case['temperature_C']:+g} degC: deployment time [s] mean {_stat(times, 'mean')}, "
+            f"std {_stat(times, 'std')}, P1 {_stat(times, 'P1')}, P99 {_stat(times, 'P99')}"
+        )
+        low, high = missed["interval95"]
+        lines.append(
+            f"  not latched: {missed['count']} ({100 * (missed['probability'] or 0.0):.3g} %, "
+            f"95 % interval {100 * low:.3g} to {100 * high:.3g} %)"
+        )
+        lines.append(
+            f"  {'hinge':<12}{'latch time [s]':>20}{'latch speed [rad/s]':>22}"
+            f"{'stuck':>10}"
+        )
+        lines.append(f"  {'':<12}{'mean':>10}{'P99':>10}{'mean':>11}{'P99':>11}{'[%]':>10}")
+        for hinge in case["hinges"]:
+            time, speed = hinge.get("latch_time_s"), hinge.get("latch_speed_rad_s")
+            stuck = hinge["stuck"]["probability"] or 0.0
+            lines.append(
+                f"  {str(hinge['hinge'])[:11]:<12}{_stat(time, 'mean'):>10}"
+                f"{_stat(time, 'P99'):>10}{_stat(speed, 'mean'):>11}{_stat(speed, 'P99'):>11}"
+                f"{100 * stuck:>10.3g}"
+            )
+            peak = hinge.get("peak_damper_temperature_C")
+            if peak:
+                lines.append(
+                    f"  {'':<12}peak damper temperature [degC]: mean {_stat(peak, 'mean')}, "
+                    f"P99 {_stat(peak, 'P99')}"
+                )
+        sens = case["sensitivity"]
+        ranked = [
+            f"{row['key']} {row['src']:+.2f}" for row in sens["inputs"] if row["src"] is not None
+        ]
+        r2 = sens["r_squared"]
+        head = "  drivers of the deployment time (SRC"
+        head += f", R^2 {r2:.3f}): " if r2 is not None else "): "
+        lines.extend(
+            textwrap.wrap(
+                head + (", ".join(ranked) if ranked else "not defined (too few latched samples)"),
+                80,
+                subsequent_indent="    ",
+            )
+        )
+    return "\n".join(lines)
+
+
+def write_study_plots(study: WingStudy, summary: dict[str, object], folder: Path) -> list[Path]:
+    """The study's plots (:mod:`ecdsim.montecarlo.plots`): the deployment time's histogram
+    and CDF, each hinge's latch speed histogram, the drivers (tornado)."""
+    import numpy as np
+
+    from ecdsim.montecarlo.plots import plot_cdf, plot_histogram, plot_tornado, study_title
+    from ecdsim.plotting import save_figure
+
+    temps = study.temperatures
+    what = f"{study.samples:,} samples, wing solver"
+    times = {t: study.column("deployment_time_s", t) for t in temps}
+    title = study_title(study.title, f"deployment time (last latch), {what}")
+    figures = {
+        "time_histogram": plot_histogram(times, "deployment time [s]", title),
+        "time_cdf": plot_cdf(times, "deployment time [s]", title),
+        "tornado": plot_tornado(summary),
+    }
+    for j, name in enumerate(study.hinges):
+        speeds = {t: study.column(f"hinge_{j}_latch_speed_rad_s", t) for t in temps}
+        speeds = {t: x[~np.isnan(x)] for t, x in speeds.items()}
+        figures[f"latch_speed_hinge_{j}"] = plot_histogram(
+            speeds,
+            "latch (arrival) speed [rad/s]",
+            study_title(study.title, f"{name}: latch speed of the samples that latch, {what}"),
+        )
+    return [save_figure(fig, folder / f"{name}.png") for name, fig in figures.items()]

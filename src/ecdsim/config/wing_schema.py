@@ -26,9 +26,24 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Protocol, get_args, get_origin
 
-from pydantic import BaseModel, BeforeValidator, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    Field,
+    ValidationError,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
 
 from ecdsim.config.errors import ConfigError
+from ecdsim.config.tolerance_schema import (
+    QuantityToleranceSpec,
+    Spread,
+    TolerancesSpec,
+    parse_spread,
+)
 from ecdsim.config.fields import (
     Angle,
     NonNegativeDamping,
@@ -62,7 +77,7 @@ from ecdsim.config.schema import (
     Tolerance,
     _Section,
 )
-from ecdsim.config.units import LENGTH, MASS, Kind
+from ecdsim.config.units import LENGTH, MASS, Kind, QuantityError
 from ecdsim.model import Ecd, Gearbox, HighSpeedDamper
 from ecdsim.wing.model import Cable, GroundTest, Hinge, HingeEcd, Latch, Panel, Wing
 
@@ -357,6 +372,48 @@ class WingAnalysisSpec(_Section):
     rtol: Tolerance = 1e-8
 
 
+class WingQuantityToleranceSpec(QuantityToleranceSpec):
+    """One entry of a wing file's ``[tolerances.quantities]``: as a single hinge's, the
+    key a wing key path (:mod:`ecdsim.config.wing_keys`), its spread in that key's unit."""
+
+    @field_validator("sigma", "three_sigma", "plus_minus", mode="before")
+    @classmethod
+    def _parse(cls, value: object, info: ValidationInfo) -> object:
+        from ecdsim.config.wing_keys import field_kind
+
+        if value is None or isinstance(value, Spread):
+            return value
+        kind = field_kind(str(info.data.get("key")))
+        if kind is None:
+            return None  # the key's own error is already reported
+        try:
+            return parse_spread(value, kind)
+        except QuantityError as exc:
+            raise PydanticCustomError("quantity", "{detail}", {"detail": str(exc)}) from None
+
+
+class WingTolerancesSpec(TolerancesSpec):
+    """A wing file's ``[tolerances]``: the Monte Carlo study's inputs (docs/wing.md,
+    studies), every key of ``[tolerances]`` with wing key paths as the quantities."""
+
+    quantities: dict[str, WingQuantityToleranceSpec] = Field(min_length=1)  # type: ignore[assignment]
+
+    @field_validator("quantities", mode="before")
+    @classmethod
+    def _known_keys(cls, value: object) -> object:
+        from ecdsim.config.wing_keys import key_problem
+
+        if not isinstance(value, dict):
+            return value
+        problems = [p for key in value if (p := key_problem(key)) is not None]
+        if problems:
+            raise PydanticCustomError("quantity", "{detail}", {"detail": "; ".join(problems)})
+        return {
+            key: ({**entry, "key": key} if isinstance(entry, dict) else entry)
+            for key, entry in value.items()
+        }
+
+
 class WingConfigSpec(_Section):
     """A whole wing file (docs/wing.md)."""
 
@@ -364,6 +421,7 @@ class WingConfigSpec(_Section):
     wing: WingSpec
     analysis: WingAnalysisSpec = Field(default_factory=WingAnalysisSpec)
     output: OutputSpec = Field(default_factory=OutputSpec)
+    tolerances: WingTolerancesSpec | None = None
 
 
 class DamperEntryLike(Protocol):
