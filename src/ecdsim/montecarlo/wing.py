@@ -172,7 +172,7 @@ def resolve(
         try:
             value = nominal(raw, q.key)
         except WingKeyError as exc:
-            problems.extend(f"{where}: {p}" for p in exc.problems)
+            problems.extend(f"{where}: {p.removeprefix(q.key + ': ')}" for p in exc.problems)
             continue
         spread, name = q.spread, q.spread_name
         if spread.relative and value == 0.0:
