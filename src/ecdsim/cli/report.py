@@ -55,9 +55,24 @@ def report(
     units: UnitsOpt = None,
 ) -> None:
     """Write a self-contained HTML report: inputs, components, deployment, plots, warnings."""
+    from ecdsim.cli.wing import is_wing_file
     from ecdsim.report import write_report
     from ecdsim.report.pdf import PdfUnavailable, html_to_pdf
 
+    if is_wing_file(config):  # the wing's report (docs/wing.md, report)
+        from ecdsim.cli.wing import wing_report
+
+        written = wing_report(config, output, temperature, method, units, fail_on)
+        if pdf:
+            target = output.with_suffix(".pdf")
+            try:
+                html_to_pdf(written, target)
+            except PdfUnavailable as exc:
+                fail([str(exc)])
+            except OSError as exc:
+                fail([f"--pdf {target}: cannot write ({exc.strerror or exc})"])
+            typer.echo(f"wrote {target}")
+        return
     conditions = failon.parse(fail_on)
     loaded = load_run(config, temperature, method)
     system = units_option(units, loaded)

@@ -337,3 +337,35 @@ def write_study_plots(study: WingStudy, summary: dict[str, object], folder: Path
             study_title(study.title, f"{name}: latch speed of the samples that latch, {what}"),
         )
     return [save_figure(fig, folder / f"{name}.png") for name, fig in figures.items()]
+
+
+def wing_report(
+    path: Path,
+    output: Path,
+    temperatures: list[str] | None,
+    methods: list[str] | None,
+    units: str | None,
+    fail_on: object,
+) -> Path:
+    """``ecdsim report WING.toml``: solve the wing and write its report
+    (:mod:`ecdsim.report.wing`); returns the file written."""
+    from ecdsim.report.wing import write_wing_report
+    from ecdsim.wing.solver import WingUnsupported, deploy_wing
+
+    if fail_on:
+        fail(["--fail-on: not taken with a wing file (docs/wing.md)"])
+    run = load_wing_run(path, temperatures, methods, units)
+    config = run.config
+    try:
+        result = deploy_wing(
+            config.wing, run.temperatures, rtol=config.rtol, stop_time=config.stop_time
+        )
+    except WingUnsupported as exc:
+        fail([f"{path}: {exc}"])
+    text = path.read_text(encoding="utf-8")
+    try:
+        written = write_wing_report(config, result, text, output, run.units)
+    except OSError as exc:
+        fail([f"--output {output}: cannot write ({exc.strerror or exc})"])
+    typer.echo(f"wrote {written}")
+    return written
