@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from html.parser import HTMLParser
 from pathlib import Path
+from typing import Any
 
 import pytest
 from typer.testing import CliRunner
@@ -70,10 +71,11 @@ def _report(tmp_path: Path, config: Path, *options: str) -> _Page:
     return page
 
 
-def _deploy(config: Path, *options: str) -> dict:
+def _deploy(config: Path, *options: str) -> dict[str, Any]:
     result = runner.invoke(app, ["deploy", str(config), "--json", *options])
     assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
+    document: dict[str, Any] = json.loads(result.stdout)
+    return document
 
 
 def test_wing_section_is_deploy_json(tmp_path: Path) -> None:
@@ -118,8 +120,13 @@ def test_peak_damper_temperature_and_us_units(tmp_path: Path) -> None:
     # --units us, and the latch's energy and torques in US units.
     config = tmp_path / "heated.toml"
     text = ONE_PANEL.read_text()
-    heat = '\n[wing.ecds.cc16.damper.thermal]\nheat_capacity = "0.5 J/K"\nthermal_resistance = "40 K/W"\n'
-    config.write_text(text.replace("\n[wing.ecds.cc16.gearbox]", heat + "\n[wing.ecds.cc16.gearbox]"))
+    heat = (
+        '\n[wing.ecds.cc16.damper.thermal]\nheat_capacity = "0.5 J/K"\n'
+        'thermal_resistance = "40 K/W"\n'
+    )
+    config.write_text(
+        text.replace("\n[wing.ecds.cc16.gearbox]", heat + "\n[wing.ecds.cc16.gearbox]")
+    )
     document = _deploy(config, "-T", "-40")
     peak = document["cases"][0]["peak_damper_temperature_C"]["root"]
     assert peak > -40.0 + 0.5

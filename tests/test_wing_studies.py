@@ -46,7 +46,9 @@ def _edited(text: str, panel_mass: float | None = None, root_friction: float | N
     if root_friction is not None:
         old = 'friction = { slope = "0 N*m/K", at_0C = "1.3 N*m" }'
         assert text.count(old) == 1
-        text = text.replace(old, f'friction = {{ slope = "0 N*m/K", at_0C = "{root_friction!r} N*m" }}')
+        text = text.replace(
+            old, f'friction = {{ slope = "0 N*m/K", at_0C = "{root_friction!r} N*m" }}'
+        )
     return text
 
 
@@ -83,13 +85,20 @@ def test_sweep_value_is_the_direct_solve_of_the_edited_file(tmp_path: Path) -> N
     for row, mass in zip(rows, (0.8, 1.2), strict=True):
         direct = _direct(_edited(text, panel_mass=mass, root_friction=1.25))
         # The same solver on the same numbers: equal to rounding (1e-12 relative).
-        for name in ("hinge_0_latch_time_s", "hinge_0_latch_speed_rad_s", "hinge_2_latch_speed_rad_s"):
+        for name in (
+            "hinge_0_latch_time_s",
+            "hinge_0_latch_speed_rad_s",
+            "hinge_2_latch_speed_rad_s",
+        ):
             assert float(row[name]) == pytest.approx(direct[name], rel=1e-12)
         assert float(row["stuck_hinges"]) == direct["stuck"] == 1.0
-        assert row["hinge_1_stuck"] == "True" and row["latched"] == "False"
+        assert row["hinge_1_stuck"] == "True"
+        assert row["latched"] == "False"
         assert row["deployment_time_s"] == ""  # NaN: the middle hinge never latches
     # ...and the varied mass matters: the outer latch differs between the two points.
-    assert float(rows[0]["hinge_2_latch_speed_rad_s"]) != float(rows[1]["hinge_2_latch_speed_rad_s"])
+    assert float(rows[0]["hinge_2_latch_speed_rad_s"]) != float(
+        rows[1]["hinge_2_latch_speed_rad_s"]
+    )
 
 
 @pytest.mark.parametrize(
@@ -105,7 +114,8 @@ def test_sweep_refuses_a_bad_wing_key_in_one_line(vary: str, message: str) -> No
     result = CliRunner().invoke(app, ["sweep", str(BASE), "--vary", vary, "--json"])
     assert result.exit_code == 2
     lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and message in lines[0], lines
+    assert len(lines) == 1, lines
+    assert message in lines[0]
 
 
 def _study(samples: int, seed: int | None = None) -> wing_study.WingStudy:
@@ -126,8 +136,7 @@ def test_monte_carlo_is_reproducible_and_its_mean_is_the_direct_solves() -> None
     assert np.all(np.abs(study.values[:, 1] - 1.3) <= 0.05 + 1e-12)
     text = BASE.read_text()
     direct = [
-        _direct(_edited(text, panel_mass=float(m), root_friction=float(f)))
-        for m, f in study.values
+        _direct(_edited(text, panel_mass=float(m), root_friction=float(f))) for m, f in study.values
     ]
     case = study.summary()["cases"][0]
     for j in (0, 2):
@@ -149,10 +158,12 @@ def test_monte_carlo_cli_writes_its_table_and_summary(tmp_path: Path) -> None:
     )
     assert result.exit_code == 0, result.output
     summary = json.loads(result.stdout)
-    assert summary["samples"] == 6 and summary["seed"] == 11
+    assert summary["samples"] == 6
+    assert summary["seed"] == 11
     assert json.loads((out / "summary.json").read_text()) == summary
     rows = list(csv.DictReader((out / "samples.csv").read_text().splitlines()))
-    assert len(rows) == 6 and "wing.panels[2].mass_kg" in rows[0]
+    assert len(rows) == 6
+    assert "wing.panels[2].mass_kg" in rows[0]
     assert (out / "plots" / "latch_speed_hinge_0.png").stat().st_size > 0
 
 
@@ -179,10 +190,13 @@ def test_monte_carlo_refuses_bad_tolerances_in_one_line(
 ) -> None:
     config = tmp_path / "wing.toml"
     config.write_text(BASE.read_text() + "\n[tolerances]\n[tolerances.quantities]\n" + tolerance)
-    result = CliRunner().invoke(app, ["montecarlo", str(config), "-n", "4", "--out", str(tmp_path / "o")])
+    result = CliRunner().invoke(
+        app, ["montecarlo", str(config), "-n", "4", "--out", str(tmp_path / "o")]
+    )
     assert result.exit_code == 2
     lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and message in lines[0], lines
+    assert len(lines) == 1, lines
+    assert message in lines[0]
 
 
 def test_montecarlo_refuses_the_single_hinge_run_options(tmp_path: Path) -> None:

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ecdsim.config.units import NUMBER_PATTERN
+from ecdsim.config.units import NUMBER_PATTERN, Kind
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -96,7 +96,7 @@ def _fields(key: str) -> Any:
 def _si(key: str, value: object) -> float:
     fields = _fields(key)
     config_value, field_kind = fields.config_value, fields.field_kind
-    kind = field_kind(key)
+    kind: Kind | None = field_kind(key)
     if kind is None:
         return float(value) if isinstance(value, int | float) else math.nan
     return kind.parse(config_value(key, value))
@@ -903,9 +903,7 @@ def run_wing_sweep(
     from ecdsim.config.wing_schema import wing_config_from_document
     from ecdsim.wing.solver import WingUnsupported, check_supported, deploy_wing
 
-    problems = [
-        f"--vary {problem}" for v in varies if (problem := key_problem(v.key)) is not None
-    ]
+    problems = [f"--vary {problem}" for v in varies if (problem := key_problem(v.key)) is not None]
     if problems:
         raise SweepError(problems)
     configs: list[Any] = []
@@ -940,9 +938,7 @@ def run_wing_sweep(
         head: dict[str, Any] = {"point": index}
         head.update({v.column: point[v.key][1] for v in varies})
         try:
-            result = deploy_wing(
-                config.wing, temps, rtol=config.rtol, stop_time=config.stop_time
-            )
+            result = deploy_wing(config.wing, temps, rtol=config.rtol, stop_time=config.stop_time)
         except WingUnsupported as exc:  # a law the solver cannot take at a temperature
             errors.append((index, str(exc)))
             rows.extend(
@@ -950,5 +946,7 @@ def run_wing_sweep(
             )
             continue
         for row in result.summary_rows():
-            rows.append({**head, "temperature_C": row.pop("temperature_C"), "method": "wing", **row})
+            rows.append(
+                {**head, "temperature_C": row.pop("temperature_C"), "method": "wing", **row}
+            )
     return SweepResult(rows, list(varies), title, ("wing",), errors, config_sha256)

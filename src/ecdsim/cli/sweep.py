@@ -111,10 +111,10 @@ def sweep(
 ) -> None:
     """Vary config keys (full factorial or Latin hypercube) and tabulate every result."""
     from ecdsim.cli.common import load_run, units_option
+    from ecdsim.cli.wing import is_wing_file
     from ecdsim.config import ConfigError
     from ecdsim.config.loader import parse_toml, read_config_text
     from ecdsim.config.seeds import seed_problem
-    from ecdsim.cli.wing import is_wing_file
     from ecdsim.sweeps import SweepError, design, parse_vary, run_sweep
 
     wing = is_wing_file(config)

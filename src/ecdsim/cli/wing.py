@@ -74,8 +74,7 @@ def load_wing_run(
     problems = []
     if methods:
         problems.append(
-            "--method: not taken with a wing file (one solver: the wing's dynamics; "
-            "docs/wing.md)"
+            "--method: not taken with a wing file (one solver: the wing's dynamics; docs/wing.md)"
         )
     temps = list(config.temperatures)
     if temperatures:
@@ -87,7 +86,9 @@ def load_wing_run(
                 problems.append(f"--temperature: {exc}")
     system: UnitSystem = "si"
     try:
-        system = check_system(units or config.spec.output.units, "--units" if units else "output.units")
+        system = check_system(
+            units or config.spec.output.units, "--units" if units else "output.units"
+        )
     except UnitSystemError as exc:
         problems.append(str(exc))
     if problems:
@@ -153,8 +154,14 @@ def format_case(result: WingResult, case: WingCase) -> list[str]:
         if peak is not None
     ]
     if peaks:
-        lines.extend(textwrap.wrap("peak damper temperature: " + ", ".join(peaks), 78,
-                                   initial_indent="  ", subsequent_indent="    "))
+        lines.extend(
+            textwrap.wrap(
+                "peak damper temperature: " + ", ".join(peaks),
+                78,
+                initial_indent="  ",
+                subsequent_indent="    ",
+            )
+        )
     lines.append(f"  energy balance closes to {case.energy.error:.1e}")
     return lines
 
@@ -276,8 +283,7 @@ def format_study(summary: dict[str, object]) -> str:
             f"95 % interval {100 * low:.3g} to {100 * high:.3g} %)"
         )
         lines.append(
-            f"  {'hinge':<12}{'latch time [s]':>20}{'latch speed [rad/s]':>22}"
-            f"{'stuck':>10}"
+            f"  {'hinge':<12}{'latch time [s]':>20}{'latch speed [rad/s]':>22}{'stuck':>10}"
         )
         lines.append(f"  {'':<12}{'mean':>10}{'P99':>10}{'mean':>11}{'P99':>11}{'[%]':>10}")
         for hinge in case["hinges"]:

@@ -38,12 +38,6 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from ecdsim.config.errors import ConfigError
-from ecdsim.config.tolerance_schema import (
-    QuantityToleranceSpec,
-    Spread,
-    TolerancesSpec,
-    parse_spread,
-)
 from ecdsim.config.fields import (
     Angle,
     NonNegativeDamping,
@@ -76,6 +70,12 @@ from ecdsim.config.schema import (
     StaticFactor,
     Tolerance,
     _Section,
+)
+from ecdsim.config.tolerance_schema import (
+    QuantityToleranceSpec,
+    Spread,
+    TolerancesSpec,
+    parse_spread,
 )
 from ecdsim.config.units import LENGTH, MASS, Kind, QuantityError
 from ecdsim.model import Ecd, Gearbox, HighSpeedDamper

@@ -93,9 +93,7 @@ class WingStudy:
         carry their units)."""
         from ecdsim.sweeps import SweepResult, Vary
 
-        varies = [
-            Vary(t.key, (), (), unit=t.unit) for t in self.tolerances.tolerances
-        ]
+        varies = [Vary(t.key, (), (), unit=t.unit) for t in self.tolerances.tolerances]
         return SweepResult(self.rows, varies, self.title, ("wing",), self.errors)
 
     def summary(self) -> dict[str, Any]:
@@ -197,7 +195,9 @@ def resolve(
                 break
         tolerance_unit = _unit(q.key)
         resolved.append(
-            Tolerance(q.key, q.distribution, value, scale, tolerance_unit, f"{name} = {spread.text!r}")
+            Tolerance(
+                q.key, q.distribution, value, scale, tolerance_unit, f"{name} = {spread.text!r}"
+            )
         )
     if problems:
         raise ConfigError(problems, config.source)
@@ -211,7 +211,9 @@ def _unit(key: str) -> str:
     return field_unit(key) or ""
 
 
-def design(tolerances: ToleranceSet, sampling: str, seed: int, chunk_size: int, samples: int) -> np.ndarray[Any, np.dtype[np.float64]]:
+def design(
+    tolerances: ToleranceSet, sampling: str, seed: int, chunk_size: int, samples: int
+) -> np.ndarray[Any, np.dtype[np.float64]]:
     """The samples' uniform scores, chunk by chunk as a single hinge's study draws them
     (:func:`ecdsim.montecarlo.sampling.uniforms`), with the correlation imposed."""
     from ecdsim.montecarlo.sampling import uniforms
@@ -284,9 +286,7 @@ def run(
         head.update({key_column(t.key, t.unit): point[t.key] for t in tolerances.tolerances})
         try:
             sample = build(set_values(raw, point))
-            result = deploy_wing(
-                sample.wing, temps, rtol=sample.rtol, stop_time=sample.stop_time
-            )
+            result = deploy_wing(sample.wing, temps, rtol=sample.rtol, stop_time=sample.stop_time)
         except (ConfigError, WingUnsupported) as exc:
             message = exc.problems[0] if isinstance(exc, ConfigError) else str(exc)
             study.errors.append((i, message))
@@ -299,4 +299,3 @@ def run(
                 {**head, "temperature_C": row.pop("temperature_C"), "method": "wing", **row}
             )
     return study
-

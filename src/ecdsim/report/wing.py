@@ -27,7 +27,7 @@ from ecdsim.units_display import Shown
 if TYPE_CHECKING:
     from ecdsim.config.wing_schema import WingConfig
     from ecdsim.units_display import UnitSystem
-    from ecdsim.wing.result import WingCase, WingResult
+    from ecdsim.wing.result import LatchEvent, WingCase, WingResult
 
 # The energy account's columns: (key, header), each summed over the hinges [J].
 ENERGY_COLUMNS = (
@@ -60,9 +60,9 @@ def _energy_cells(case: WingCase, u: Shown) -> list[dict[str, str]]:
 def _hinge_rows(result: WingResult, u: Shown) -> list[dict[str, Any]]:
     rows = []
     for i, case in enumerate(result.cases):
-        first = {}
-        for latch in case.latches:
-            first.setdefault(latch.hinge, latch)
+        first: dict[int, LatchEvent] = {}
+        for record in case.latches:
+            first.setdefault(record.hinge, record)
         peaks = case.peak_damper_temperature
         for j, name in enumerate(result.hinges):
             latch = first.get(j)
@@ -130,7 +130,8 @@ def _figures(result: WingResult, config: WingConfig) -> list[dict[str, str]]:
         figures.append(
             {
                 "id": f"wing_shapes_{label}C",
-                "caption": f"The wing's shape from release to the end at {case.temperature:g} degC.",
+                "caption": f"The wing's shape from release to the end at "
+                f"{case.temperature:g} degC.",
                 "src": figure_data_uri(plot_wing_shapes(config.wing, result, case.temperature)),
             }
         )
@@ -182,7 +183,11 @@ def build_wing_context(
         "wing_cases": cases,
         "wing_hinges": _hinge_rows(result, u),
         "wing_energy": [
-            {"case": i, "temperature": u.num(c.temperature, "temperature"), "cells": _energy_cells(c, u)}
+            {
+                "case": i,
+                "temperature": u.num(c.temperature, "temperature"),
+                "cells": _energy_cells(c, u),
+            }
             for i, c in enumerate(result.cases)
         ],
         "energy_headers": [label for _, label in ENERGY_COLUMNS],

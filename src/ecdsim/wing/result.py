@@ -383,9 +383,9 @@ class WingResult:
                 "stuck_hinges": len(case.stuck_hinges),
                 "energy_balance_error": float(case.energy.error),
             }
-            first = {}
-            for latch in case.latches:
-                first.setdefault(latch.hinge, latch)
+            first: dict[int, LatchEvent] = {}
+            for record in case.latches:
+                first.setdefault(record.hinge, record)
             peaks = case.peak_damper_temperature
             for j in range(case.hinges):
                 head = f"hinge_{j}_"
@@ -398,8 +398,9 @@ class WingResult:
                 torque = latch.peak_torque if latch else None
                 row[head + "peak_latch_torque_Nm"] = math.nan if torque is None else float(torque)
                 row[head + "stuck"] = j in case.stuck_hinges
-                if j < len(peaks) and peaks[j] is not None:
-                    row[head + "peak_damper_temperature_C"] = float(peaks[j])
+                peak = peaks[j] if j < len(peaks) else None
+                if peak is not None:
+                    row[head + "peak_damper_temperature_C"] = float(peak)
             rows.append(row)
         return rows
 
