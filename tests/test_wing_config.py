@@ -332,10 +332,14 @@ def test_describe_wing_field_walks_lists_and_named_ecds() -> None:
     assert known == ["hinges", "ratio", "stiffness", "pretension", "pulley_radius"]
 
 
-def test_single_hinge_commands_refuse_a_wing_file_in_one_line(tmp_path: Path) -> None:
-    result = CliRunner().invoke(app, ["report", str(EXAMPLE), "-o", str(tmp_path / "r.html")])
+def test_single_hinge_commands_refuse_a_wing_file_in_one_line() -> None:
+    # (deploy, report, sweep and montecarlo take a wing file: tests/test_wing_studies.py,
+    # tests/test_report_wing.py.)
+    result = CliRunner().invoke(
+        app, ["repeat", str(EXAMPLE), "-n", "3", "--cool-down", "60 s"]
+    )
     assert result.exit_code == 2
     assert result.stderr.strip().splitlines() == [
-        f"error: {EXAMPLE}: wing: this is a wing file (docs/wing.md); `ecdsim deploy` "
-        "solves it, this command takes a single hinge's file"
+        f"error: {EXAMPLE}: wing: this is a wing file (docs/wing.md); `ecdsim deploy`, "
+        "`report`, `sweep` and `montecarlo` take it, this command takes a single hinge's file"
     ]

@@ -210,8 +210,8 @@ def validate(raw: dict[str, Any], source: str = "<string>") -> ConfigSpec | Core
 
 # A wing file read where a single hinge's config is expected (docs/wing.md).
 WING_FILE = (
-    "wing: this is a wing file (docs/wing.md); `ecdsim deploy` solves it, this command "
-    "takes a single hinge's file"
+    "wing: this is a wing file (docs/wing.md); `ecdsim deploy`, `report`, `sweep` and "
+    "`montecarlo` take it, this command takes a single hinge's file"
 )
 
 Describe = Callable[[tuple[Any, ...]], tuple[str | None, list[str]]]

@@ -12,81 +12,43 @@ name, as every error message of a wing file names them::
 (:class:`ecdsim.config.wing_schema.WingConfigSpec`), so a plain number is read in the
 key's SI unit as everywhere (:mod:`ecdsim.config.overrides`); :func:`set_values` copies
 a parsed wing document with keys set, for validation as any file; :func:`nominal` reads
-a key's value in the file, in SI. Every problem is one line naming the key.
+a key's value in the file, in SI. Every problem is one line naming the key. The
+paths' parsing and their kinds live with the schema they walk
+(:mod:`ecdsim.config.wing_schema`, which checks a ``[tolerances]`` section's keys with
+them) and are re-exported here.
 """
 
 from __future__ import annotations
 
 import copy
 import math
-import re
 from collections.abc import Mapping
 from typing import Any
 
-from ecdsim.config.errors import ConfigError
-from ecdsim.config.units import Kind, QuantityError
+from ecdsim.config.units import QuantityError
+from ecdsim.config.wing_schema import (
+    EXAMPLE_KEY,
+    KEY_PATTERN,
+    WingKeyError,
+    field_kind,
+    is_wing_key,
+    key_problem,
+    split_key,
+)
 
-_NAME = r"[A-Za-z_][A-Za-z0-9_]*"
-# wing, then dotted names each with optional [index] parts.
-KEY_PATTERN = re.compile(rf"^wing(\.{_NAME}(\[\d+\])*)+$")
-_PART = re.compile(rf"({_NAME})((?:\[\d+\])*)")
-EXAMPLE_KEY = "wing.hinges[1].friction.at_0C"
-
-
-class WingKeyError(ConfigError):
-    """A key path that is not a quantity of the wing file (one line each)."""
-
-
-def is_wing_key(key: str) -> bool:
-    """True for a key path into ``[wing]`` (``wing.panels[0].mass``)."""
-    return KEY_PATTERN.match(key) is not None
-
-
-def split_key(key: str) -> tuple[str | int, ...]:
-    """``wing.hinges[1].friction.at_0C`` -> ``("wing", "hinges", 1, "friction", "at_0C")``."""
-    if not is_wing_key(key):
-        raise WingKeyError([f"{key!r}: not a wing key; expected a path such as {EXAMPLE_KEY}"])
-    parts: list[str | int] = []
-    for piece in key.split("."):
-        found = _PART.fullmatch(piece)
-        assert found is not None  # the pattern above admits only such pieces
-        parts.append(found.group(1))
-        parts.extend(int(i) for i in re.findall(r"\[(\d+)\]", found.group(2)))
-    return tuple(parts)
-
-
-def field_kind(key: str) -> Kind | None:
-    """The quantity kind of a wing key path, or None (not a quantity, or unknown)."""
-    from ecdsim.config.overrides import _kind_in
-    from ecdsim.config.wing_schema import WingConfigSpec, _container, _model_in
-
-    try:
-        parts = split_key(key)
-    except WingKeyError:
-        return None
-    model: Any = WingConfigSpec
-    kind: Kind | None = None
-    expect: str | None = None  # "index" after a list field, "name" after a dict field
-    for part in parts:
-        if expect == "index":
-            if not isinstance(part, int):
-                return None
-            expect = None
-            continue
-        if expect == "name":
-            expect = None
-            continue
-        if isinstance(part, int) or model is None or part not in model.model_fields:
-            return None
-        info = model.model_fields[part]
-        container = _container(info.annotation)
-        expect = "index" if container is list else "name" if container is dict else None
-        kinds = [m for m in info.metadata if isinstance(m, Kind)]
-        kind = kinds[0] if kinds else (None if container else _kind_in(info.annotation))
-        model = _model_in(info.annotation)
-    if expect is not None or model is not None:
-        return None  # a list, a table or an ECD, not one quantity
-    return kind
+__all__ = [
+    "EXAMPLE_KEY",
+    "KEY_PATTERN",
+    "WingKeyError",
+    "config_value",
+    "field_kind",
+    "field_unit",
+    "is_wing_key",
+    "key_problem",
+    "nominal",
+    "set_values",
+    "split_key",
+]
 
 
 def field_unit(key: str) -> str | None:
@@ -106,21 +68,6 @@ def config_value(key: str, value: object) -> object:
         raise WingKeyError([f"{key} = {value!r}: not a finite number"])
     unit = field_unit(key)
     return f"{number!r} {unit}" if unit else number
-
-
-def key_problem(key: str) -> str | None:
-    """Why ``key`` cannot be varied (one line), or None."""
-    if not is_wing_key(key):
-        return (
-            f"{key}: not a key of a wing file; give its path in the file, e.g. {EXAMPLE_KEY} "
-            "(docs/wing.md)"
-        )
-    if field_kind(key) is None:
-        return (
-            f"{key}: not a quantity of a wing file (a path to one number with its unit, "
-            f"e.g. {EXAMPLE_KEY}; list entries counted from 0)"
-        )
-    return None
 
 
 def _walk(document: Any, parts: tuple[str | int, ...], key: str) -> Any:

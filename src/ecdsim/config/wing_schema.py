@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -379,8 +380,6 @@ class WingQuantityToleranceSpec(QuantityToleranceSpec):
     @field_validator("sigma", "three_sigma", "plus_minus", mode="before")
     @classmethod
     def _parse(cls, value: object, info: ValidationInfo) -> object:
-        from ecdsim.config.wing_keys import field_kind
-
         if value is None or isinstance(value, Spread):
             return value
         kind = field_kind(str(info.data.get("key")))
@@ -401,8 +400,6 @@ class WingTolerancesSpec(TolerancesSpec):
     @field_validator("quantities", mode="before")
     @classmethod
     def _known_keys(cls, value: object) -> object:
-        from ecdsim.config.wing_keys import key_problem
-
         if not isinstance(value, dict):
             return value
         problems = [p for key in value if (p := key_problem(key)) is not None]
@@ -633,6 +630,85 @@ def describe_wing_field(loc: tuple[Any, ...]) -> tuple[str | None, list[str]]:
         skip_name = _container(info.annotation) is dict
         model = nested
     return expected, known
+
+
+# --- key paths into a wing file (ecdsim.config.wing_keys: sweeps, Monte Carlo) ---
+
+_NAME = r"[A-Za-z_][A-Za-z0-9_]*"
+# wing, then dotted names each with optional [index] parts.
+KEY_PATTERN = re.compile(rf"^wing(\.{_NAME}(\[\d+\])*)+$")
+_PART = re.compile(rf"({_NAME})((?:\[\d+\])*)")
+EXAMPLE_KEY = "wing.hinges[1].friction.at_0C"
+
+
+class WingKeyError(ConfigError):
+    """A key path that is not a quantity of the wing file (one line each)."""
+
+
+def is_wing_key(key: str) -> bool:
+    """True for a key path into ``[wing]`` (``wing.panels[0].mass``)."""
+    return KEY_PATTERN.match(key) is not None
+
+
+def split_key(key: str) -> tuple[str | int, ...]:
+    """``wing.hinges[1].friction.at_0C`` -> ``("wing", "hinges", 1, "friction", "at_0C")``."""
+    if not is_wing_key(key):
+        raise WingKeyError([f"{key!r}: not a wing key; expected a path such as {EXAMPLE_KEY}"])
+    parts: list[str | int] = []
+    for piece in key.split("."):
+        found = _PART.fullmatch(piece)
+        assert found is not None  # the pattern above admits only such pieces
+        parts.append(found.group(1))
+        parts.extend(int(i) for i in re.findall(r"\[(\d+)\]", found.group(2)))
+    return tuple(parts)
+
+
+def field_kind(key: str) -> Kind | None:
+    """The quantity kind of a wing key path, or None (not a quantity, or unknown)."""
+    from ecdsim.config.overrides import _kind_in
+
+    try:
+        parts = split_key(key)
+    except WingKeyError:
+        return None
+    model: Any = WingConfigSpec
+    kind: Kind | None = None
+    expect: str | None = None  # "index" after a list field, "name" after a dict field
+    for part in parts:
+        if expect == "index":
+            if not isinstance(part, int):
+                return None
+            expect = None
+            continue
+        if expect == "name":
+            expect = None
+            continue
+        if isinstance(part, int) or model is None or part not in model.model_fields:
+            return None
+        info = model.model_fields[part]
+        container = _container(info.annotation)
+        expect = "index" if container is list else "name" if container is dict else None
+        kinds = [m for m in info.metadata if isinstance(m, Kind)]
+        kind = kinds[0] if kinds else (None if container else _kind_in(info.annotation))
+        model = _model_in(info.annotation)
+    if expect is not None or model is not None:
+        return None  # a list, a table or an ECD, not one quantity
+    return kind
+
+
+def key_problem(key: str) -> str | None:
+    """Why ``key`` cannot be varied (one line), or None."""
+    if not is_wing_key(key):
+        return (
+            f"{key}: not a key of a wing file; give its path in the file, e.g. {EXAMPLE_KEY} "
+            "(docs/wing.md)"
+        )
+    if field_kind(key) is None:
+        return (
+            f"{key}: not a quantity of a wing file (a path to one number with its unit, "
+            f"e.g. {EXAMPLE_KEY}; list entries counted from 0)"
+        )
+    return None
 
 
 def validate_wing(raw: dict[str, Any], source: str = "<string>") -> WingConfigSpec:
