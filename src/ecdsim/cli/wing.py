@@ -5,7 +5,8 @@
 columns): how the run ended, the deployment time, then one row per latch in latching
 order (time, arrival speed, the wing's kinetic energy, the compliant latch's peak torque
 or the rigid latch's impulse, the impact loss), the hinges left stuck and the energy
-balance. ``--json`` prints :meth:`~ecdsim.wing.result.WingResult.to_dict`; ``--plot DIR``
+balance (and each heated damper's peak temperature). ``--json`` prints
+:meth:`~ecdsim.wing.result.WingResult.to_dict`; ``--plot DIR``
 writes the hinge angles and the shape strips (:mod:`ecdsim.plotting_wing`).
 """
 
