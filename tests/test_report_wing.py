@@ -145,3 +145,21 @@ def test_wing_report_refuses_single_hinge_options(tmp_path: Path) -> None:
     assert result.exit_code == 2
     assert result.stderr.strip() == "error: --fail-on: not taken with a wing file (docs/wing.md)"
     assert not (tmp_path / "r.html").exists()
+
+
+def test_compliant_latch_peak_torque_in_us_units(tmp_path: Path) -> None:
+    # wing_two_panel_latches: a compliant root latch (its peak torque) and a rebounding
+    # rigid outer latch (no torque): the cell is the JSON's peak in lbf*in.
+    config = ROOT / "validation" / "configs" / "wing_two_panel_latches.toml"
+    document = _deploy(config, "-T", "25")
+    page = _report(tmp_path, config, "-T", "25", "--units", "us")
+    hinges = document["hinges"]
+    for latch in document["cases"][0]["latches"]:
+        j = hinges.index(latch["hinge"])
+        cell = page.cells[(0, j, "peak_torque_Nm")]
+        if latch["peak_torque_Nm"] is None:
+            assert cell == "-"
+        else:
+            expected = latch["peak_torque_Nm"] * LBF_IN_PER_NM
+            assert float(cell) == pytest.approx(expected, rel=CELL_REL)
+    assert any(latch["peak_torque_Nm"] for latch in document["cases"][0]["latches"])

@@ -8,6 +8,11 @@ or the rigid latch's impulse, the impact loss), the hinges left stuck and the en
 balance (and each heated damper's peak temperature). ``--json`` prints
 :meth:`~ecdsim.wing.result.WingResult.to_dict`; ``--plot DIR``
 writes the hinge angles and the shape strips (:mod:`ecdsim.plotting_wing`).
+
+``sweep``, ``montecarlo`` and ``report`` hand a wing file here too: :func:`load_wing_run`
+reads it with the options they share, :func:`run_wing_montecarlo` runs and prints the
+tolerance study (:mod:`ecdsim.montecarlo.wing`), :func:`wing_report` writes the report
+(:mod:`ecdsim.report.wing`); the sweep itself is :func:`ecdsim.sweeps.run_wing_sweep`.
 """
 
 from __future__ import annotations
