@@ -335,9 +335,7 @@ def test_describe_wing_field_walks_lists_and_named_ecds() -> None:
 def test_single_hinge_commands_refuse_a_wing_file_in_one_line() -> None:
     # (deploy, report, sweep and montecarlo take a wing file: tests/test_wing_studies.py,
     # tests/test_report_wing.py.)
-    result = CliRunner().invoke(
-        app, ["repeat", str(EXAMPLE), "-n", "3", "--cool-down", "60 s"]
-    )
+    result = CliRunner().invoke(app, ["repeat", str(EXAMPLE), "-n", "3", "--cool-down", "60 s"])
     assert result.exit_code == 2
     assert result.stderr.strip().splitlines() == [
         f"error: {EXAMPLE}: wing: this is a wing file (docs/wing.md); `ecdsim deploy`, "
