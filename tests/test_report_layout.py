@@ -261,3 +261,37 @@ def test_print_shows_every_column(browser: Any, report: Path) -> None:
         assert set(overflow) == {"visible"}
     finally:
         page.context.close()
+
+
+@pytest.fixture(scope="module")
+def wing_report(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A wing file's report (docs/wing.md, the report): the three-panel stick-slip ground
+    test, a hinge stuck (a warning), every table of the wing section."""
+    out = tmp_path_factory.mktemp("wing") / "wing.html"
+    config = ROOT / "validation" / "configs" / "wing_three_panel_stick_slip_ground_test.toml"
+    result = CliRunner().invoke(app, ["report", str(config), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    return out
+
+
+@pytest.mark.parametrize("width", [390, 1280])
+def test_wing_report_fits_the_screen(browser: Any, wing_report: Path, width: int) -> None:
+    page = _open(browser, wing_report, width)
+    try:
+        page.screenshot(path=str(SHOTS / f"wing-report-{width}.png"), full_page=True)
+        assert page.evaluate("document.documentElement.scrollWidth") == width
+        tables = page.evaluate(TABLE_LAYOUT)
+        names = [t["name"] for t in tables]
+        assert names == ["provenance", "wing-deployment", "wing-latches", "wing-energy"]
+        for table in tables[1:]:
+            box = table["box"]
+            assert box is not None, table
+            assert box["right"] <= width, table
+            assert box["tabindex"] == "0", table
+            assert box["role"] == "region", table
+        scrolling = {t["name"] for t in tables if t["box"] and t["box"]["scrolls"]}
+        # The latch table is wider than a phone: it scrolls in its box; on a desktop none.
+        assert ("wing-latches" in scrolling) == (width == 390)
+        _axe(page)
+    finally:
+        page.context.close()
