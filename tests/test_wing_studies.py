@@ -215,3 +215,15 @@ def test_the_base_file_is_unchanged_by_a_study() -> None:
     before = load_wing_config(BASE).wing
     _study(2)
     assert parse_wing_config(text, "again").wing == before
+
+
+def test_a_wing_key_given_to_a_single_hinge_sweep_is_named() -> None:
+    paper = ROOT / "examples" / "paper_cc16.toml"
+    result = CliRunner().invoke(
+        app, ["sweep", str(paper), "--vary", "wing.panels[0].mass=1", "--json"]
+    )
+    assert result.exit_code == 2
+    assert result.stderr.strip() == (
+        f"error: --vary wing.panels[0].mass: a wing file's key path, but {paper} is a single "
+        "hinge's file (its keys: gearbox.ratio, load.inertia, ...; docs/config.md)"
+    )

@@ -824,10 +824,18 @@ def run_sweep(
     from ecdsim.config import ConfigError
     from ecdsim.config.loader import validate
     from ecdsim.config.overrides import apply_overrides
+    from ecdsim.config.wing_keys import is_wing_key
     from ecdsim.model import DeploymentSystem
 
     specs: list[Any] = []
-    problems: list[str] = []
+    problems: list[str] = [
+        f"--vary {v.key}: a wing file's key path, but {source} is a single hinge's file "
+        "(its keys: gearbox.ratio, load.inertia, ...; docs/config.md)"
+        for v in varies
+        if is_wing_key(v.key)
+    ]
+    if problems:
+        raise SweepError(problems)
     seen: set[str] = set()
     for point in points:
         overrides = {k: value for k, (value, _) in point.items()}
