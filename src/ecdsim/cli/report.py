@@ -57,21 +57,13 @@ def report(
     """Write a self-contained HTML report: inputs, components, deployment, plots, warnings."""
     from ecdsim.cli.wing import is_wing_file
     from ecdsim.report import write_report
-    from ecdsim.report.pdf import PdfUnavailable, html_to_pdf
 
     if is_wing_file(config):  # the wing's report (docs/wing.md, report)
         from ecdsim.cli.wing import wing_report
 
         written = wing_report(config, output, temperature, method, units, fail_on)
         if pdf:
-            target = output.with_suffix(".pdf")
-            try:
-                html_to_pdf(written, target)
-            except PdfUnavailable as exc:
-                fail([str(exc)])
-            except OSError as exc:
-                fail([f"--pdf {target}: cannot write ({exc.strerror or exc})"])
-            typer.echo(f"wrote {target}")
+            _write_pdf(written, output)
         return
     conditions = failon.parse(fail_on)
     loaded = load_run(config, temperature, method)
@@ -92,18 +84,25 @@ def report(
     echo_warnings(prediction, system)
     typer.echo(f"wrote {written}")
     if pdf:
-        target = output.with_suffix(".pdf")
-        try:
-            html_to_pdf(written, target)
-        except PdfUnavailable as exc:
-            fail([str(exc)])
-        except OSError as exc:
-            fail([f"--pdf {target}: cannot write ({exc.strerror or exc})"])
-        typer.echo(f"wrote {target}")
+        _write_pdf(written, output)
     reasons = failon.stall_reasons(prediction) if "stall" in conditions else []
     if "requirements" in conditions:
         reasons += failon.requirement_reasons(loaded)
     failon.finish(conditions, reasons)
+
+
+def _write_pdf(written: Path, output: Path) -> None:
+    """Print the HTML report ``written`` to ``output`` with a .pdf suffix (--pdf)."""
+    from ecdsim.report.pdf import PdfUnavailable, html_to_pdf
+
+    target = output.with_suffix(".pdf")
+    try:
+        html_to_pdf(written, target)
+    except PdfUnavailable as exc:
+        fail([str(exc)])
+    except OSError as exc:
+        fail([f"--pdf {target}: cannot write ({exc.strerror or exc})"])
+    typer.echo(f"wrote {target}")
 
 
 def explore(

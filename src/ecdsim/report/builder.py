@@ -32,6 +32,7 @@ from ecdsim.model import TabulatedTemperatureLaw
 from ecdsim.units_display import KIND_BY_SI_UNIT, Shown, UnitSystem, convert_text, kind_of_key
 
 if TYPE_CHECKING:
+    import jinja2
     from matplotlib.figure import Figure
 
     from ecdsim.config import Config
@@ -554,6 +555,16 @@ def _kind(key: str) -> str:
     return kind_of_key(key.rsplit(".", 1)[-1]) or "number"
 
 
+def provenance_of(source: str, sha256: str) -> dict[str, str]:
+    """What a report says it was made from: ecdsim's version, the file, its hash, when."""
+    return {
+        "ecdsim_version": __version__,
+        "config_source": source,
+        "config_sha256": sha256,
+        "date": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
+    }
+
+
 def build_context(
     config: Config, prediction: Prediction, config_text: str, units: UnitSystem = "si"
 ) -> dict[str, Any]:
@@ -561,12 +572,7 @@ def build_context(
     u = Shown(units, digits=6)
     document = prediction.to_dict()
     document["display_units"] = units
-    provenance = {
-        "ecdsim_version": __version__,
-        "config_source": config.source,
-        "config_sha256": config.sha256,
-        "date": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
-    }
+    provenance = provenance_of(config.source, config.sha256)
     margins = margin_section(config, u)
     montecarlo = montecarlo_section(config)
     # The qualification block (its own module and template, docs/qualification.md).
@@ -661,19 +667,25 @@ def _ground_test(document: dict[str, Any], u: Shown) -> dict[str, Any] | None:
     }
 
 
-def render_html(
-    config: Config, prediction: Prediction, config_text: str, units: UnitSystem = "si"
-) -> str:
-    """The report as one self-contained HTML document (figures inline, no network)."""
+def template_environment() -> jinja2.Environment:
+    """The reports' jinja2 environment (templates in ecdsim/report/templates, escaped,
+    an undefined name an error): the single hinge's report and the wing's."""
     import jinja2
 
-    env = jinja2.Environment(
+    return jinja2.Environment(
         loader=jinja2.PackageLoader("ecdsim.report", "templates"),
         autoescape=True,
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
     )
+
+
+def render_html(
+    config: Config, prediction: Prediction, config_text: str, units: UnitSystem = "si"
+) -> str:
+    """The report as one self-contained HTML document (figures inline, no network)."""
+    env = template_environment()
     env.globals["fmt"] = fmt
     template = env.get_template("report.html.j2")
     return template.render(**build_context(config, prediction, config_text, units))

@@ -13,15 +13,18 @@ report's units (``--units`` or the file's ``[output] units``), as the single hin
 
 from __future__ import annotations
 
-import datetime as dt
 import json
 import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ecdsim._version import __version__
 from ecdsim.atomic import write_text
-from ecdsim.report.builder import DATA_ELEMENT_ID, figure_data_uri
+from ecdsim.report.builder import (
+    DATA_ELEMENT_ID,
+    figure_data_uri,
+    provenance_of,
+    template_environment,
+)
 from ecdsim.units_display import Shown
 
 if TYPE_CHECKING:
@@ -145,12 +148,7 @@ def build_wing_context(
     u = Shown(units, digits=6)
     document = result.to_dict()
     document["display_units"] = units
-    provenance = {
-        "ecdsim_version": __version__,
-        "config_source": config.source,
-        "config_sha256": config.sha256,
-        "date": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
-    }
+    provenance = provenance_of(config.source, config.sha256)
     cases = []
     for i, case in enumerate(result.cases):
         order = " > ".join(result.hinges[j] for j in case.sequence) or "none"
@@ -209,16 +207,7 @@ def render_wing_html(
     config: WingConfig, result: WingResult, config_text: str, units: UnitSystem = "si"
 ) -> str:
     """The wing report as one self-contained HTML document."""
-    import jinja2
-
-    env = jinja2.Environment(
-        loader=jinja2.PackageLoader("ecdsim.report", "templates"),
-        autoescape=True,
-        undefined=jinja2.StrictUndefined,
-        trim_blocks=True,
-        lstrip_blocks=True,
-    )
-    template = env.get_template("wing_report.html.j2")
+    template = template_environment().get_template("wing_report.html.j2")
     return template.render(**build_wing_context(config, result, config_text, units))
 
 
