@@ -117,7 +117,7 @@ def _warnings(result: WingResult, u: Shown) -> list[dict[str, str]]:
     return out
 
 
-def _figures(result: WingResult, config: WingConfig) -> list[dict[str, str]]:
+def _figures(result: WingResult, config: WingConfig, u: Shown) -> list[dict[str, str]]:
     from ecdsim.plotting_wing import plot_hinge_angles, plot_wing_shapes
 
     figures = [
@@ -133,8 +133,8 @@ def _figures(result: WingResult, config: WingConfig) -> list[dict[str, str]]:
         figures.append(
             {
                 "id": f"wing_shapes_{label}C",
-                "caption": f"The wing's shape from release to the end at "
-                f"{case.temperature:g} degC.",
+                "caption": "The wing's shape from release to the end at "
+                f"{u.text(case.temperature, 'temperature')} (drawn in SI).",
                 "src": figure_data_uri(plot_wing_shapes(config.wing, result, case.temperature)),
             }
         )
@@ -189,7 +189,7 @@ def build_wing_context(
             for i, c in enumerate(result.cases)
         ],
         "energy_headers": [label for _, label in ENERGY_COLUMNS],
-        "figures": _figures(result, config),
+        "figures": _figures(result, config, u),
         "config_text": config_text,
         "t_unit": u.unit("temperature"),
         "speed_unit": u.unit("angular_speed"),
