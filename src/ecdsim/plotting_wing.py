@@ -3,8 +3,8 @@
 :func:`plot_hinge_angles` draws each hinge's deployed angle against time, one panel per
 temperature, with each hinge's travel dotted and the events marked where they happen
 (latch, rebound, stick, breakaway). :func:`plot_wing_shapes` draws a strip of the wing's
-outline at chosen instants, from the panels' geometry
-(:func:`ecdsim.physics.chain.panel_outlines` through :meth:`ecdsim.wing.model.Wing.outlines`)
+outline at chosen instants, from the panels' geometry (:func:`drawn_outlines`, through
+:func:`ecdsim.physics.chain.panel_outlines`; the explorer's animation draws the same)
 and the case's sampled angles (linear between samples). Both return a matplotlib
 ``Figure`` and never show it; matplotlib is imported lazily, through
 :mod:`ecdsim.plotting`.
@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 
 from ecdsim._types import FloatArray
+from ecdsim.physics import chain
 from ecdsim.plotting import _figure, plot_title, save_figure
 from ecdsim.wing.model import Wing
 from ecdsim.wing.result import WingCase, WingResult
@@ -162,20 +163,32 @@ def shape_times(case: WingCase, count: int = 6) -> list[float]:
     return [float(t) for t in np.linspace(0.0, end, count)]
 
 
+# The thinnest a panel is drawn, as a fraction of the wing's length (hinge to tip), so
+# that a thin panel shows in a picture of the whole wing.
+DRAWN_THICKNESS_FRACTION = 0.025
+
+
+def drawn_outlines(wing: Wing, deployed: FloatArray) -> FloatArray:
+    """The panels' outlines as the pictures draw them, at deployed angles phi [m], (n, 4, 2).
+
+    :func:`ecdsim.physics.chain.panel_outlines` (through :meth:`Wing.outlines`'s
+    geometry) with every panel drawn as thick as the thickest panel, and at least
+    :data:`DRAWN_THICKNESS_FRACTION` of the wing's length. The shape strip and the
+    explorer's animation both draw these (one source).
+    """
+    arrays = wing.chain_arrays()
+    extent = float(np.sum(arrays["length"]))
+    drawn = max(DRAWN_THICKNESS_FRACTION * extent, float(np.max(arrays["thickness"])))
+    return chain.panel_outlines(
+        wing.relative_angles(deployed), arrays["length"], np.full(wing.size, drawn)
+    )
+
+
 def _draw_shape(ax: Axes, wing: Wing, angles: FloatArray, colors: Sequence[object]) -> None:
     from matplotlib.patches import Polygon
 
-    outlines = wing.outlines(angles)
-    extent = sum(p.length for p in wing.panels)
-    # A drawn thickness of at least 2.5 % of the wing, so that a thin panel shows.
-    drawn = max(0.025 * extent, max(p.thickness for p in wing.panels))
-    for i, corners in enumerate(outlines):
-        axis = (corners[1] + corners[2]) / 2 - (corners[0] + corners[3]) / 2
-        normal = np.array([-axis[1], axis[0]]) / max(float(np.hypot(*axis)), 1e-300)
-        start = (corners[0] + corners[3]) / 2
-        end = start + axis
-        half = 0.5 * max(drawn, wing.panels[i].thickness) * normal
-        polygon = np.array([start - half, end - half, end + half, start + half])
+    outlines = drawn_outlines(wing, angles)
+    for i, polygon in enumerate(outlines):
         ax.add_patch(
             Polygon(
                 polygon,

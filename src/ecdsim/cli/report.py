@@ -139,7 +139,12 @@ def explore(
     text = None
     loaded = None
     if config is not None:
-        loaded = load_run(config, None, None)  # validate first: errors exit 2 like every command
+        from ecdsim.cli.wing import is_wing_file
+
+        if is_wing_file(config):  # a wing (docs/wing.md): validated by its own reader
+            _check_wing(config)
+        else:
+            loaded = load_run(config, None, None)  # validate first: errors exit 2
         text = config.read_text(encoding="utf-8")
     # The page starts in --units if given (else the config's [output] units) and may switch.
     system = units_option(units, loaded) if units is not None else None
@@ -149,3 +154,15 @@ def explore(
     if warning is not None:
         typer.echo(warning, err=True)
     uvicorn.run(application, host=host, port=port, log_level="warning")
+
+
+def _check_wing(path: Path) -> None:
+    """Validate a wing file for ``ecdsim app``; its problems exit 2, one line each."""
+    from ecdsim.config import ConfigError
+    from ecdsim.config.wing_schema import load_wing_config
+    from ecdsim.sizing.catalogue import load_catalogue
+
+    try:
+        load_wing_config(path, read_catalogue=load_catalogue)
+    except ConfigError as exc:
+        fail(str(exc).splitlines())

@@ -32,10 +32,12 @@ from ecdsim._version import __version__
 from ecdsim.config import Config, ConfigError, parse_config
 from ecdsim.config.loader import MAX_NESTING, nesting_depth, parse_toml
 from ecdsim.config.units import quoted
+from ecdsim.config.wing_schema import WingConfig
 from ecdsim.deployment import ModelDomainError, Prediction, predict
 from ecdsim.report.builder import predict_config, render_html
 from ecdsim.units_display import UnitSystem, check_system, convert_text, describe, key_units
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
+from ecdsim.webapp.wingapi import WING_REFUSAL, is_wing, load_wing_text
 from ecdsim.webapp.workers import Busy, Reply, Timeout, WorkerDied, as_reply, shared_pool
 
 _LOG = logging.getLogger(__name__)
@@ -274,15 +276,23 @@ def _refuse(problems: list[str]) -> HTTPException:
     return HTTPException(status_code=422, detail=problems)
 
 
-def load_body(raw: dict[str, Any]) -> tuple[Config, str]:
-    """The validated config and its TOML text; HTTP 422 with every problem if invalid."""
+def body_text(raw: dict[str, Any]) -> str:
+    """A config's TOML text; HTTP 422 if it is nested too deeply or has no TOML form."""
     if nesting_depth(raw) > MAX_NESTING:
         # Bounded before anything walks it (to_toml and the TOML reader recurse).
         raise _refuse([f"config: nested too deeply (at most {MAX_NESTING} levels)"])
     try:
-        text = to_toml(raw)
+        return to_toml(raw)
     except UnrepresentableError as exc:
         raise _refuse([f"config.{exc}"]) from None
+
+
+def load_body(raw: dict[str, Any]) -> tuple[Config, str]:
+    """The validated config and its TOML text; HTTP 422 with every problem if invalid
+    (a wing file: one line naming ``POST /api/wing``)."""
+    text = body_text(raw)
+    if is_wing(raw):
+        raise _refuse([WING_REFUSAL])
     try:
         config = parse_config(text, "config")
     except ConfigError as exc:
@@ -294,8 +304,16 @@ def load_body(raw: dict[str, Any]) -> tuple[Config, str]:
     return config, text
 
 
+def _load_wing(raw: dict[str, Any]) -> WingConfig:
+    """A wing file's config validated; HTTP 422 with every problem if invalid."""
+    try:
+        return load_wing_text(body_text(raw))
+    except ConfigError as exc:
+        raise _refuse(str(exc).splitlines()) from None
+
+
 def display_system(
-    config: Config, asked: str | None, default: UnitSystem | None = None
+    config: Config | WingConfig, asked: str | None, default: UnitSystem | None = None
 ) -> UnitSystem:
     """The unit system to show: the request's, else ``default`` (``ecdsim app --units``),
     else the config's ``[output] units``."""
@@ -646,6 +664,10 @@ def create_app(
     def app_js() -> FileResponse:
         return FileResponse(STATIC / "app.js", media_type="text/javascript")
 
+    @app.get("/static/wing.js", include_in_schema=False)
+    def wing_js() -> FileResponse:
+        return FileResponse(STATIC / "wing.js", media_type="text/javascript")
+
     @app.get("/static/plotly.min.js", include_in_schema=False)
     def plotly_js() -> FileResponse:
         import plotly
@@ -691,8 +713,12 @@ def create_app(
             raw = parse_toml(body.toml)
         except ConfigError as exc:
             raise _refuse([f"toml: {problem}" for problem in exc.problems]) from None
-        config, _ = load_body(raw)
-        system = display_system(config, None, units)
+        if is_wing(raw):
+            wing = _load_wing(raw)
+            system = display_system(wing, None, units)
+        else:
+            config, _ = load_body(raw)
+            system = display_system(config, None, units)
         return {
             "config": raw,
             "toml": body.toml,
@@ -708,7 +734,11 @@ def create_app(
     )
     def config_toml(body: ConfigBody) -> Response:
         """The (edited) config as a TOML file to download."""
-        _, text = load_body(body.config)
+        if is_wing(body.config):
+            text = body_text(body.config)
+            _load_wing(body.config)
+        else:
+            _, text = load_body(body.config)
         return Response(
             text,
             media_type="application/toml",
@@ -728,4 +758,8 @@ def create_app(
     from ecdsim.webapp.fitapi import ServerHelpers, add_fit_routes
 
     add_fit_routes(app, _LIMITED, ServerHelpers(_refuse, load_body, limited))
+    # A wing file (docs/wing.md): its own endpoint, ecdsim.webapp.wingapi.
+    from ecdsim.webapp.wingapi import WingHelpers, add_wing_routes
+
+    add_wing_routes(app, _LIMITED, WingHelpers(_refuse, body_text, limited, display_block), units)
     return app

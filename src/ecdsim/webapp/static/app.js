@@ -45,6 +45,7 @@ const SI_UNITS = {
   angular_speed: { unit: "rad/s", scale: 1, offset: 0 },
   time: { unit: "s", scale: 1, offset: 0 },
   energy: { unit: "J", scale: 1, offset: 0 },
+  length: { unit: "m", scale: 1, offset: 0 },
   per_kelvin: { unit: "1/K", scale: 1, offset: 0 },
   torque_per_kelvin: { unit: "N*m/K", scale: 1, offset: 0 },
 };
@@ -52,6 +53,7 @@ const SI_UNITS = {
 const state = {
   config: null, response: null, sentConfig: null, requests: 0, inFlight: false, pending: false,
   units: SI_UNITS, displayUnits: "si", choice: "config", pinned: null, stale: false, fit: null, fits: 0,
+  wing: null, // the answer of POST /api/wing when the config is a wing file (wing.js)
 };
 window.ecdsim = state;
 
@@ -317,11 +319,13 @@ async function requestDeploy() {
   state.inFlight = true;
   state.pending = false;
   const sent = JSON.parse(JSON.stringify(state.config));
+  const wing = isWingConfig(sent); // a wing file: its own endpoint and page (wing.js)
   try {
-    const r = await postJson("/api/deploy", deployBody(sent));
+    const r = await postJson(wing ? "/api/wing" : "/api/deploy", deployBody(sent));
     const body = await r.json();
     if (r.ok) {
-      state.response = body;
+      state.response = wing ? null : body;
+      state.wing = wing ? body : null;
       state.sentConfig = sent;
       if (body.units) state.units = body.units;
       if (body.display_units) state.displayUnits = body.display_units;
@@ -330,7 +334,7 @@ async function requestDeploy() {
       showErrors([]);
       // The inputs follow the results' unit system: rebuilt when it changed.
       if (state.builtFor !== state.displayUnits) buildControls();
-      render();
+      if (wing) renderWing(); else render();
       if (state.fit) renderFit(); // the display units may have changed
       saveToUrl();
     } else failed(body.errors || [`HTTP ${r.status}`]);
@@ -744,6 +748,7 @@ async function loadExample(which, note = "") {
 
 function useConfig(config, source, units, system) {
   state.config = config;
+  setMode(config);
   if (units && state.choice === "config" && !defaultSystem(config)) {
     state.units = units;
     if (system) state.displayUnits = system;
@@ -1018,7 +1023,7 @@ async function start() {
 let resizeTimer = null;
 window.addEventListener("resize", () => {
   clearTimeout(resizeTimer);
-  resizeTimer = setTimeout(() => { if (state.response) render(); if (state.fit) renderFit(); }, 150);
+  resizeTimer = setTimeout(() => { if (state.response) render(); if (state.wing) renderWing(); if (state.fit) renderFit(); }, 150);
 });
 
 start();
