@@ -10,6 +10,9 @@ state. Screenshots go to ``$ECDSIM_SHOTS`` as for the other browser tests.
 
 from __future__ import annotations
 
+import base64
+import json
+import math
 import tomllib
 from collections.abc import Iterator
 from typing import Any
@@ -199,6 +202,48 @@ def test_the_wing_page_keeps_its_plots_wide_on_a_phone(
         scroll = page.evaluate("document.documentElement.scrollWidth")
         assert scroll <= width  # the page itself does not scroll sideways
         _shot(page, f"wing-03-layout-{width}px")
+        _axe(page)
+        assert not errors, errors
+    finally:
+        context.close()
+
+
+def test_a_stuck_hinge_is_shown_stuck(wing_server: str, browser: Any) -> None:
+    """The outer hinge's friction (5 N*m) above its spring's start torque (3.73 N*m): it
+    cannot break away, so the wing stays short of deployed. Opened from a link, as a
+    shared case is."""
+    config = tomllib.loads(WING_FILE.read_text(encoding="utf-8"))
+    config["wing"]["hinges"][2]["friction"] = {"slope": "0 N*m/K", "at_0C": "5 N*m"}
+    config["analysis"]["temperatures"] = ["25 degC"]
+    api = httpx.post(wing_server + "/api/wing", json={"config": config}, timeout=120.0).json()
+    (case,) = api["result"]["cases"]
+    assert case["status"] == "stuck"
+    assert case["stuck_hinges"] == ["outer"]
+    encoded = base64.urlsafe_b64encode(json.dumps(config).encode()).rstrip(b"=").decode()
+    context, page, errors = _context(browser, 1280)
+    try:
+        _open(page, f"{wing_server}/#case={encoded}")
+        cells = page.evaluate(
+            "() => [...document.querySelectorAll('#wing-table td')].map(td => td.textContent)"
+        )
+        assert "not deployed (stuck)" in cells
+        # Its angle at the end in degrees, to the page's 4 digits.
+        final = math.degrees(case["final_angle_rad"]["outer"])
+        assert f"stuck at {float(f'{final:.4g}'):g} deg" in cells, cells
+        # The stick is marked on the angle plot at the run's stick time.
+        sticks = page.evaluate(
+            """() => document.getElementById('wing-angle-plot').data
+                     .filter(t => t.name && t.name.endsWith(': sticks')).map(t => t.x)"""
+        )
+        stick_times = [
+            e["time_s"] for e in case["events"] if e["event"] == "stick" and e["hinge"] == "outer"
+        ]
+        assert sticks == [stick_times]
+        page.focus("#wing-time")
+        page.keyboard.press("End")
+        assert "root latched, middle latched, outer stuck" in _state(page)["text"]
+        assert "hinge, stuck" in _plot(page, "wing-shape-plot")["legend"]
+        _shot(page, "wing-04-stuck-1280px")
         _axe(page)
         assert not errors, errors
     finally:

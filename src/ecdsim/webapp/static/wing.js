@@ -142,6 +142,22 @@ function latchedBy(r, t) {
   return done;
 }
 
+// The hinges at rest for good short of their latch (the run's stuck hinges) by time t:
+// from their last stick.
+function stuckBy(r, t) {
+  const stuck = new Set();
+  for (const h of r.stuck_hinges) {
+    const sticks = r.events.filter((e) => e.event === "stick" && e.hinge === h && e.time_s !== null);
+    if (sticks.length && sticks[sticks.length - 1].time_s <= t) stuck.add(h);
+  }
+  return stuck;
+}
+
+function hingeStatus(h, done, stuck) {
+  if (done.has(h)) return "latched";
+  return stuck.has(h) ? "stuck" : "moving";
+}
+
 function drawWingShape() {
   const body = state.wing;
   const c = wingCase();
@@ -155,16 +171,24 @@ function drawWingShape() {
     mode: "lines", fill: "toself", fillcolor: PANEL_FILLS[i % PANEL_FILLS.length], opacity: 0.9,
     line: { color: "#222", width: 1 }, name: body.panels[i], hoverinfo: "name",
   }));
-  // Hinge i sits at panel i's inboard end, midway across it: filled once latched.
+  // Hinge i sits at panel i's inboard end, midway across it: filled once latched, a
+  // cross once stuck for good, open while it moves.
   const done = latchedBy(r, t);
+  const stuck = stuckBy(r, t);
   const hingeAt = (i) => [(frame[i][0][0] + frame[i][3][0]) / 2, (frame[i][0][1] + frame[i][3][1]) / 2];
-  for (const latched of [true, false]) {
-    const which = body.hinges.map((h, i) => i).filter((i) => done.has(body.hinges[i]) === latched);
+  const looks = {
+    latched: { symbol: "circle", size: 10, color: "#000", line: { color: "#000", width: 2 } },
+    moving: { symbol: "circle", size: 10, color: "#fff", line: { color: "#000", width: 2 } },
+    stuck: { symbol: "x", size: 12, color: "#b00020", line: { color: "#000", width: 1 } },
+  };
+  for (const status of ["latched", "moving", "stuck"]) {
+    const which = body.hinges.map((h, i) => i).filter((i) => hingeStatus(body.hinges[i], done, stuck) === status);
+    if (status === "stuck" && !which.length) continue;
     traces.push({
       x: which.map((i) => len(hingeAt(i)[0])), y: which.map((i) => len(hingeAt(i)[1])),
-      mode: "markers", name: latched ? "hinge, latched" : "hinge, moving",
+      mode: "markers", name: `hinge, ${status}`,
       text: which.map((i) => body.hinges[i]), hovertemplate: "%{text}<extra></extra>",
-      marker: { symbol: "circle", size: 10, color: latched ? "#000" : "#fff", line: { color: "#000", width: 2 } },
+      marker: looks[status],
     });
   }
   const win = shapeWindow(c);
@@ -178,7 +202,7 @@ function drawWingShape() {
       annotations: [{ x: -win.wall / 2, y: 0.5, xref: "x", yref: "paper", text: "spacecraft", textangle: -90,
         showarrow: false, font: { size: 11, color: "#37474f" } }],
     });
-  const status = body.hinges.map((h) => (done.has(h) ? `${h} latched` : `${h} moving`)).join(", ");
+  const status = body.hinges.map((h) => `${h} ${hingeStatus(h, done, stuck)}`).join(", ");
   const angles = body.hinges.map((h, j) => `${h} ${sig(deg(c.angle_rad[j][k]), 4)} deg`).join(", ");
   document.getElementById("wing-state").textContent = `t = ${sig(t, 4)} s: ${status}. Deployed angles: ${angles}.`;
   const slider = document.getElementById("wing-time");
