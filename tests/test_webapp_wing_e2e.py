@@ -15,6 +15,7 @@ import json
 import math
 import tomllib
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -22,7 +23,7 @@ import numpy as np
 import pytest
 
 from tests.test_webapp_e2e import _axe, _geometry, _open, _plot, _serve, _shot, browser
-from tests.test_webapp_wing import DEPLOYED, STOWED, WING_FILE
+from tests.test_webapp_wing import DEPLOYED, STOWED, WING_FILE, warm_wing_kernel
 
 __all__ = ["browser"]  # the fixture, shared with tests/test_webapp_e2e.py
 
@@ -31,11 +32,12 @@ INCH_M = 0.0254
 
 @pytest.fixture(scope="module")
 def wing_server() -> Iterator[str]:
+    warm_wing_kernel()
     yield from _serve(WING_FILE.read_text(encoding="utf-8"))
 
 
 def _context(browser: Any, width: int) -> Any:
-    context = browser.new_context(viewport={"width": width, "height": 900})
+    context = browser.new_context(viewport={"width": width, "height": 900}, accept_downloads=True)
     page = context.new_page()
     page.set_default_timeout(60_000)
     errors: list[str] = []
@@ -104,6 +106,12 @@ def test_a_wing_file_shows_its_hinges_and_unfolds(wing_server: str, browser: Any
         assert "root moving, middle moving, outer moving" in start["text"]
         _shot(page, "wing-01-release-1280px")
         _axe(page)
+        # Download report: the wing's report (ecdsim report WING.toml) of the same result.
+        with page.expect_download() as download:
+            page.click("#download-report")
+        report = Path(download.value.path()).read_text(encoding="utf-8")
+        assert '<script type="application/json" id="ecdsim-data">' in report
+        assert "Three-panel wing" in report
 
         # The slider from the keyboard: End is the last sample, the deployed wing.
         page.focus("#wing-time")

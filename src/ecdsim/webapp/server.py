@@ -262,6 +262,10 @@ def report_job(
     """``POST /api/report``'s computation (in a worker): the HTML report."""
 
     def compute() -> Response:
+        if is_wing(config):  # the wing's report (ecdsim.report.wing)
+            from ecdsim.webapp.wingapi import wing_report_response
+
+            return wing_report_response(config, units, default_units, _refuse, body_text)
         loaded, text = load_body(config)
         system = display_system(loaded, units, default_units)
         html = render_html(loaded, _predict(loaded), text, system)

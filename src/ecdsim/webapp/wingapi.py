@@ -11,7 +11,9 @@ draws (one source). A solution with more samples than :data:`MAX_FRAMES` is thin
 that many of its own samples (evenly by index, the first and last kept): no frame is
 interpolated.
 
-The single-hinge endpoints refuse a wing file with one line naming this one.
+``POST /api/report`` answers a wing file with the wing's report
+(:func:`wing_report_response`, as ``ecdsim report WING.toml``); the other single-hinge
+endpoints refuse a wing file with one line naming this one.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 if TYPE_CHECKING:
     from ecdsim.config.wing_schema import WingConfig
+    from ecdsim.units_display import UnitSystem
     from ecdsim.webapp.workers import Reply
     from ecdsim.wing.model import Wing
     from ecdsim.wing.result import WingCase
@@ -182,6 +185,56 @@ class WingHelpers:
     display_block: Callable[..., dict[str, Any]]
 
 
+def _solved(
+    raw: dict[str, Any],
+    refuse: Callable[..., HTTPException],
+    to_text: Callable[..., str],
+) -> tuple[WingConfig, str]:
+    """The request's wing file validated, and its TOML text; 422 with every problem."""
+    from ecdsim.config import ConfigError
+
+    text = to_text(raw)
+    try:
+        return load_wing_text(text), text
+    except ConfigError as exc:
+        raise refuse(str(exc).splitlines()) from None
+
+
+def _system(config: WingConfig, units: str | None, default_units: str | None) -> UnitSystem:
+    """The request's units, else ``ecdsim app --units``, else the file's ``[output] units``."""
+    from ecdsim.units_display import check_system
+
+    chosen = units if units is not None else default_units
+    return check_system(chosen if chosen is not None else config.spec.output.units)
+
+
+def wing_report_response(
+    raw: dict[str, Any],
+    units: str | None,
+    default_units: str | None,
+    refuse: Callable[..., HTTPException],
+    to_text: Callable[..., str],
+) -> Response:
+    """``POST /api/report`` for a wing file (in a worker): the wing's HTML report, as
+    ``ecdsim report WING.toml`` writes it (:mod:`ecdsim.report.wing`)."""
+    from fastapi.responses import HTMLResponse
+
+    from ecdsim.report.wing import render_wing_html
+    from ecdsim.wing.solver import deploy_wing
+
+    config, text = _solved(raw, refuse, to_text)
+    try:
+        result = deploy_wing(
+            config.wing, list(config.temperatures), rtol=config.rtol, stop_time=config.stop_time
+        )
+    except ValueError as exc:  # WingUnsupported: what the solver does not take yet
+        raise refuse([f"config: {exc}"]) from None
+    html = render_wing_html(config, result, text, _system(config, units, default_units))
+    return HTMLResponse(
+        html, headers={"Content-Disposition": 'attachment; filename="ecdsim-report.html"'}
+    )
+
+
 def wing_job(
     raw: dict[str, Any],
     units: str | None,
@@ -189,26 +242,19 @@ def wing_job(
     helpers: tuple[Callable[..., Any], Callable[..., Any], Callable[..., Any]],
 ) -> Reply:
     """``POST /api/wing``'s computation (in a worker): the result and its frames."""
-    from ecdsim.config import ConfigError
-    from ecdsim.units_display import check_system
     from ecdsim.webapp.workers import as_reply
 
     refuse, to_text, display_block = helpers
 
     def compute() -> Response:
-        text = to_text(raw)
-        try:
-            config = load_wing_text(text)
-        except ConfigError as exc:
-            raise refuse(str(exc).splitlines()) from None
+        config, text = _solved(raw, refuse, to_text)
         began = time.perf_counter()
         try:
             document = wing_document(config)
         except ValueError as exc:  # WingUnsupported: what the solver does not take yet
             raise refuse([f"config: {exc}"]) from None
         elapsed = 1000.0 * (time.perf_counter() - began)
-        chosen = units if units is not None else default_units
-        system = check_system(chosen if chosen is not None else config.spec.output.units)
+        system = _system(config, units, default_units)
         payload = {
             **document,
             "toml": text,
@@ -244,4 +290,5 @@ __all__ = [
     "is_wing",
     "load_wing_text",
     "wing_document",
+    "wing_report_response",
 ]
