@@ -106,6 +106,22 @@ def test_a_wing_file_shows_its_hinges_and_unfolds(wing_server: str, browser: Any
         assert "root moving, middle moving, outer moving" in start["text"]
         _shot(page, "wing-01-release-1280px")
         _axe(page)
+        # Tab reaches every control shown (the wing's slider, temperature and Play too).
+        focusable = "button:not([disabled]), input, select, a[href]"
+        controls = page.evaluate(
+            f"""() => [...document.querySelectorAll('{focusable}')]
+                  .filter(e => !e.closest('.modebar') && e.getClientRects().length > 0)
+                  .map(e => e.id || e.getAttribute('href'))"""
+        )
+        assert {"wing-time", "wing-play", "wing-temperature", "temperatures"} <= set(controls)
+        page.evaluate("document.activeElement.blur()")  # from the top of the page
+        # Plotly's toolbar buttons and the scrolling table regions take Tabs too.
+        stops = int(page.evaluate(f"document.querySelectorAll('{focusable}, [tabindex]').length"))
+        reached = []
+        for _ in range(stops + 5):
+            page.keyboard.press("Tab")
+            reached.append(page.evaluate("document.activeElement.id || ''"))
+        assert {"wing-time", "wing-play", "wing-temperature"} <= set(reached), reached
         # Download report: the wing's report (ecdsim report WING.toml) of the same result.
         with page.expect_download() as download:
             page.click("#download-report")
