@@ -255,6 +255,30 @@ def test_frame_indices_thin_evenly_and_keep_both_ends() -> None:
     assert frame_indices(MAX_FRAMES) == list(range(MAX_FRAMES))
 
 
+def test_many_temperatures_get_fewer_frames_each(
+    client: TestClient, wing_raw: dict[str, Any]
+) -> None:
+    """3000 frames in all: ten temperatures get 300 frames each, every one a sample of the
+    solution (the first and last kept); 51 temperatures are refused, as for a hinge."""
+    config = json.loads(json.dumps(wing_raw))
+    config["analysis"]["temperatures"] = [f"{t} degC" for t in range(-40, 60, 10)]
+    response = client.post("/api/wing", json={"config": config})
+    assert response.status_code == 200, response.text
+    body = response.json()
+    from ecdsim.api import deploy_wing
+
+    solved = deploy_wing(WING_FILE, temperatures=[-40]).to_dict(series=True)["cases"][0]
+    first = body["cases"][0]
+    assert len(first["time_s"]) == 300
+    assert set(first["time_s"]) <= set(solved["series"]["time_s"])
+    assert first["time_s"][0] == 0.0
+    assert first["time_s"][-1] == solved["series"]["time_s"][-1]
+    config["analysis"]["temperatures"] = [f"{t} degC" for t in range(51)]
+    response = client.post("/api/wing", json={"config": config})
+    assert response.status_code == 422
+    assert response.json() == {"errors": ["analysis.temperatures: 51 given; at most 50"]}
+
+
 def test_app_refuses_a_bad_wing_file_in_one_line(tmp_path: Path) -> None:
     text = WING_FILE.read_text(encoding="utf-8").replace('mass = "1.0 kg"', 'mass = "1.0 m"', 1)
     bad = tmp_path / "wing.toml"

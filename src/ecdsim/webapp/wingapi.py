@@ -7,9 +7,9 @@ answer's ``result`` is the document of ``ecdsim deploy WING.toml --json``. Besid
 per temperature, the frames of the animation: at the solution's own time samples, each
 hinge's deployed angle and the panels' outlines in the plane, computed by
 :func:`ecdsim.plotting_wing.drawn_outlines`, the function the ``--plot`` shape strip
-draws (one source). A solution with more samples than :data:`MAX_FRAMES` is thinned to
-that many of its own samples (evenly by index, the first and last kept): no frame is
-interpolated.
+draws (one source). A solution with more samples than :func:`frame_limit` allows
+(:data:`MAX_FRAMES`, fewer with more than five temperatures) is thinned to that many of
+its own samples (evenly by index, the first and last kept): no frame is interpolated.
 
 ``POST /api/report`` answers a wing file with the wing's report
 (:func:`wing_report_response`, as ``ecdsim report WING.toml``); the other single-hinge
@@ -41,6 +41,11 @@ if TYPE_CHECKING:
 # few enough that three temperatures of a three-panel wing stay under about 1 MB of JSON
 # (the example wing has 490 to 560 samples per temperature: all are sent).
 MAX_FRAMES = 600
+# The most frames over all temperatures (a three-panel wing's frame is 24 numbers: 3000
+# frames are some 1.5 MB of JSON); with more than five temperatures each gets fewer, at
+# least MIN_FRAMES.
+MAX_TOTAL_FRAMES = 3000
+MIN_FRAMES = 100
 # The line a single-hinge endpoint answers a wing file with.
 WING_REFUSAL = (
     "config: a wing file ([wing]) is not a single hinge's config; the explorer solves it "
@@ -130,9 +135,18 @@ def _outlines(wing: Wing, angles: Any) -> list[Any]:
     return result
 
 
-def case_frames(wing: Wing, case: WingCase) -> dict[str, Any]:
+def frame_limit(temperatures: int) -> int:
+    """The most frames of each temperature when ``temperatures`` are solved at once.
+
+    >>> frame_limit(3), frame_limit(10), frame_limit(50)
+    (600, 300, 100)
+    """
+    return max(MIN_FRAMES, min(MAX_FRAMES, MAX_TOTAL_FRAMES // max(temperatures, 1)))
+
+
+def case_frames(wing: Wing, case: WingCase, limit: int = MAX_FRAMES) -> dict[str, Any]:
     """One temperature's frames: times, each hinge's angle and the outlines (module notes)."""
-    chosen = frame_indices(case.time.shape[0])
+    chosen = frame_indices(case.time.shape[0], limit)
     angles = case.angle[chosen]
     return {
         "temperature_C": case.temperature,
@@ -158,7 +172,7 @@ def wing_document(config: WingConfig) -> dict[str, Any]:
         "extent_m": float(sum(panel.length for panel in wing.panels)),
         "stowed_outlines_m": _outlines(wing, np.zeros(wing.size)),
         "deployed_outlines_m": _outlines(wing, wing.travels),
-        "cases": [case_frames(wing, case) for case in result.cases],
+        "cases": [case_frames(wing, case, frame_limit(len(result.cases))) for case in result.cases],
     }
 
 
@@ -193,11 +207,20 @@ def _solved(
     """The request's wing file validated, and its TOML text; 422 with every problem."""
     from ecdsim.config import ConfigError
 
+    # The server's bound on the temperatures of one request, imported here (in the worker)
+    # because the server imports this module.
+    from ecdsim.webapp.server import MAX_TEMPERATURES
+
     text = to_text(raw)
     try:
-        return load_wing_text(text), text
+        config = load_wing_text(text)
     except ConfigError as exc:
         raise refuse(str(exc).splitlines()) from None
+    if len(config.temperatures) > MAX_TEMPERATURES:
+        raise refuse(
+            [f"analysis.temperatures: {len(config.temperatures)} given; at most {MAX_TEMPERATURES}"]
+        )
+    return config, text
 
 
 def _system(config: WingConfig, units: str | None, default_units: str | None) -> UnitSystem:
@@ -287,6 +310,7 @@ __all__ = [
     "add_wing_routes",
     "case_frames",
     "frame_indices",
+    "frame_limit",
     "is_wing",
     "load_wing_text",
     "wing_document",
