@@ -37,6 +37,7 @@ from ecdsim.deployment import ModelDomainError, Prediction, predict
 from ecdsim.report.builder import predict_config, render_html
 from ecdsim.units_display import UnitSystem, check_system, convert_text, describe, key_units
 from ecdsim.webapp.tomlwriter import UnrepresentableError, to_toml
+from ecdsim.webapp.wingapi import MAX_TEMPERATURES as WING_MAX_TEMPERATURES
 from ecdsim.webapp.wingapi import WING_REFUSAL, is_wing, load_wing_text
 from ecdsim.webapp.workers import Busy, Reply, Timeout, WorkerDied, as_reply, shared_pool
 
@@ -44,7 +45,7 @@ _LOG = logging.getLogger(__name__)
 
 STATIC = Path(str(files("ecdsim.webapp") / "static"))
 EXAMPLE_CONFIG = files("ecdsim") / "data" / "paper_cc16.toml"
-MAX_TEMPERATURES = 50
+MAX_TEMPERATURES = WING_MAX_TEMPERATURES  # one bound for a hinge's and a wing's requests
 
 
 class ConfigBody(BaseModel):

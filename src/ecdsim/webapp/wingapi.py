@@ -46,6 +46,9 @@ MAX_FRAMES = 600
 # least MIN_FRAMES.
 MAX_TOTAL_FRAMES = 3000
 MIN_FRAMES = 100
+# The most temperatures of one request, as for a single hinge (the server's
+# MAX_TEMPERATURES is this number: the server imports this module, not the reverse).
+MAX_TEMPERATURES = 50
 # The line a single-hinge endpoint answers a wing file with.
 WING_REFUSAL = (
     "config: a wing file ([wing]) is not a single hinge's config; the explorer solves it "
@@ -207,10 +210,6 @@ def _solved(
     """The request's wing file validated, and its TOML text; 422 with every problem."""
     from ecdsim.config import ConfigError
 
-    # The server's bound on the temperatures of one request, imported here (in the worker)
-    # because the server imports this module.
-    from ecdsim.webapp.server import MAX_TEMPERATURES
-
     text = to_text(raw)
     try:
         config = load_wing_text(text)
@@ -306,6 +305,7 @@ def add_wing_routes(
 
 __all__ = [
     "MAX_FRAMES",
+    "MAX_TEMPERATURES",
     "WING_REFUSAL",
     "add_wing_routes",
     "case_frames",
