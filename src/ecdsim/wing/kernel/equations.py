@@ -126,6 +126,7 @@ def damper_torque(cw: FloatArray, j: int, rate: float, y: FloatArray) -> tuple[f
         int(cw[hinge_at(W.H_LAW, j)]),
         cw[hinge_at(W.H_LA, j)],
         cw[hinge_at(W.H_LB, j)],
+        0.0,  # the power law's core speed: a wing's dampers are ECDs (linear or Kloss)
         cw[hinge_at(W.H_RATIO, j)],
         cw[hinge_at(W.H_BG, j)],
         rate,
