@@ -356,3 +356,40 @@ def test_python_dash_m() -> None:
         [sys.executable, "-m", "ecdsim", "--version"], capture_output=True, text=True, check=True
     )
     assert done.stdout.strip() == f"ecdsim {__version__}"
+
+
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ["margin"],
+        ["compare-fluid"],
+        ["export-fmu", "--out", "unused.fmu"],
+        ["size", "--catalog", "examples/catalogue.toml"],
+        ["repeat", "-n", "3", "--cool-down", "60 s"],
+    ],
+    ids=lambda arguments: arguments[0],
+)
+def test_single_hinge_commands_name_the_commands_that_take_a_wing_file(
+    arguments: list[str],
+) -> None:
+    # One message for every command that takes only a single hinge's file (margin had said
+    # the wing file was "neither a torque budget nor a deployment config").
+    wing = ROOT / "examples" / "wing_cc16_three_panel.toml"
+    result = CliRunner().invoke(app, [arguments[0], str(wing), *arguments[1:]])
+    assert result.exit_code == 2, result.output
+    assert result.stderr.strip().splitlines() == [
+        f"error: {wing}: wing: this is a wing file (docs/wing.md); `ecdsim deploy`, "
+        "`report`, `sweep` and `montecarlo` take it, this command takes a single hinge's file"
+    ]
+
+
+def test_top_level_help_lists_each_command_summary_as_one_paragraph() -> None:
+    # typer's rich mode kept the docstring's line breaks in the command list, so at any
+    # width the summaries of deploy and export-fmu broke mid-sentence ("(model exchange
+    # and" / "co-simulation, ..."). At 250 columns each summary is one line of the list.
+    screen = read_help(CliRunner(), app, [], has_example=True)
+    assert screen.commands["deploy"].startswith(
+        "Predict deployment time, speeds and stall at each temperature (paper Eq. 1-13); "
+        "a wing file: each hinge's latching"
+    )
+    assert "(model exchange and co-simulation, in C;" in screen.commands["export-fmu"]

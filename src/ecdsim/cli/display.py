@@ -425,10 +425,21 @@ class QuickCommand(HelpCommand):
 
 
 class HelpGroup(TyperGroup):
-    """A command group whose --help shows no ``<bool>`` after flags."""
+    """A command group whose --help shows no ``<bool>`` after flags, and each command's
+    summary as one paragraph."""
 
     def get_params(self, ctx: _click.Context) -> list[_click.Parameter]:
         """The parameters, flags with an empty metavar."""
         params = super().get_params(ctx)
         _quiet_flags(params)
         return params
+
+    def get_command(self, ctx: _click.Context, cmd_name: str) -> _click.Command | None:
+        """The command, its summary in the group's list the first paragraph of its help
+        with the docstring's line breaks joined: typer's rich mode keeps them, and the
+        list showed a summary broken mid-sentence at the docstring's width."""
+        command = super().get_command(ctx, cmd_name)
+        if command is not None and command.short_help is None and command.help:
+            first = command.help.split("\n\n", 1)[0]
+            command.short_help = " ".join(first.split())
+        return command

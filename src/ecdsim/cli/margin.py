@@ -211,7 +211,10 @@ def margin(
         temp_unit = units_option(units) if units is not None else "si"
     else:
         from ecdsim.cli.common import load_run
+        from ecdsim.config.loader import WING_FILE
 
+        if "wing" in raw:  # the wing's margins are not modelled: say what takes the file
+            fail([f"{path}: {WING_FILE}"])
         if not any(key in raw for key in ("damper", "gearbox", "load")):
             fail(
                 [
