@@ -6,9 +6,10 @@ The compiled kernels are checked against the NumPy paths number by number elsewh
 tests/test_montecarlo_streaming.py); here: that every entry point falls back where numba
 cannot be imported (a platform without its wheels), that the dynamic kernel (compiled
 from its own Python source by ecdsim.dynamics.kernel.build) obeys the same switch, that
-a compile without a cache says so, and that `ecdsim precompile` on a package folder
+a compile without a cache says so, that `ecdsim precompile` on a package folder
 nobody can write leaves its kernels (the dynamic kernel's included) in the user's cache,
-where the next process finds them all.
+where the next process finds them, and that a process after precompile compiles none of
+the kernels precompile reaches.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import io
 import json
 import os
 import re
+import shlex
 import shutil
 import stat
 import subprocess
@@ -239,8 +241,48 @@ def _can_mount_read_only() -> bool:
         return done.returncode == 0
 
 
+# ``ecdsim precompile`` (its command, its count and its report of the cache folder) with
+# two small workloads, one for each kind of numba cache ecdsim compiles into: a module
+# kernel with numba's own cache (the exact solution of a large batch), and the dynamic
+# kernel's digest-keyed cache (ecdsim.dynamics.kernel.build), reached by its smallest
+# entry point, the sampling of a trajectory (the deployment itself solved by the plain
+# kernel, so that only the sampling compiles). Where a cache goes (beside the package, or
+# the user's folder) is decided per cache class by numba's locators, the same for every
+# kernel of a class: all of precompile's workloads compiled cold here took about 270 s
+# of CPU (320 compilations), these two about 25 s. That every kernel precompile reaches
+# is loaded by a later process is checked on the test install, whose cache the rest of
+# the suite warms anyway (test_a_process_after_precompile_compiles_nothing).
+SMALL_PRECOMPILE = """
+import sys
+from ecdsim.cli import precompile
+from ecdsim.cli.precompile import Workload
+
+
+def sample_a_trajectory():
+    from ecdsim import _numba
+    from ecdsim.api import load
+    from ecdsim.deployment import predict
+
+    config = load(precompile._dynamic_mapping())
+    with _numba.plain():
+        out = predict(config.system, [25.0], ["dynamic"], config.spec.dynamics())
+    out.solutions["dynamic"].trajectory([0.0, 1.0, 2.0])
+
+
+precompile.workloads = lambda: [
+    Workload("exact: a batch", precompile._exact_batch),
+    Workload("dynamic: a trajectory sampled", sample_a_trajectory),
+]
+from ecdsim.cli.app import main
+
+sys.argv = ["ecdsim", "precompile"]
+main()
+"""
+
+
 def _precompile_command(site: Path) -> list[str]:
-    """``ecdsim precompile`` from the copy in ``site``, which no one can write.
+    """``ecdsim precompile`` (:data:`SMALL_PRECOMPILE`) from the copy in ``site``, which no
+    one can write.
 
     As a user, the permissions do it. As root (CI), whom permissions do not stop, the
     folder is bind-mounted read-only over itself in a mount namespace, as a system
@@ -248,11 +290,11 @@ def _precompile_command(site: Path) -> list[str]:
     ``__pycache__`` in each package folder stops numba from making its cache folder there,
     which is what numba checks (it then uses the user's cache folder).
     """
-    command = [sys.executable, "-m", "ecdsim", "precompile"]
+    command = [sys.executable, "-c", SMALL_PRECOMPILE]
     if os.geteuid() != 0:
         return command
     if _can_mount_read_only():
-        script = f"mount --bind -o ro {site} {site} && exec " + " ".join(command)
+        script = f"mount --bind -o ro {site} {site} && exec " + shlex.join(command)
         return ["unshare", "--mount", "sh", "-c", script]
     for folder in [p for p in site.rglob("*") if p.is_dir()]:
         if (folder / "__init__.py").exists():
@@ -270,8 +312,9 @@ def _compilations(output: str) -> int:
 @pytest.mark.slow
 def test_a_read_only_install_compiles_once_into_the_user_cache(tmp_path: Path) -> None:
     # A system-wide install: the package in a folder nobody can write. The first
-    # precompile compiles into the user's cache folder (XDG_CACHE_HOME/numba), nothing
-    # beside the package; the second, a new process, loads every kernel from there.
+    # precompile (SMALL_PRECOMPILE's two workloads) compiles into the user's cache folder
+    # (XDG_CACHE_HOME/numba), nothing beside the package; the second, a new process,
+    # loads every kernel from there.
     site = tmp_path / "site"
     shutil.copytree(
         ROOT / "src" / "ecdsim", site / "ecdsim", ignore=shutil.ignore_patterns("__pycache__")
@@ -299,10 +342,38 @@ def test_a_read_only_install_compiles_once_into_the_user_cache(tmp_path: Path) -
     assert "compilation" not in second.replace("0 compilations in this process", "")
     assert list((cache / "numba").rglob("*.nbi")), "no index in the user cache"
     assert list((cache / "numba").rglob("*.nbc")), "no machine code in the user cache"
+    # Both kinds of cache went there: the dynamic kernel's entry point, the exact kernel.
+    assert list((cache / "numba").rglob("sample.sample_cases-*.nbc")), "no dynamic kernel"
+    assert list((cache / "numba").rglob("_exact_numba.ordinary-*.nbc")), "no exact kernel"
     after = sorted(str(p.relative_to(site)) for p in site.rglob("*") if p.name != "__pycache__")
     assert after == [b for b in before if not b.endswith("__pycache__")]
     for path in site.rglob("*"):
         path.chmod(path.stat().st_mode | stat.S_IWUSR)  # let tmp_path be removed
+
+
+@pytest.mark.slow
+def test_a_process_after_precompile_compiles_nothing(tmp_path: Path) -> None:
+    # Every kernel that `ecdsim precompile`'s workloads reach (all of them, the Monte Carlo
+    # study's in its own process) is cached and loaded by the next process, none compiled
+    # again: in this install's cache, which the first run completes (the suite's other
+    # tests have compiled most of it already).
+    env = {k: v for k, v in os.environ.items() if k not in ("ECDSIM_NUMBA", "NUMBA_DISABLE_JIT")}
+    runs = []
+    for _ in range(2):
+        done = subprocess.run(
+            [sys.executable, "-m", "ecdsim", "precompile"],
+            cwd=tmp_path,
+            env=env,
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        assert done.returncode == 0, done.stdout + done.stderr
+        runs.append(done.stdout)
+    second = runs[-1]
+    assert "wing: two panels" in second, second  # every workload ran
+    assert _compilations(second) == 0, second
+    assert "compilation" not in second.replace("0 compilations in this process", "")
 
 
 def test_plain_turns_every_compiled_path_off_for_a_block(monkeypatch: pytest.MonkeyPatch) -> None:
