@@ -241,7 +241,7 @@ def pack(problem: DynamicProblem, record: bool) -> Packed:
     resistance = np.zeros((n, points))
     if problem.resistance is not None:
         full = np.broadcast_to(problem.resistance, problem.angles.shape)
-        resistance = np.ascontiguousarray(full.reshape(points, n).T)
+        resistance = np.array(full.reshape(points, n).T, order="C")
     settings = np.array(
         [
             problem.stop_time,
@@ -251,10 +251,12 @@ def pack(problem: DynamicProblem, record: bool) -> Packed:
             float(L.INTEGRATOR_CODES[problem.integrator]),
         ]
     )
+    # Copies, always writable: a read-only view (one case's spring table is one) is
+    # another type to numba, which would compile the whole kernel again for it.
     return Packed(
         table=table,
-        angles=np.ascontiguousarray(problem.angles.reshape(points, n).T),
-        torques=np.ascontiguousarray(problem.torques.reshape(points, n).T),
+        angles=np.array(problem.angles.reshape(points, n).T, order="C"),
+        torques=np.array(problem.torques.reshape(points, n).T, order="C"),
         resistance=resistance,
         compliant=np.isfinite(table[:, L.MC]),
         nodes=nodes,
