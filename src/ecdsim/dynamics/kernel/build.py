@@ -100,6 +100,34 @@ def _ours(value: object) -> bool:
     return module.startswith((KERNEL_PACKAGE, PHYSICS_PACKAGE, *MODEL_PACKAGES))
 
 
+def _copy_with_globals(func: Callable[..., Any]) -> tuple[types.FunctionType, dict[str, Any]]:
+    """A copy of ``func`` with a namespace of its own (a copy of its module's globals),
+    so that the names it calls can be pointed at other functions."""
+    namespace = dict(func.__globals__)
+    copy = types.FunctionType(
+        func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__
+    )
+    copy.__qualname__ = func.__qualname__
+    copy.__module__ = func.__module__
+    return copy, namespace
+
+
+def _point_globals(
+    namespace: dict[str, Any],
+    substitutes: dict[str, Callable[..., Any]],
+    convert: Callable[[Callable[..., Any]], Any],
+    compile_substitutes: bool,
+) -> None:
+    """Point a copy's globals at the substitutes (converted too when
+    ``compile_substitutes``) and every kernel or physics function at its converted copy."""
+    for name, value in list(namespace.items()):
+        if name in substitutes:
+            given = substitutes[name]
+            namespace[name] = convert(given) if compile_substitutes else given
+        elif _ours(value):
+            namespace[name] = convert(value)
+
+
 class _Compiler:
     """Compiled copies of kernel functions, each calling the compiled copies of its own.
 
@@ -120,12 +148,7 @@ class _Compiler:
         done = self._done.get(func)
         if done is not None:
             return done
-        namespace = dict(func.__globals__)
-        copy = types.FunctionType(
-            func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__
-        )
-        copy.__qualname__ = func.__qualname__
-        copy.__module__ = func.__module__
+        copy, namespace = _copy_with_globals(func)
         law = (func.__module__ or "").startswith(PHYSICS_PACKAGE)
         inline = "always" if func.__name__ in INLINE or law else "never"
         nrt = func.__name__ in ALLOCATING or bool(self._substitutes)
@@ -134,11 +157,7 @@ class _Compiler:
         dispatcher._cache = _digest_cache(self._numba, self._tag)(copy)  # cache=True, keyed
         _numba.note_cache(dispatcher._cache.cache_path)
         self._done[func] = dispatcher
-        for name, value in list(namespace.items()):
-            if name in self._substitutes:
-                namespace[name] = self(self._substitutes[name])
-            elif _ours(value):
-                namespace[name] = self(value)
+        _point_globals(namespace, self._substitutes, self, compile_substitutes=True)
         return dispatcher
 
 
@@ -188,17 +207,9 @@ class _Substituter:
         done = self._done.get(func)
         if done is not None:
             return done
-        namespace = dict(func.__globals__)
-        copy = types.FunctionType(
-            func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__
-        )
-        copy.__qualname__ = func.__qualname__
+        copy, namespace = _copy_with_globals(func)
         self._done[func] = copy
-        for name, value in list(namespace.items()):
-            if name in self._substitutes:
-                namespace[name] = self._substitutes[name]
-            elif _ours(value):
-                namespace[name] = self(value)
+        _point_globals(namespace, self._substitutes, self, compile_substitutes=False)
         return copy
 
 
