@@ -23,6 +23,7 @@ import pytest
 
 from ecdsim.config.wing_schema import load_wing_config
 from ecdsim.physics.gravity import STANDARD_GRAVITY
+from ecdsim.wing.model import Hinge as EcdsimHinge
 from ecdsim.wing.result import LatchEvent, WingResult
 from validation.wing_cases import (
     CASES,
@@ -40,7 +41,7 @@ from validation.wing_reference import Hinge, Panel, Reference, Wing
 @pytest.mark.parametrize("item", CASES, ids=[c.name for c in CASES])
 def test_the_case_file_is_the_reference_wing(item: WingValidationCase) -> None:
     config = load_wing_config(item.config)
-    wing = config.wing
+    wing = item.wing()  # the file, with what no file key says (a warm start)
     assert config.temperatures == item.temperatures
     for temperature in item.temperatures:
         ref = item.build(temperature)
@@ -67,6 +68,7 @@ def test_the_case_file_is_the_reference_wing(item: WingValidationCase) -> None:
             for phi in (0.0, 0.5 * hinge.travel, hinge.travel):
                 drive = float(hinge.drive_torque(phi, temperature))
                 assert drive == pytest.approx(typed_hinge.spring(phi), rel=1e-13)
+            _same_heating(hinge, typed_hinge, temperature)
             latch = hinge.latch
             assert latch.restitution == typed_hinge.restitution
             assert latch.stiffness == typed_hinge.latch_stiffness
@@ -82,6 +84,49 @@ def test_the_case_file_is_the_reference_wing(item: WingValidationCase) -> None:
         else:
             np.testing.assert_allclose(wing.ground_test.gravity, ref.gravity, atol=1e-15)
             assert ref.offload == pytest.approx(wing.ground_test.offload, rel=1e-15)
+
+
+def _same_heating(hinge: EcdsimHinge, typed: Hinge, temperature: float) -> None:
+    """The file's damper heating is the reference's typed one: capacities, resistances,
+    the warm start, and the eddy damping (Eq. 1 through N^2) and its slope per kelvin."""
+    thermal = None if hinge.ecd is None else hinge.ecd.thermal
+    if thermal is None:
+        assert typed.heat_capacity is None
+        return
+    assert hinge.ecd is not None
+    assert thermal.heat_capacity == typed.heat_capacity
+    assert thermal.thermal_resistance == typed.thermal_resistance
+    assert thermal.housing_heat_capacity == typed.housing_heat_capacity
+    assert thermal.initial_rotor_rise == typed.initial_rotor_rise
+    assert thermal.initial_housing_rise == typed.initial_housing_rise
+    if thermal.two_node:
+        assert thermal.housing_thermal_resistance == typed.housing_resistance
+    damper = hinge.ecd.ecd.damper
+    ratio = hinge.ecd.ecd.gearbox.ratio
+    eddy = float(damper.damping_rate_at(temperature)) * ratio**2
+    assert eddy == pytest.approx(typed.eddy_damping, rel=1e-13)
+    slope = damper.damping_rate * damper.damping_temperature_coefficient * ratio**2
+    assert slope == pytest.approx(typed.eddy_slope, rel=1e-13)
+
+
+def test_reference_heating_is_the_hand_heat_balance() -> None:
+    # An adiabatic rotor whose damping is all eddy current (no BG): every joule the
+    # damper dissipates heats it, so C (r_end - r_0) equals the damper's dissipation
+    # (Incropera Eq. 5.2 integrated with R = inf), whatever Eq. 1's slope makes of the
+    # damping on the way; the two are integrated separately (the rise as a state, the
+    # dissipation as a quadrature), both at rtol 1e-11, so they agree to 1e-9.
+    eddy, slope, capacity, warm = 3.0, -0.012, 0.2, 15.0
+    hinge = Hinge(
+        0.0, 1.0, 2.0, 1.0, eddy, 0.05, 0.05,
+        eddy_damping=eddy, eddy_slope=slope, heat_capacity=capacity,
+        initial_rotor_rise=warm,
+    )  # fmt: skip
+    run = Reference(Wing((Panel(1.0, 0.5, 0.25, 0.0, 0.02),), (hinge,))).run()
+    assert run.status == "latched"
+    rise = float(run.peak_rise[0]) - warm  # adiabatic: the peak is the end
+    assert rise > 1.0  # it heats by kelvins (the effect is there)
+    assert capacity * rise == pytest.approx(float(run.damper[0]), rel=1e-9)
+    assert run.energy_error < ENERGY_BOUND
 
 
 def test_one_undamped_hinge_swings_and_sticks_as_the_hand_solution() -> None:

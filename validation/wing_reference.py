@@ -12,6 +12,12 @@ hinge law is typed from its source:
 - the ECD as a linear damper and a Coulomb friction at the hinge, BECD_T and FECD_T
   (Eq. 1-4, evaluated by the cases in plain floats), plus the hinge friction FS_T, with
   a breakaway (static) friction at rest;
+- the damper's self-heating, typed from Incropera, DeWitt, Bergman and Lavine,
+  *Fundamentals of Heat and Mass Transfer* (2007), sections 3.1.3 and 5.2, in
+  temperatures (not ecdsim's log state): the rotor a lumped capacity heated by its
+  eddy-current power ``BD_T(T_r) N^2 w^2`` (Eq. 1's damping at the rotor's temperature,
+  linear in it), cooled to the environment or to a housing node of its own, which is
+  cooled to the environment; a warm start gives both nodes a rise at release;
 - Coulomb friction with stick-slip at every hinge: the hinges at rest are decided
   together, exactly, by enumerating their modes (stuck, sliding either way) and keeping
   the one whose stuck hinges' holding torques, computed from M(q) with the stuck hinges'
@@ -92,6 +98,15 @@ class Hinge:
     restitution : a rigid latch's e [-]
     latch_stiffness, latch_damping : a compliant latch [N*m/rad], [N*m*s/rad]; stiffness
         None for a rigid latch
+    eddy_damping : the eddy-current part of ``damping``, BD_T N^2 at the ambient
+        temperature [N*m*s/rad] (what heats the rotor)
+    eddy_slope : its change per kelvin of the rotor, BD c N^2 [N*m*s/rad/K] (Eq. 1)
+    heat_capacity : the rotor's C_r [J/K]; None: no heating
+    thermal_resistance : the rotor's resistance to the environment, or to the housing
+        with a housing node [K/W]
+    housing_heat_capacity, housing_resistance : the housing node's C_h [J/K] (None: one
+        node) and its resistance to the environment [K/W]
+    initial_rotor_rise, initial_housing_rise : the nodes' rises at release [K]
     """
 
     stowed: float
@@ -105,6 +120,36 @@ class Hinge:
     restitution: float = 0.0
     latch_stiffness: float | None = None
     latch_damping: float = 0.0
+    eddy_damping: float = 0.0
+    eddy_slope: float = 0.0
+    heat_capacity: float | None = None
+    thermal_resistance: float = math.inf
+    housing_heat_capacity: float | None = None
+    housing_resistance: float = math.inf
+    initial_rotor_rise: float = 0.0
+    initial_housing_rise: float = 0.0
+
+    def heating(self, speed: float, rotor: float, housing: float) -> tuple[float, float]:
+        """The rates of the rotor's and the housing's rises over the environment [K/s]:
+        ``C_r r' = (BD_T(T_r) N^2) w^2 - (r - h) / R`` and
+        ``C_h h' = (r - h) / R - h / R_he`` (h = 0 without a housing node; Incropera et
+        al. 2007, Eq. 5.2 per node with the resistances of section 3.1.3)."""
+        if self.heat_capacity is None:
+            return 0.0, 0.0
+        eddy = self.eddy_damping + self.eddy_slope * rotor
+        if self.housing_heat_capacity is None:
+            loss = rotor / self.thermal_resistance
+            return (eddy * speed * speed - loss) / self.heat_capacity, 0.0
+        flow = (rotor - housing) / self.thermal_resistance
+        return (
+            (eddy * speed * speed - flow) / self.heat_capacity,
+            (flow - housing / self.housing_resistance) / self.housing_heat_capacity,
+        )
+
+    def damping_at(self, rotor: float) -> float:
+        """BECD_T with the rotor ``rotor`` kelvin above the environment [N*m*s/rad]
+        (Eq. 1 is linear in the temperature)."""
+        return self.damping + self.eddy_slope * rotor
 
     @property
     def travel(self) -> float:
@@ -282,6 +327,7 @@ class Solution:
     final_kinetic: float = 0.0
     cable_elastic: float = 0.0
     latch_elastic: float = 0.0
+    peak_rise: FloatArray = field(default_factory=lambda: np.zeros(0))  # rotors' [K]
 
     @property
     def deployment_time(self) -> float:
@@ -380,6 +426,8 @@ class _Model:
         self.breakaway = self.P.T @ np.array([h.breakaway for h in wing.hinges])
         self.group_travel = np.array([self.travel[g[0]] for g in self.groups])
         self.rigid_latch = [wing.hinges[g[0]].latch_stiffness is None for g in self.groups]
+        # The rotors' rises over the environment [K], set from the state being evaluated.
+        self.rise = np.array([h.initial_rotor_rise for h in wing.hinges])
 
     def phi(self, psi: FloatArray) -> FloatArray:
         return np.asarray(self.P @ psi, dtype=float)
@@ -412,7 +460,7 @@ class _Model:
         phi, dphi = self.P @ psi, self.P @ rate
         forces = np.empty(self.n)
         for j, h in enumerate(self.wing.hinges):
-            forces[j] = h.spring(phi[j]) - h.damping * dphi[j]
+            forces[j] = h.spring(phi[j]) - h.damping_at(self.rise[j]) * dphi[j]
             if engaged[j]:
                 assert h.latch_stiffness is not None
                 forces[j] -= h.latch_stiffness * (phi[j] - h.travel) + h.latch_damping * dphi[j]
@@ -475,6 +523,11 @@ class Reference:
         self.model = _Model(wing)
         self.wing = wing
         self.max_events = max_events
+        n = wing.size
+        # The nodes' rises (rotors, then housings) carried from segment to segment [K],
+        # and the rotors' largest so far.
+        self.thermal = np.zeros(2 * n)
+        self.peak_rise = np.zeros(n)
 
     # ------------------------------------------------------------------ decisions
     def _decide(
@@ -582,6 +635,12 @@ class Reference:
         peak: dict[int, float] = {}
         v0 = model.gravity_potential(psi)
         t = 0.0
+        self.thermal = np.array(
+            [h.initial_rotor_rise for h in wing.hinges]
+            + [h.initial_housing_rise for h in wing.hinges]
+        )
+        model.rise = self.thermal[:n].copy()
+        self.peak_rise = self.thermal[:n].copy()
         self._decide(psi, rate, mode)
         for _ in range(self.max_events):
             if all(mode.locked) or all(mode.held) or t >= stop_time:
@@ -702,6 +761,7 @@ class Reference:
         out.stuck_hinges = tuple(
             j for j in range(n) if mode.stuck[model.group_of[j]] and not mode.engaged[j]
         )
+        out.peak_rise = self.peak_rise.copy()
         out.damper = energy["damper"]
         out.friction = energy["friction"]
         out.latch_damping = energy["latch"]
@@ -744,6 +804,7 @@ class Reference:
             rate = np.zeros(m)
             psi[free] = y[:f]
             rate[free] = y[f : 2 * f]
+            model.rise = y[2 * f : 2 * f + n].copy()  # the rotors' rises: the damping
             return psi, rate
 
         def rhs(_t: float, y: FloatArray) -> FloatArray:
@@ -751,7 +812,14 @@ class Reference:
             acc, _ = model.accelerations(psi, rate, engaged, held, direction, model.friction)
             dphi = model.P @ rate
             sliding = np.abs(model.P @ direction)
-            damping = np.array([h.damping for h in self.wing.hinges])
+            hinges = self.wing.hinges
+            damping = np.array([h.damping_at(model.rise[j]) for j, h in enumerate(hinges)])
+            heat = np.array(
+                [
+                    h.heating(dphi[j], y[2 * f + j], y[2 * f + n + j])
+                    for j, h in enumerate(self.wing.hinges)
+                ]
+            )
             friction = np.array([h.friction for h in self.wing.hinges])
             latch = np.array(
                 [h.latch_damping if engaged[j] else 0.0 for j, h in enumerate(self.wing.hinges)]
@@ -760,6 +828,8 @@ class Reference:
                 [
                     rate[free],
                     acc[free],
+                    heat[:, 0],
+                    heat[:, 1],
                     damping * dphi**2,
                     np.where(sliding > 0.0, friction * np.abs(dphi), 0.0),
                     latch * dphi**2,
@@ -825,7 +895,7 @@ class Reference:
             add(deflection_from(cable, limit), 0.0, "cable", None)
             add(deflection_from(cable, -limit), 0.0, "cable", None)
 
-        y0 = np.concatenate([psi0[free], rate0[free], np.zeros(3 * n)])
+        y0 = np.concatenate([psi0[free], rate0[free], self.thermal, np.zeros(3 * n)])
         end = min(stop_time, t0 + 1e4)
         sol = solve_ivp(
             rhs,
@@ -855,9 +925,15 @@ class Reference:
             return model.P @ psi, model.P @ rate
 
         out.segments.append(Segment(t0, t1, state))
-        energy["damper"] += y1[2 * f : 2 * f + n]
-        energy["friction"] += y1[2 * f + n : 2 * f + 2 * n]
-        energy["latch"] += y1[2 * f + 2 * n :]
+        e = 2 * f + 2 * n
+        energy["damper"] += y1[e : e + n]
+        energy["friction"] += y1[e + n : e + 2 * n]
+        energy["latch"] += y1[e + 2 * n :]
+        # The rotors' peak rises: at the steps (Radau at rtol 1e-11) and at the end.
+        last = np.searchsorted(sol.t, t1, side="right")
+        steps = np.concatenate([sol.y[2 * f : 2 * f + n, :last], y1[2 * f : 2 * f + n, None]], 1)
+        self.peak_rise = np.maximum(self.peak_rise, np.max(steps, axis=1))
+        self.thermal = y1[2 * f : e].copy()
         for j, h in enumerate(self.wing.hinges):
             if engaged[j] and h.latch_stiffness is not None:
 

@@ -9,12 +9,12 @@ friction machine, RODAS4 and the dense-output locator, the chain's equations of
 The wing's path models (gates closed by default, as every path of the kernel): per
 hinge a spring (linear or table, less a resistive table), the ECD's damping through its
 gear ratio (Eq. 3 with the linear law or the Kloss roll-off, BG), its self-heating (one
-node), its Coulomb friction ``FECD_T`` with the hinge friction ``FS_T`` and their
-breakaway (stick-slip), the rotor and gear train reflected to the hinge, a rigid or
-compliant latch, the stowed stop; cables rigid or elastic; a ground test's gravity and
-offload. An ECD with an effect the wing's path does not model yet (the housing as a
-second heat node, a warm start, Stribeck, lost motion, a lossy or compliant gear) is
-refused in one line naming the hinge and the key (:class:`WingUnsupported`).
+node, or rotor and housing; from a warm start or not), its Coulomb friction ``FECD_T``
+with the hinge friction ``FS_T`` and their breakaway (stick-slip), the rotor and gear
+train reflected to the hinge, a rigid or compliant latch, the stowed stop; cables rigid
+or elastic; a ground test's gravity and offload. An ECD with an effect the wing's path
+does not model yet (Stribeck, lost motion, a lossy or compliant gear) is refused in one
+line naming the hinge and the key (:class:`WingUnsupported`).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from ecdsim.dynamics.problem import _eddy_law as eddy_law
 from ecdsim.physics import chain
 from ecdsim.physics import eddy as eddy_laws
 from ecdsim.physics.cable import cable_energy
-from ecdsim.physics.thermal import temperature_from_factor_log
+from ecdsim.physics.thermal import factor_log_from_rise, temperature_from_factor_log
 from ecdsim.wing.kernel import layout as W
 from ecdsim.wing.model import Hinge, Wing
 from ecdsim.wing.result import LatchEvent, WingCase, WingEnergy, WingEvent, WingResult
@@ -90,16 +90,7 @@ def check_supported(wing: Wing) -> None:
         if ecd is None:
             continue
         at = f"wing.hinges[{i}] ({hinge.name}): its ECD's"
-        thermal = ecd.thermal
         found = (
-            (
-                "damper.thermal.housing_heat_capacity",
-                thermal is not None and thermal.housing_heat_capacity is not None,
-            ),
-            (
-                "damper.thermal.initial_rotor_rise",
-                thermal is not None and np.any(np.asarray(thermal.initial_rotor_rise) != 0.0),
-            ),
             ("damper.stribeck_speed", ecd.stribeck_speed is not None),
             ("gearbox.stiffness", ecd.gear_stiffness is not None),
             ("gearbox.lost_motion", ecd.lost_motion > 0.0),
@@ -139,10 +130,33 @@ def _law(hinge: Hinge, temperature: float) -> dict[int, float]:
         values[W.H_LAW] = float(eddy_laws.KLOSS)
         values[W.H_LA] = float(np.asarray(law.peak_torque))
         values[W.H_LB] = float(np.asarray(law.reference_peak_speed))
-    if ecd.thermal is not None:
-        values[W.H_HC] = float(np.asarray(ecd.thermal.heat_capacity))
-        values[W.H_HR] = float(np.asarray(ecd.thermal.thermal_resistance))
+    thermal = ecd.thermal
+    if thermal is not None:
+        values[W.H_HC] = float(np.asarray(thermal.heat_capacity))
+        values[W.H_HR] = float(np.asarray(thermal.thermal_resistance))
+        rise = float(np.asarray(thermal.initial_rotor_rise))
+        if rise != 0.0:
+            # A warm start (the single hinge's _check_start and its kernel's S0): the log
+            # state of the rise, which must lie below the damping law's zero.
+            if float(np.asarray(law.factor(temperature + rise))) <= 0.0:
+                raise WingUnsupported(
+                    f"wing.hinges ({hinge.name}): damper.thermal.initial_rotor_rise: "
+                    f"{rise:g} K puts the damper at or beyond the temperature where its "
+                    "damping law reaches zero"
+                )
+            values[W.H_S0] = float(factor_log_from_rise(rise, values[W.H_FA], values[W.H_COEF]))
+        if thermal.housing_heat_capacity is not None:
+            values[W.H_HCH] = float(np.asarray(thermal.housing_heat_capacity))
+            values[W.H_HRHE] = float(np.asarray(thermal.housing_thermal_resistance))
+            values[W.H_H0] = float(np.asarray(thermal.initial_housing_rise))
     return values
+
+
+def _nodes(hinge: Hinge) -> int:
+    """Hinge j's heating states: 0 (no heating), 1 (the damper) or 2 (rotor and housing)."""
+    if hinge.ecd is None or hinge.ecd.thermal is None:
+        return 0
+    return 2 if hinge.ecd.thermal.two_node else 1
 
 
 def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) -> FloatArray:
@@ -156,7 +170,7 @@ def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) ->
     elastic = [c for c in wing.cables if not c.rigid]
     gravity = wing.ground_test.gravity if wing.ground_test is not None else (0.0, 0.0)
     cw[W.W_N], cw[W.W_M], cw[W.W_C], cw[W.W_K] = n, groups.count, len(elastic), points
-    cw[W.W_AUX] = sum(1 for h in wing.hinges if h.ecd is not None and h.ecd.thermal is not None)
+    cw[W.W_AUX] = sum(_nodes(h) for h in wing.hinges)
     cw[W.W_GX], cw[W.W_GY] = gravity
     cw[W.W_MAX_EVENTS] = max_events
     cw[W.W_STOP] = stop_time
@@ -166,9 +180,13 @@ def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) ->
         for field, value in law.items():
             cw[W.hinge(field, j)] = value
         cw[W.hinge(W.H_AUX, j)] = -1.0
-        if hinge.ecd is not None and hinge.ecd.thermal is not None:
+        cw[W.hinge(W.H_HOUSING, j)] = -1.0
+        nodes = _nodes(hinge)
+        if nodes > 0:
             cw[W.hinge(W.H_AUX, j)] = 2 * groups.count + heated
-            heated += 1
+        if nodes == 2:
+            cw[W.hinge(W.H_HOUSING, j)] = 2 * groups.count + heated + 1
+        heated += nodes
         state = hinge.at(temperature)
         values = {
             W.H_MASS: arrays["mass"][j],

@@ -14,7 +14,8 @@ a constraint ``psi_g'' = 0``; its holding torque, what its friction or latch sup
 the constraint force (:mod:`ecdsim.dynamics.kernel.friction`'s constraint system, solved
 by its :func:`~ecdsim.dynamics.kernel.friction.solve_small`). The hinge laws are the
 single hinge's: the spring table, the ECD as ``BECD_T`` (Eq. 3) with its Coulomb
-``FECD_T`` (Eq. 4), the compliant latch's spring and damper, the cable's two strands
+``FECD_T`` (Eq. 4), its heating (one node, or rotor and housing), the compliant
+latch's spring and damper, the cable's two strands
 (:func:`ecdsim.physics.cable.cable_torque`).
 
 The functions have the hinge's signatures (``derivatives(cw, y, dy, dm, da, dq)`` ...),
@@ -39,6 +40,9 @@ from ecdsim.physics.thermal import (
     damping_factor_from_log,
     factor_log_cooling,
     factor_log_heating,
+    housing_rate,
+    housing_return,
+    temperature_from_factor_log,
 )
 from ecdsim.wing.kernel import layout as W
 from ecdsim.wing.kernel.layout import cable as cable_at
@@ -248,6 +252,33 @@ def accelerations(
             holding[g] = value if abs(value) > ROUNDING * scale else 0.0
 
 
+def heating_rates(cw: FloatArray, j: int, y: FloatArray, dy: FloatArray, power: float) -> None:
+    """Hinge j's heating states' rates (the single hinge's ``aux_rates`` on the wing's
+    words): the damper's log state, Incropera Eq. 5.2 in the log form of
+    :mod:`ecdsim.physics.thermal`, and with two nodes the heat its housing returns and
+    the housing's own rise (:func:`~ecdsim.physics.thermal.housing_return`,
+    :func:`~ecdsim.physics.thermal.housing_rate`)."""
+    aux = int(cw[hinge_at(W.H_AUX, j)])
+    capacity = cw[hinge_at(W.H_HC, j)]
+    resistance = cw[hinge_at(W.H_HR, j)]
+    coefficient = cw[hinge_at(W.H_COEF, j)]
+    s = y[aux]
+    rate = float(factor_log_heating(power, capacity))
+    if resistance < math.inf:  # the cooling term; 0 (and skipped) where adiabatic
+        rate -= float(factor_log_cooling(s, capacity, resistance, coefficient))
+    housing = int(cw[hinge_at(W.H_HOUSING, j)])
+    if housing >= 0:
+        ambient = cw[hinge_at(W.H_FA, j)]
+        factor = float(damping_factor_from_log(s, ambient, coefficient))
+        h = y[housing]
+        rate += float(housing_return(h, factor, resistance, capacity))
+        rise = float(temperature_from_factor_log(s, 0.0, ambient, coefficient))
+        dy[housing] = float(
+            housing_rate(rise, h, cw[hinge_at(W.H_HCH, j)], resistance, cw[hinge_at(W.H_HRHE, j)])
+        )
+    dy[aux] = rate
+
+
 def chain_derivatives(
     cw: FloatArray, y: FloatArray, dy: FloatArray, dm: tuple[int, ...], da: tuple[int, ...],
     dq: tuple[int, ...],
@@ -268,18 +299,8 @@ def chain_derivatives(
         rate = cw[hinge_at(W.H_FACTOR, j)] * y[m + g]
         torque, power = damper_torque(cw, j, rate, y)
         dy[e + j] = torque * rate
-        aux = int(cw[hinge_at(W.H_AUX, j)])
-        if aux >= 0:
-            # The damper's log state: Incropera Eq. 5.2 in the log form of
-            # ecdsim.physics.thermal (the single hinge's aux_rates, one node).
-            capacity = cw[hinge_at(W.H_HC, j)]
-            resistance = cw[hinge_at(W.H_HR, j)]
-            heating = factor_log_heating(power, capacity)
-            if resistance < math.inf:
-                heating -= factor_log_cooling(
-                    y[aux], capacity, resistance, cw[hinge_at(W.H_COEF, j)]
-                )
-            dy[aux] = heating
+        if int(cw[hinge_at(W.H_AUX, j)]) >= 0:
+            heating_rates(cw, j, y, dy, power)
         dy[e + n + j] = cw[group_at(W.G_DIR, g)] * cw[hinge_at(W.H_FRICTION, j)] * rate
         latch = cw[hinge_at(W.H_ENGAGED, j)] * cw[hinge_at(W.H_LATCH_C, j)]
         dy[e + 2 * n + j] = latch * rate * rate

@@ -7,7 +7,8 @@ per-cable fields stored field by field (``cw[base + field * NMAX + j]``), then e
 hinge's drive table. Groups are the hinges joined by rigid cables (one coordinate psi
 each; ``phi_j = factor_j psi_group``); a wing without rigid cables has one group per
 hinge. The state is ``y = [psi (m), psi' (m), z (a), quadratures (3 n)]``: ``z`` the
-heated dampers' log temperature states (:mod:`ecdsim.physics.thermal`), the quadratures
+heated dampers' log temperature states (:mod:`ecdsim.physics.thermal`), each followed by
+its housing's temperature rise where the damper has two nodes, the quadratures
 each hinge's damper, friction and latch-damper dissipation.
 """
 
@@ -33,7 +34,7 @@ NMAX = 8  # the most hinges (and groups, and cables) a wing case holds
     W_POINTS,  # points written
     W_OVERFLOW,  # 1 when a buffer was full
     W_SETTLE,  # the settle fraction of a rebound's energy
-    W_AUX,  # heated dampers (auxiliary states)
+    W_AUX,  # auxiliary states: each heated damper's log state, each housing's rise
     HEADER,
 ) = range(18)
 
@@ -71,8 +72,13 @@ NMAX = 8  # the most hinges (and groups, and cables) a wing case holds
     H_HC,  # the damper's heat capacity [J/K]
     H_HR,  # its thermal resistance to ambient [K/W] (inf: adiabatic)
     H_PEAK_LOG,  # the largest log temperature state of its damper so far [K] (0: ambient)
+    H_HOUSING,  # the state index of its housing's rise (two nodes); -1: one node or none
+    H_HCH,  # the housing's heat capacity [J/K]
+    H_HRHE,  # the housing's resistance to the environment [K/W] (inf: adiabatic)
+    H_S0,  # its damper's log temperature state at release [K] (a warm start; 0: ambient)
+    H_H0,  # its housing's rise at release [K]
     HFIELDS,
-) = range(33)
+) = range(38)
 HINGES = HEADER
 
 # --- per group ------------------------------------------------------------------------------

@@ -511,6 +511,13 @@ def run_wing(
     m = len(dm)
     n = 2 * m + len(da) + len(dq)
     y = np.zeros(n)
+    for j in range(int(cw[W.W_N])):  # a warm start: the heating states at release
+        aux = int(cw[hinge_at(W.H_AUX, j)])
+        if aux >= 0:
+            y[aux] = cw[hinge_at(W.H_S0, j)]
+        housing = int(cw[hinge_at(W.H_HOUSING, j)])
+        if housing >= 0:
+            y[housing] = cw[hinge_at(W.H_H0, j)]
     work, jac, lu, pivot = new_work(n, m, len(da))
     ws = (work, jac, lu, pivot, np.zeros((6, max(n, W.SLOTS))), np.zeros(2))
     log_event(cw, events, 0.0, W.EV_RELEASE, -1)
