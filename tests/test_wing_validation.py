@@ -69,6 +69,8 @@ def test_the_case_file_is_the_reference_wing(item: WingValidationCase) -> None:
                 drive = float(hinge.drive_torque(phi, temperature))
                 assert drive == pytest.approx(typed_hinge.spring(phi), rel=1e-13)
             _same_heating(hinge, typed_hinge, temperature)
+            stribeck = None if hinge.ecd is None else hinge.ecd.stribeck_speed
+            assert (math.inf if stribeck is None else stribeck) == typed_hinge.stribeck_speed
             latch = hinge.latch
             assert latch.restitution == typed_hinge.restitution
             assert latch.stiffness == typed_hinge.latch_stiffness
@@ -127,6 +129,19 @@ def test_reference_heating_is_the_hand_heat_balance() -> None:
     assert rise > 1.0  # it heats by kelvins (the effect is there)
     assert capacity * rise == pytest.approx(float(run.damper[0]), rel=1e-9)
     assert run.energy_error < ENERGY_BOUND
+
+
+def test_reference_stribeck_friction_is_the_hand_curve() -> None:
+    # Canudas de Wit et al. 1995's g(v) typed by hand: the breakaway at rest, the kinetic
+    # value far above the Stribeck speed, 1/e of the excess at it; and a hinge whose
+    # spring lies between its kinetic friction and its breakaway stays stuck at release.
+    hinge = Hinge(0.0, 1.0, 1.5, 1.5, 0.0, 1.0, 2.0, stribeck_speed=0.1)
+    assert hinge.sliding(0.0) == 2.0
+    assert hinge.sliding(0.1) == pytest.approx(1.0 + math.exp(-1.0), rel=1e-15)
+    assert hinge.sliding(-10.0) == pytest.approx(1.0, abs=1e-15)
+    run = Reference(Wing((Panel(1.0, 0.5, 0.25, 0.0, 0.02),), (hinge,))).run()
+    assert run.status == "stuck"
+    assert run.final_angle[0] == 0.0
 
 
 def test_one_undamped_hinge_swings_and_sticks_as_the_hand_solution() -> None:

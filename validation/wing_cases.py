@@ -179,6 +179,24 @@ def _two_heating(t: float) -> Wing:
     return Wing((SMALL, SMALL_OFFSET), hinges)
 
 
+STRIBECK_FACTOR = 1.5  # breakaway over kinetic, the ECD's and the hinge's
+STRIBECK_SPEED = 0.03  # [rad/s] at the hinge
+
+
+def _two_stribeck(t: float) -> Wing:
+    hinges = []
+    for stowed in (90.0, -180.0):
+        hinge = _cc16_hinge(t, stowed, 0.0)
+        hinges.append(
+            replace(
+                hinge,
+                breakaway=STRIBECK_FACTOR * hinge.friction,
+                stribeck_speed=STRIBECK_SPEED,
+            )
+        )
+    return Wing((SMALL, SMALL_OFFSET), tuple(hinges))
+
+
 def _warm_start(wing: EcdsimWing) -> EcdsimWing:
     """The heating case's file with its warm start (ecdsim's Thermal initial rises)."""
     hinges = []
@@ -318,6 +336,13 @@ CASES: tuple[WingValidationCase, ...] = (
         (-40.0, 100.0),
         _two_heating,
         adjust=_warm_start,
+    ),
+    WingValidationCase(
+        "wing_two_panel_stribeck",
+        "Two panels, Stribeck friction at both hinges (breakaway 1.5x, 0.03 rad/s)",
+        CONFIGS / "wing_two_panel_stribeck.toml",
+        (25.0, 100.0),
+        _two_stribeck,
     ),
 )
 

@@ -18,6 +18,10 @@ hinge law is typed from its source:
   eddy-current power ``BD_T(T_r) N^2 w^2`` (Eq. 1's damping at the rotor's temperature,
   linear in it), cooled to the environment or to a housing node of its own, which is
   cooled to the environment; a warm start gives both nodes a rise at release;
+- with a Stribeck speed w_St, a hinge's sliding friction falls from its breakaway at rest
+  to its kinetic value as it speeds up, ``F_C + (F_brk - F_C) exp(-(w / w_St)^2)`` (the
+  steady-state Stribeck curve of the LuGre model, Canudas de Wit, Olsson, Astrom and
+  Lischinsky, IEEE TAC 40(3), 1995, Eq. 4's g(v)), typed here;
 - Coulomb friction with stick-slip at every hinge: the hinges at rest are decided
   together, exactly, by enumerating their modes (stuck, sliding either way) and keeping
   the one whose stuck hinges' holding torques, computed from M(q) with the stuck hinges'
@@ -107,6 +111,7 @@ class Hinge:
     housing_heat_capacity, housing_resistance : the housing node's C_h [J/K] (None: one
         node) and its resistance to the environment [K/W]
     initial_rotor_rise, initial_housing_rise : the nodes' rises at release [K]
+    stribeck_speed : w_St [rad/s] at the hinge; inf: Coulomb friction (no Stribeck curve)
     """
 
     stowed: float
@@ -128,6 +133,16 @@ class Hinge:
     housing_resistance: float = math.inf
     initial_rotor_rise: float = 0.0
     initial_housing_rise: float = 0.0
+    stribeck_speed: float = math.inf
+
+    def sliding(self, speed: float) -> float:
+        """The sliding friction's magnitude at the hinge speed ``speed`` [N*m]:
+        ``F_C + (F_brk - F_C) exp(-(w / w_St)^2)`` (Canudas de Wit et al. 1995), the
+        kinetic friction without a Stribeck speed."""
+        if math.isinf(self.stribeck_speed):
+            return self.friction
+        ratio = speed / self.stribeck_speed
+        return self.friction + (self.breakaway - self.friction) * math.exp(-ratio * ratio)
 
     def heating(self, speed: float, rotor: float, housing: float) -> tuple[float, float]:
         """The rates of the rotor's and the housing's rises over the environment [K/s]:
@@ -432,6 +447,13 @@ class _Model:
     def phi(self, psi: FloatArray) -> FloatArray:
         return np.asarray(self.P @ psi, dtype=float)
 
+    def sliding_friction(self, rate: FloatArray) -> FloatArray:
+        """Each group's sliding friction limit in psi at the groups' speeds ``rate``:
+        ``P^T`` of each hinge's (its Stribeck curve at its speed; the breakaway at rest)."""
+        dphi = self.P @ rate
+        each = np.array([h.sliding(float(dphi[j])) for j, h in enumerate(self.wing.hinges)])
+        return np.asarray(self.P.T @ each, dtype=float)
+
     def matrices(self, psi: FloatArray, rate: FloatArray) -> tuple[FloatArray, FloatArray]:
         """M_psi and h_psi (Coriolis, centrifugal) at psi, psi'."""
         phi, dphi = self.P @ psi, self.P @ rate
@@ -559,7 +581,7 @@ class Reference:
             # A stuck group holds up to its breakaway; a sliding one feels the kinetic
             # friction at once (it drops from breakaway to kinetic as motion starts).
             acc, holding = model.accelerations(
-                psi, rate, mode.engaged, held, direction, model.friction
+                psi, rate, mode.engaged, held, direction, model.sliding_friction(rate)
             )
             ok = True
             for g, choice in zip(rest, combo, strict=True):
@@ -809,7 +831,8 @@ class Reference:
 
         def rhs(_t: float, y: FloatArray) -> FloatArray:
             psi, rate = unpack(y)
-            acc, _ = model.accelerations(psi, rate, engaged, held, direction, model.friction)
+            limits = model.sliding_friction(rate)
+            acc, _ = model.accelerations(psi, rate, engaged, held, direction, limits)
             dphi = model.P @ rate
             sliding = np.abs(model.P @ direction)
             hinges = self.wing.hinges
@@ -820,7 +843,7 @@ class Reference:
                     for j, h in enumerate(self.wing.hinges)
                 ]
             )
-            friction = np.array([h.friction for h in self.wing.hinges])
+            friction = np.array([h.sliding(float(dphi[j])) for j, h in enumerate(hinges)])
             latch = np.array(
                 [h.latch_damping if engaged[j] else 0.0 for j, h in enumerate(self.wing.hinges)]
             )
@@ -860,7 +883,7 @@ class Reference:
             def margin(_t: float, y: FloatArray) -> float:
                 psi, rate = unpack(y)
                 _, holding = model.accelerations(
-                    psi, rate, engaged, held, direction, model.friction
+                    psi, rate, engaged, held, direction, model.sliding_friction(rate)
                 )
                 limit = model.breakaway[g] * (1.0 + STICK_MARGIN)
                 if psi0[g] == 0.0:

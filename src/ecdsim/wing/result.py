@@ -113,8 +113,8 @@ class WingEnergy:
     ----------
     spring_work : work of each hinge's net drive (spring less resistive table)
     damper_dissipation : energy each hinge's ECD dissipated (BECD_T and beyond)
-    friction_dissipation : energy each hinge's Coulomb friction (FECD_T + FS_T)
-        dissipated
+    friction_dissipation : energy each hinge's friction (FECD_T + FS_T, with its
+        Stribeck excess where the ECD has a Stribeck speed) dissipated
     latch_dissipation : energy each compliant latch's damping dissipated
     impact_loss : kinetic energy lost in each hinge's rigid latch impacts
     gravity_work : work of the offloaded weights in a ground test (0 in flight)

@@ -10,10 +10,11 @@ The wing's path models (gates closed by default, as every path of the kernel): p
 hinge a spring (linear or table, less a resistive table), the ECD's damping through its
 gear ratio (Eq. 3 with the linear law or the Kloss roll-off, BG), its self-heating (one
 node, or rotor and housing; from a warm start or not), its Coulomb friction ``FECD_T``
-with the hinge friction ``FS_T`` and their breakaway (stick-slip), the rotor and gear
+with the hinge friction ``FS_T`` and their breakaway (stick-slip; with the ECD's
+Stribeck speed, falling from the breakaway to the kinetic value with speed), the rotor and gear
 train reflected to the hinge, a rigid or compliant latch, the stowed stop; cables rigid
 or elastic; a ground test's gravity and offload. An ECD with an effect the wing's path
-does not model yet (Stribeck, lost motion, a lossy or compliant gear) is refused in one
+does not model yet (lost motion, a lossy or compliant gear) is refused in one
 line naming the hinge and the key (:class:`WingUnsupported`).
 """
 
@@ -91,7 +92,6 @@ def check_supported(wing: Wing) -> None:
             continue
         at = f"wing.hinges[{i}] ({hinge.name}): its ECD's"
         found = (
-            ("damper.stribeck_speed", ecd.stribeck_speed is not None),
             ("gearbox.stiffness", ecd.gear_stiffness is not None),
             ("gearbox.lost_motion", ecd.lost_motion > 0.0),
             ("gearbox.efficiency", ecd.ecd.gearbox.efficiency is not None),
@@ -152,6 +152,16 @@ def _law(hinge: Hinge, temperature: float) -> dict[int, float]:
     return values
 
 
+def _stribeck(hinge: Hinge, kinetic: float, breakaway: float) -> dict[int, float]:
+    """Hinge j's Stribeck speed and excess (the single hinge's: the ECD's
+    ``stribeck_speed`` at the hinge shaft, over the excess ``F_brk - F_C`` of the ECD's
+    and the hinge's frictions together; none without a Stribeck speed)."""
+    speed = None if hinge.ecd is None else hinge.ecd.stribeck_speed
+    if speed is None or not math.isfinite(float(speed)):
+        return {W.H_WST: math.inf, W.H_EXCESS: 0.0}
+    return {W.H_WST: float(speed), W.H_EXCESS: max(breakaway - kinetic, 0.0)}
+
+
 def _nodes(hinge: Hinge) -> int:
     """Hinge j's heating states: 0 (no heating), 1 (the damper) or 2 (rotor and housing)."""
     if hinge.ecd is None or hinge.ecd.thermal is None:
@@ -208,6 +218,7 @@ def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) ->
             W.H_GROUP: groups.of[j],
             W.H_FACTOR: groups.factor[j],
             W.H_POINTS: np.asarray(tables[j][0]).shape[0],
+            **_stribeck(hinge, float(state.kinetic_friction), float(state.breakaway_friction)),
         }
         for field, value in values.items():
             cw[W.hinge(field, j)] = value

@@ -9,14 +9,15 @@ velocity terms ``h(q, q')``, the ground test's gravity), in each hinge's deploye
 
 and in the groups' coordinates psi (hinges joined by rigid cables share one,
 ``phi = P psi``): ``M_psi = P^T M_phi P``, ``Q_psi = P^T F - d F_k`` with each sliding
-group's kinetic friction F_k against its direction d. A held group (stuck, or latched) is
-a constraint ``psi_g'' = 0``; its holding torque, what its friction or latch supplies, is
-the constraint force (:mod:`ecdsim.dynamics.kernel.friction`'s constraint system, solved
-by its :func:`~ecdsim.dynamics.kernel.friction.solve_small`). The hinge laws are the
-single hinge's: the spring table, the ECD as ``BECD_T`` (Eq. 3) with its Coulomb
-``FECD_T`` (Eq. 4), its heating (one node, or rotor and housing), the compliant
-latch's spring and damper, the cable's two strands
-(:func:`ecdsim.physics.cable.cable_torque`).
+group's kinetic friction F_k against its direction d (with a Stribeck speed, each
+hinge's friction falls from its breakaway at rest to its kinetic value with speed). A
+held group (stuck, or latched) is a constraint ``psi_g'' = 0``; its holding torque, what
+its friction or latch supplies, is the constraint force
+(:mod:`ecdsim.dynamics.kernel.friction`'s constraint system, solved by its
+:func:`~ecdsim.dynamics.kernel.friction.solve_small`). The hinge laws are the single
+hinge's: the spring table, the ECD as ``BECD_T`` (Eq. 3) with its Coulomb ``FECD_T``
+(Eq. 4), its heating (one node, or rotor and housing), the compliant latch's spring and
+damper, the cable's two strands (:func:`ecdsim.physics.cable.cable_torque`).
 
 The functions have the hinge's signatures (``derivatives(cw, y, dy, dm, da, dq)`` ...),
 so the kernel's RODAS4 step, its step control and its event locator run a wing unchanged
@@ -36,6 +37,7 @@ from ecdsim.dynamics.kernel.friction import solve_small
 from ecdsim.physics.cable import cable_torque
 from ecdsim.physics.chain import gravity_forces, mass_matrix, velocity_terms
 from ecdsim.physics.eddy import damper_side_torque
+from ecdsim.physics.friction import stribeck_curve
 from ecdsim.physics.thermal import (
     damping_factor_from_log,
     factor_log_cooling,
@@ -210,7 +212,24 @@ def group_system(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, Flo
             mass[gj, gk] += fj * cw[hinge_at(W.H_FACTOR, k)] * matrix[j, k]
     for g in range(m):
         rhs[g] -= cw[group_at(W.G_DIR, g)] * cw[group_at(W.G_FRICTION, g)]
+    for j in range(n):  # the Stribeck excesses of the sliding groups' hinges
+        g = int(cw[hinge_at(W.H_GROUP, j)])
+        direction = cw[group_at(W.G_DIR, g)]
+        if direction != 0.0 and cw[hinge_at(W.H_EXCESS, j)] > 0.0:
+            factor = cw[hinge_at(W.H_FACTOR, j)]
+            rhs[g] -= direction * factor * stribeck_part(cw, j, factor * y[m + g])
     return mass, rhs
+
+
+def stribeck_part(cw: FloatArray, j: int, rate: float) -> float:
+    """Hinge j's sliding friction above its kinetic one at its speed ``rate``: the
+    single hinge's Stribeck curve :func:`ecdsim.physics.friction.stribeck_curve` of its
+    excess ``F_brk - F_C`` at its ECD's Stribeck speed (docs/dynamics.md, "Stribeck
+    friction"); 0 without one."""
+    excess = cw[hinge_at(W.H_EXCESS, j)]
+    if excess <= 0.0:
+        return 0.0
+    return float(stribeck_curve(rate, excess, cw[hinge_at(W.H_WST, j)]))
 
 
 def accelerations(
@@ -301,7 +320,8 @@ def chain_derivatives(
         dy[e + j] = torque * rate
         if int(cw[hinge_at(W.H_AUX, j)]) >= 0:
             heating_rates(cw, j, y, dy, power)
-        dy[e + n + j] = cw[group_at(W.G_DIR, g)] * cw[hinge_at(W.H_FRICTION, j)] * rate
+        sliding = cw[hinge_at(W.H_FRICTION, j)] + stribeck_part(cw, j, rate)
+        dy[e + n + j] = cw[group_at(W.G_DIR, g)] * sliding * rate
         latch = cw[hinge_at(W.H_ENGAGED, j)] * cw[hinge_at(W.H_LATCH_C, j)]
         dy[e + 2 * n + j] = latch * rate * rate
 

@@ -77,8 +77,10 @@ NMAX = 8  # the most hinges (and groups, and cables) a wing case holds
     H_HRHE,  # the housing's resistance to the environment [K/W] (inf: adiabatic)
     H_S0,  # its damper's log temperature state at release [K] (a warm start; 0: ambient)
     H_H0,  # its housing's rise at release [K]
+    H_WST,  # its ECD's Stribeck speed at the hinge [rad/s] (inf: none)
+    H_EXCESS,  # its Stribeck excess, breakaway less kinetic friction [N*m] (0: none)
     HFIELDS,
-) = range(38)
+) = range(40)
 HINGES = HEADER
 
 # --- per group ------------------------------------------------------------------------------
