@@ -15,8 +15,9 @@ integrator, the Monte Carlo sums) import numba through :func:`load`, never at st
   names another folder. Each CPU model keeps its own entries: a cache copied to another
   machine is recompiled, not misused. ``tests/test_numba_setup.py`` checks that a
   read-only package's kernels are compiled once and then loaded.
-* **The notice.** The first compilation on a machine takes about 15 to 30 s (all the
-  dynamic method's kernels; measured figures in docs/reproducibility.md), which looks
+* **The notice.** The first compilation on a machine takes a minute or more (one
+  dynamic run's kernels: 83 s of CPU for the MSL brake's; all of ``ecdsim precompile``'s
+  320: 271 s on a loaded 2-core machine; docs/reproducibility.md), which looks
   like a hang. When a kernel is about to be compiled because the cache has none for this
   CPU, one line on stderr says so, once per process. It is printed only when stderr is a
   terminal (``ECDSIM_COMPILE_NOTICE=1`` prints it always, ``=0`` never): what a command
@@ -55,7 +56,7 @@ SWITCH = "ECDSIM_NUMBA"
 # The compile notice: "1" always, "0" never, anything else: when stderr is a terminal.
 NOTICE = "ECDSIM_COMPILE_NOTICE"
 # One line within 80 columns.
-NOTICE_TEXT = "ecdsim: compiling its kernels for this CPU, once (about 15 to 30 s)"
+NOTICE_TEXT = "ecdsim: compiling its kernels for this CPU, once (a minute or more)"
 
 _lock = threading.Lock()
 # "plain": how many plain() blocks are open (process wide: the dynamic solve may run a

@@ -1,8 +1,8 @@
 """``ecdsim precompile``: compile the numerical kernels ahead, so that no run waits for them.
 
 The compiled kernels (numba, :mod:`ecdsim._numba`) are compiled on first use and cached
-on disk for this CPU; the first dynamic run on a machine would otherwise spend 15 to 30 s
-compiling. This command runs a small representative set of computations instead of
+on disk for this CPU; the first dynamic run on a machine would otherwise spend a minute
+or more compiling. This command runs a small representative set of computations instead of
 naming kernels: whatever kernels those computations reach are compiled and cached, now
 and after any rework of the solvers. ``make demo`` runs it; after ``pip install ecdsim``
 a user runs it once (again after an upgrade). It prints each computation's time and
