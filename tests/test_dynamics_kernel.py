@@ -24,7 +24,7 @@ from scipy.integrate import solve_ivp
 from ecdsim.deployment import build_problem, predict
 from ecdsim.dynamics import DynamicParameters, DynamicProblem, Rolloff, Thermal
 from ecdsim.dynamics import solver as solver_module
-from ecdsim.dynamics.kernel import hinge, layout, loop, rodas, segment
+from ecdsim.dynamics.kernel import effects, hinge, layout, loop, rodas, segment
 from ecdsim.dynamics.kernel.build import backend
 from ecdsim.dynamics.problem import dynamic_problem
 from ecdsim.dynamics.result import EVENT_KINDS, STATUSES, DynamicResult
@@ -384,15 +384,15 @@ def test_one_case_effects_are_the_batch_ones(name: str) -> None:
         assert solver_module._case_effects(problem, table[i].tolist()) == batch[i]
 
 
-@pytest.mark.parametrize("effect", [DUMMY, layout.EFFECT_ROLLOFF, layout.EFFECT_GRAVITY])
+@pytest.mark.parametrize("effect", [DUMMY, layout.EFFECT_ROLLOFF, effects.BIT["gravity"]])
 def test_the_closed_form_takes_only_the_effects_it_models(effect: int) -> None:
     # A linear segment takes the closed form; the same segment with any effect outside
     # CLOSED_FORM_EFFECTS (a dummy one included) is integrated instead.
     case = _case(_problem(paper_system(), DynamicParameters(5.0), [25.0]), (1.0,))
     assert loop.closed_form_applies(case.cw, 1)
     case.cw[layout.EFFECTS] += effect
-    if effect == layout.EFFECT_GRAVITY:
-        case.cw[layout.GW] = 1.0  # gravity acts only where it has a weight
+    if effect == effects.BIT["gravity"]:
+        case.cw[effects.COLUMN["gravity_amplitude"]] = 1.0  # a registered effect's column
     assert not loop.closed_form_applies(case.cw, 1)
     for known in (layout.EFFECT_LOSSY, layout.EFFECT_REBOUND, layout.EFFECT_STOP_TIME):
         assert known & layout.CLOSED_FORM_EFFECTS

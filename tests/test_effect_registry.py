@@ -10,13 +10,13 @@ declarations: checked here too, with the refusals of an unknown parameter.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 import pytest
 
 from ecdsim.config.schema import CoreConfigSpec
-from ecdsim.dynamics import DynamicParameters
+from ecdsim.dynamics import DynamicParameters, DynamicProblem
 from ecdsim.dynamics.kernel import effects, layout, loop
 from ecdsim.dynamics.kernel.build import backend
 from ecdsim.dynamics.solver import solve_dynamic
@@ -53,8 +53,12 @@ def test_the_layout_is_derived_from_the_declarations() -> None:
 
 @pytest.mark.parametrize("name", NAMES)
 def test_every_parameter_has_its_config_key(name: str) -> None:
-    # `[section] key` exists in the config schema and reaches DynamicParameters.effects.
+    # `[section] key` exists in the config schema and reaches DynamicParameters.effects;
+    # a parameter without one is a field of DynamicProblem (gravity's, set by predict).
     for p in _effect(name).parameters:
+        if p.config is None:
+            assert p.name in {f.name for f in fields(DynamicProblem)}, p.name
+            continue
         section, key = p.config.split(".")
         spec_section = CoreConfigSpec.model_fields[section].annotation
         assert key in spec_section.model_fields, p.config  # type: ignore[union-attr]
@@ -124,3 +128,31 @@ def test_the_closed_form_refuses_an_effect_it_does_not_declare(name: str) -> Non
     # The same case without it is linear: the closed form takes it.
     case.cw[layout.EFFECTS] -= effects.BIT[name]
     assert loop.closed_form_applies(case.cw, 1)
+
+
+@pytest.mark.parametrize("slope", [-1.5, 0.0, 1.2, 1.99])
+def test_gravity_lists_every_angle_where_its_stiffness_balances_the_spring(slope: float) -> None:
+    # The rest test examines where the push at rest k x + T_g can turn: T_g' = -k, i.e.
+    # W cos(theta_0 + phi) = k. Its candidates are held to the roots found independently:
+    # sign changes of W cos(theta_0 + phi) - k on a fine grid, refined by brentq.
+    from scipy.optimize import brentq
+
+    from ecdsim.physics.gravity import gravity_level_angle, gravity_level_count
+
+    amplitude, release, lo, hi = 2.0, 0.3, -1.0, 11.0
+
+    def balance(phi: float) -> float:
+        return float(amplitude * np.cos(release + phi) - slope)
+
+    grid = np.linspace(lo, hi, 20001)
+    values = [balance(x) for x in grid]
+    pairs = zip(grid[:-1], grid[1:], values[:-1], values[1:], strict=True)
+    roots = [brentq(balance, a, b) for a, b, fa, fb in pairs if fa * fb < 0.0]
+    count = gravity_level_count(slope, lo, hi, amplitude, release)
+    listed = sorted(
+        a for i in range(count)
+        if lo <= (a := gravity_level_angle(slope, lo, hi, i, amplitude, release)) <= hi
+    )  # fmt: skip
+    np.testing.assert_allclose(listed, roots, atol=1e-9)  # brentq's default xtol 2e-12
+    assert len(roots) >= 3  # the interval spans nearly two turns
+    assert gravity_level_count(2.5, lo, hi, amplitude, release) == 0  # |k| > W: none

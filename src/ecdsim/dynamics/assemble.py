@@ -15,10 +15,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ecdsim._types import FloatArray, as_float
+from ecdsim.dynamics.kernel import effects as registry
 from ecdsim.dynamics.kernel import layout as L
 from ecdsim.dynamics.problem import DynamicProblem
 from ecdsim.dynamics.result import DynamicResult, EnergyBalance, EventLog, TrajectoryData
-from ecdsim.physics.gravity import gravity_work
 
 
 @dataclass(frozen=True)
@@ -106,12 +106,8 @@ def _energy(
 ) -> EnergyBalance:
     """The energy account per case (``rows``: the summaries by field, batch-shaped)."""
     table = packed.table
-    gravity = None
-    if problem.has_gravity:
-        work = gravity_work(
-            table[:, L.PHI0], rows[L.OUT_ANGLE].reshape(-1), table[:, L.GW], table[:, L.GTH]
-        )
-        gravity = np.asarray(work).reshape(shape)
+    end = rows[L.OUT_ANGLE].reshape(-1)
+    stored = registry.stored_work(table, table[:, L.EFFECTS], table[:, L.PHI0], end)
     compliant = bool(np.any(packed.compliant))
     return EnergyBalance(
         spring_work=rows[L.OUT_SPRING_WORK],
@@ -122,7 +118,7 @@ def _energy(
         impact_loss=rows[L.OUT_IMPACT_LOSS],
         final_kinetic_energy=rows[L.OUT_FINAL_KE],
         gear_loss=rows[L.OUT_GEAR_LOSS],
-        gravity_work=gravity,
+        **{line: np.asarray(work).reshape(shape) for line, work in stored.items()},
         mesh_dissipation=rows[L.OUT_MESH_WORK] if compliant else None,
         elastic_energy=rows[L.OUT_ELASTIC] if compliant else None,
         resistive_work=rows[L.OUT_RESISTIVE_WORK] if problem.resistance is not None else None,

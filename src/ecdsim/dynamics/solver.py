@@ -102,7 +102,7 @@ def _law(problem: DynamicProblem) -> dict[int, Column]:
 
 
 def _derived(problem: DynamicProblem, law: dict[int, Column], nodes: int) -> dict[int, Column]:
-    """The breakaway frictions, the travel, gravity and the heating's start states."""
+    """The breakaway frictions, the travel and the heating's start states."""
     columns: dict[int, Column] = {
         L.FSB: problem.system_friction * problem.system_static_friction_factor,
         L.FEB: problem.ecd_friction * problem.static_friction_factor,
@@ -111,9 +111,6 @@ def _derived(problem: DynamicProblem, law: dict[int, Column], nodes: int) -> dic
         L.S0: 0.0,
         L.H0: problem.initial_housing_rise if nodes == 2 else 0.0,
     }
-    if problem.gravity_amplitude is not None and problem.gravity_angle is not None:
-        columns[L.GW] = problem.gravity_amplitude
-        columns[L.GTH] = problem.gravity_angle
     rise = np.asarray(problem.initial_rotor_rise, float)
     if nodes and np.any(rise != 0.0):
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -135,8 +132,6 @@ KNOWN_FIELDS = frozenset(
         "eddy",
         "static_friction_factor",
         "system_static_friction_factor",
-        "gravity_amplitude",
-        "gravity_angle",
         "initial_rotor_rise",
         "initial_housing_rise",
         "thermal",
@@ -147,6 +142,8 @@ KNOWN_FIELDS = frozenset(
         "max_events",
         "effects",  # the registered effects' parameters (kernel/effects.py)
     }
+    # and the registered parameters set as fields (gravity's: effects.problem_values)
+    | {p.name for p in registry.PARAMETERS if p.config is None}
 )
 
 
@@ -177,7 +174,6 @@ def _presence(problem: DynamicProblem, c: Any) -> list[tuple[int, Any]]:
         (L.EFFECT_HEATING, c[L.NODES] > 0),
         (L.EFFECT_TWO_NODE, c[L.NODES] == 2),
         (L.EFFECT_STRIBECK, c[L.WST] < inf),
-        (L.EFFECT_GRAVITY, c[L.GW] != 0.0),
         (L.EFFECT_LOSSY, (c[L.ETAF] != 1.0) | (c[L.ETAB] != 1.0)),
         (L.EFFECT_LOST_MOTION, c[L.GAP] > 0.0),
         (L.EFFECT_COMPLIANT, c[L.MC] < inf),
@@ -234,7 +230,7 @@ def pack(problem: DynamicProblem, record: bool) -> Packed:
     law = _law(problem)
     columns.update(law)
     columns.update(_derived(problem, law, nodes))
-    columns.update(registry.columns(problem.effects))
+    columns.update(registry.columns(registry.problem_values(problem)))
     table = _table(columns, shape, n)
     table[:, L.EFFECTS] = _effects(problem, table)
     _check_known(problem, table[:, L.EFFECTS])

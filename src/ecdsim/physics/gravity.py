@@ -19,6 +19,8 @@ so that deployment lifting the CG (0 < beta < 180 deg) is opposed, lowering it
 ``offload`` of the weight (1 = fully offloaded, flight-like: no torque).
 """
 
+import math
+
 import numpy as np
 
 from ecdsim._types import ArrayLike, FloatArray, Real, as_float
@@ -97,3 +99,83 @@ def gravity_work(start: Real, end: Real, amplitude: Real, release_angle: Real) -
     release_angle : theta_0 [rad]
     """
     return amplitude * (np.cos(release_angle + start) - np.cos(release_angle + end))
+
+
+# --- gravity as an effect of the hinge's registry (dynamics/kernel/effects.py) ---------
+# The registry's convention: T along deployment, a function of the deployed angle and
+# speed, with its slopes; the laws above, signed.
+
+
+def gravity_load_torque(angle: float, speed: float, amplitude: float, release: float) -> float:
+    """Gravity's torque along deployment, ``-W sin(theta_0 + phi)`` [N*m]: the
+    :func:`gravity_torque` of rigid-body statics (Meriam & Kraige, Statics, section on the
+    moment of a force), counted along deployment.
+
+    Parameters
+    ----------
+    angle : deployed angle phi [rad]
+    speed : the load's speed [rad/s] (gravity does not depend on it)
+    amplitude : W [N*m]
+    release : theta_0 [rad]
+    """
+    return -float(gravity_torque(angle, amplitude, release))
+
+
+def gravity_load_slopes(
+    angle: float, speed: float, amplitude: float, release: float
+) -> tuple[float, float]:
+    """``(dT/dphi, dT/domega) = (-W cos(theta_0 + phi), 0)`` of
+    :func:`gravity_load_torque` (:func:`gravity_torque_slope`; Statics, section on the
+    moment of a force) [N*m/rad, N*m*s/rad].
+
+    Parameters
+    ----------
+    angle : deployed angle phi [rad]
+    speed : the load's speed [rad/s]
+    amplitude : W [N*m]
+    release : theta_0 [rad]
+    """
+    return -float(gravity_torque_slope(angle, amplitude, release)), 0.0
+
+
+def gravity_level_count(
+    slope: float, lo: float, hi: float, amplitude: float, release: float
+) -> int:
+    """How many candidates :func:`gravity_level_angle` lists for ``[lo, hi]``: the angles
+    where gravity's stiffness ``-W cos(theta_0 + phi)`` (section on the moment of a
+    force, as :func:`gravity_torque_slope`) is ``-slope``; none where ``|slope| > |W|``.
+
+    Parameters
+    ----------
+    slope : the stiffness sought, negated [N*m/rad] (the spring piece's slope)
+    lo : the interval's least deployed angle [rad]
+    hi : its greatest [rad]
+    amplitude : W [N*m]
+    release : theta_0 [rad]
+    """
+    if amplitude == 0.0 or abs(slope) > abs(amplitude):
+        return 0
+    first = math.floor((lo + release - math.pi) / (2.0 * math.pi))
+    last = math.ceil((hi + release + math.pi) / (2.0 * math.pi))
+    return 2 * (int(last) - int(first) + 1)
+
+
+def gravity_level_angle(
+    slope: float, lo: float, hi: float, i: int, amplitude: float, release: float
+) -> float:
+    """Candidate ``i`` of :func:`gravity_level_count` [rad]: ``cos(theta_0 + phi) =
+    slope / W`` (section on the moment of a force), ``theta = +-acos(slope / W)`` plus
+    whole turns; the caller keeps those inside ``[lo, hi]``.
+
+    Parameters
+    ----------
+    slope : the stiffness sought, negated [N*m/rad]
+    lo : the interval's least deployed angle [rad]
+    hi : its greatest [rad]
+    i : the candidate's index [-], from 0
+    amplitude : W [N*m]
+    release : theta_0 [rad]
+    """
+    first = math.floor((lo + release - math.pi) / (2.0 * math.pi))
+    root = math.acos(slope / amplitude) * (1.0 if i % 2 == 0 else -1.0)
+    return root + 2.0 * math.pi * (int(first) + i // 2) - release

@@ -63,7 +63,8 @@ INLINE = frozenset(
         "crossed",
         "_endpoint",
         "_extremes",
-        "registered_terms",  # the registered effects' sum (kernel/effects.py)
+        "registered_terms",  # the registered effects' sums (kernel/effects.py)
+        "registered_torque",
     }
 )
 

@@ -27,12 +27,11 @@ import math
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.kernel import layout as L
-from ecdsim.dynamics.kernel.effects import registered_terms
+from ecdsim.dynamics.kernel.effects import registered_level, registered_torque
 from ecdsim.dynamics.kernel.friction import STICK_MARGIN, capacity, drives, stuck_flags
 from ecdsim.dynamics.kernel.hinge import factor_at, mesh_now
 from ecdsim.physics.eddy import damper_side_torque
 from ecdsim.physics.gearing import power_flow_indicator
-from ecdsim.physics.gravity import gravity_torque
 
 
 def active_slots(cw: FloatArray, active: FloatArray, m: int) -> None:
@@ -94,10 +93,8 @@ def indicator(cw: FloatArray, y: FloatArray, m: int, na: int) -> float:
         int(par[L.LAW]), par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], y[1], f
     )[0]
     x = y[0]
-    spring = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_terms(cw, sg[L.SG_PHI] + x, y[1])[0]
+    spring = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_torque(cw, sg[L.SG_PHI] + x, y[1])[0]
     load = sigma * spring - par[L.FS]
-    if par[L.GW] != 0.0:
-        load -= sigma * gravity_torque(sg[L.SG_PHI] + x, par[L.GW], par[L.GTH])
     damper = sigma * torque + sg[L.SG_FQ]
     value: float = md[L.MD_FLOW] * power_flow_indicator(par[L.JL], par[L.JD], damper, load)
     return value
@@ -148,11 +145,9 @@ def rest_push(cw: FloatArray, x: float) -> float:
     ``sigma (T_s - G) - F_brk`` along the motion, the drive less the breakaway friction
     (kinetic plus the Stribeck excess at rest; the damping vanishes at rest). Positive
     while the load is short of its static equilibrium."""
-    par = md = sg = cw
+    md = sg = cw
     sigma = md[L.MD_SLIDE0]
-    torque = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_terms(cw, sg[L.SG_PHI] + x, 0.0)[0]
-    if par[L.GW] != 0.0:
-        torque -= gravity_torque(sg[L.SG_PHI] + x, par[L.GW], par[L.GTH])
+    torque = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_torque(cw, sg[L.SG_PHI] + x, 0.0)[0]
     value: float = sigma * torque - (sg[L.SG_FC0] + sg[L.SG_EX0])
     return value
 
@@ -161,29 +156,27 @@ def equilibrium_ahead(cw: FloatArray, x: float) -> bool:
     """Whether the push at rest vanishes somewhere between x and the segment's geometric
     event ahead: a static equilibrium the load can come to rest at.
 
-    The push is the linear spring piece less gravity's sine: its least value over the
-    interval is at an end or where its slope vanishes, ``slope = W cos(theta_0 + phi)``,
-    each of which is examined (issue 23 item 8: a grazing bottleneck has none).
+    The push is the linear spring piece plus the registered torques: its least value
+    over the interval is at an end or where its slope vanishes, the angles each effect
+    lists where its stiffness is minus the spring's (``effects.registered_level``: for
+    gravity ``W cos(theta_0 + phi) = k``), each of which is examined (issue 23 item 8: a
+    grazing bottleneck has none).
     """
-    par = sg = cw
+    sg = cw
     end = sg[L.SG_TARGET]
     if rest_push(cw, end) <= 0.0:
         return True
-    w = par[L.GW]
-    if w == 0.0 or abs(sg[L.SG_SLOPE]) > abs(w):
-        return False
-    offset = sg[L.SG_PHI] + par[L.GTH]  # theta = offset + x
-    lo = min(x, end) + offset
-    hi = max(x, end) + offset
-    base = math.acos(sg[L.SG_SLOPE] / w)
-    first = int(math.floor((lo - math.pi) / (2.0 * math.pi)))
-    last = int(math.ceil((hi + math.pi) / (2.0 * math.pi)))
-    for turn in range(first, last + 1):
-        for root in (base, -base):
-            angle = root + 2.0 * math.pi * turn
-            if lo <= angle <= hi and rest_push(cw, angle - offset) <= 0.0:
-                return True
-    return False
+    origin = sg[L.SG_PHI]  # the registry's angles are deployed angles: origin + x
+    lo = min(x, end) + origin
+    hi = max(x, end) + origin
+    i = 0
+    while True:
+        angle = registered_level(cw, sg[L.SG_SLOPE], lo, hi, i)
+        if math.isnan(angle):
+            return False
+        if lo <= angle <= hi and rest_push(cw, angle - origin) <= 0.0:
+            return True
+        i += 1
 
 
 def accept_creep(cw: FloatArray, y: FloatArray) -> bool:

@@ -31,10 +31,9 @@ import math
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.kernel import layout as L
-from ecdsim.dynamics.kernel.effects import registered_terms
+from ecdsim.dynamics.kernel.effects import registered_terms, registered_torque
 from ecdsim.physics.eddy import damper_side_parts, damper_side_torque
 from ecdsim.physics.friction import stribeck_excess
-from ecdsim.physics.gravity import gravity_torque, gravity_torque_slope
 from ecdsim.physics.mechanics import mesh_torque
 from ecdsim.physics.thermal import (
     damping_factor_from_log,
@@ -115,10 +114,8 @@ def hinge_forces(
     w = y[m]
     sigma = md[L.MD_SLIDE0]
     g = excess_at(sigma * w, sg[L.SG_EX0], par[L.WST])[0]
-    extra = registered_terms(cw, sg[L.SG_PHI] + phi, w)[0]  # kernel/effects.py
+    extra, lost = registered_torque(cw, sg[L.SG_PHI] + phi, w)  # kernel/effects.py
     load = load_spring(sg, phi) - sigma * (sg[L.SG_FC0] + g) + extra
-    if par[L.GW] != 0.0:
-        load -= float(gravity_torque(sg[L.SG_PHI] + phi, par[L.GW], par[L.GTH]))
     if m == 1:
         eng = sg[L.SG_ENG]
         torque_, power = damper_side_torque(
@@ -126,7 +123,7 @@ def hinge_forces(
         )
         torque = eng * float(torque_)
         q0 = load - sg[L.SG_MESH] * torque
-        return q0, 0.0, torque, eng * float(power), torque * w + sigma * g * w - extra * w, 0.0, f
+        return q0, 0.0, torque, eng * float(power), torque * w + sigma * g * w + lost, 0.0, f
     # A compliant mesh: q = (phi_L, delta), the damper side's speed w_L - delta'.
     speed = y[m + 1]
     wd = w - speed
@@ -138,7 +135,7 @@ def hinge_forces(
     )
     torque = float(torque_)
     damper = tau - sigma_d * (sg[L.SG_FC1] + g_d) - torque
-    dissipated = torque * wd + sigma * g * w + sigma_d * g_d * wd - extra * w
+    dissipated = torque * wd + sigma * g * w + sigma_d * g_d * wd + lost
     return load - tau + damper, -damper, torque, float(power), dissipated, tau, f
 
 
@@ -239,10 +236,8 @@ def jacobian(
         torque, d_speed, d_factor, _, p_speed, p_factor = damper_side_parts(
             law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], w, f
         )
-        extra, x_angle, x_speed = registered_terms(cw, sg[L.SG_PHI] + phi, w)
+        _, x_angle, x_speed, _, p_angle, p_speed_ = registered_terms(cw, sg[L.SG_PHI] + phi, w)
         stiffness = sg[L.SG_SLOPE] + x_angle
-        if par[L.GW] != 0.0:
-            stiffness -= gravity_torque_slope(sg[L.SG_PHI] + phi, par[L.GW], par[L.GTH])
         inv = cw[L.PINV]
         jac[1, 0] = inv * stiffness
         jac[1, 1] = -inv * (g_slope + mesh * d_speed - x_speed)
@@ -250,8 +245,8 @@ def jacobian(
             jac[1, 2] = -inv * mesh * d_factor * c_f
             aux_jacobian(par, y, jac, eng * p_speed, eng * p_factor, f, m, na)
             jac[e, 2] = eng * d_factor * c_f * w
-        jac[e, 0] = -x_angle * w
-        jac[e, 1] = eng * (d_speed * w + torque) + g_slope * w + sigma * g - extra - x_speed * w
+        jac[e, 0] = p_angle
+        jac[e, 1] = eng * (d_speed * w + torque) + g_slope * w + sigma * g + p_speed_
         return
     compliant_jacobian(cw, y, jac, f, c_f, law, m, na)
 
@@ -276,10 +271,8 @@ def compliant_jacobian(
     torque, d_speed, d_factor, _, p_speed, p_factor = damper_side_parts(
         law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], wd, f
     )
-    extra, x_angle, x_speed = registered_terms(cw, sg[L.SG_PHI] + phi, w)
+    _, x_angle, x_speed, _, p_angle, p_speed_ = registered_terms(cw, sg[L.SG_PHI] + phi, w)
     stiffness = sg[L.SG_SLOPE] + x_angle
-    if par[L.GW] != 0.0:
-        stiffness -= gravity_torque_slope(sg[L.SG_PHI] + phi, par[L.GW], par[L.GTH])
     damper_speed = gd_slope + d_speed  # d(damper friction and damping)/d(w_D)
     # d(load force)/d(phi, delta, w, speed) and d(damper force)/d(same), then Q = (L + D, -D).
     load = (stiffness, -k_mesh, x_speed - g_slope, -d_mesh)
@@ -297,8 +290,8 @@ def compliant_jacobian(
         aux_jacobian(par, y, jac, float(p_speed), float(p_factor), f, m, na)
         jac[e, 4] = d_factor * c_f * wd
     power_wd = d_speed * wd + torque + gd_slope * wd + sigma_d * g_d
-    jac[e, 0] = -x_angle * w
-    jac[e, 2] = power_wd + g_slope * w + sigma * g - extra - x_speed * w
+    jac[e, 0] = p_angle
+    jac[e, 2] = power_wd + g_slope * w + sigma * g + p_speed_
     jac[e, 3] = -power_wd
     mode = md[L.MD_MESH]
     if mode == L.PRESS and tau != 0.0:

@@ -48,14 +48,12 @@ from ecdsim.dynamics.kernel import effects as _registry
     TZERO,  # the law's zero temperature T_ref - 1/c where c < 0, else inf [degC]
     ETAF,  # forward mesh efficiency [-]
     ETAB,  # back-driven mesh efficiency [-]
-    GW,  # gravity amplitude W [N*m]; 0: none
-    GTH,  # gravity's angle at release theta_0 [rad]
     MC,  # mesh stiffness c [N*m/rad]; inf: rigid
     MD,  # mesh damping d [N*m*s/rad]
     TREF,  # the damping law's reference temperature, where its factor is 1 [degC]
     EFFECTS,  # the effects the case has (EFFECT_* bits)
     BUILT_IN_COLUMNS,
-) = range(39)
+) = range(37)
 # Then one column per parameter of the registered effects (ecdsim.dynamics.kernel.effects).
 COLUMNS = _registry.END_COLUMN
 if BUILT_IN_COLUMNS != _registry.FIRST_COLUMN:  # the registry's columns follow EFFECTS
@@ -68,20 +66,20 @@ EFFECT_ROLLOFF = 1  # the Kloss law (roll-off) instead of Eq. 1's linear one
 EFFECT_HEATING = 2  # self-heating (one node)
 EFFECT_TWO_NODE = 4  # the housing as a second node
 EFFECT_STRIBECK = 8  # a Stribeck speed
-EFFECT_GRAVITY = 16  # a ground test's gravity
-EFFECT_LOSSY = 32  # a lossy gear
-EFFECT_LOST_MOTION = 64  # a rigid mesh's lost motion
-EFFECT_COMPLIANT = 128  # a compliant mesh (two coordinates)
-EFFECT_RESISTANCE = 256  # a resistive table
-EFFECT_REBOUND = 512  # a rebounding end stop
-EFFECT_WARM_START = 1024  # heat carried over from a previous deployment
-EFFECT_STOP_TIME = 2048  # a stop time
-EFFECT_POWER_LAW = 4096  # a shear-thinning fluid damper's power law (physics.fluid)
+EFFECT_LOSSY = 16  # a lossy gear
+EFFECT_LOST_MOTION = 32  # a rigid mesh's lost motion
+EFFECT_COMPLIANT = 64  # a compliant mesh (two coordinates)
+EFFECT_RESISTANCE = 128  # a resistive table
+EFFECT_REBOUND = 256  # a rebounding end stop
+EFFECT_WARM_START = 512  # heat carried over from a previous deployment
+EFFECT_STOP_TIME = 1024  # a stop time
+EFFECT_POWER_LAW = 2048  # a shear-thinning fluid damper's power law (physics.fluid)
+# (gravity is a registered effect: kernel/effects.py)
 # The effects the kernel models (every path together: the built-in ones and the
 # registered ones, whose bits follow), and those a closed-form segment takes: linear
-# damping at a constant temperature, Coulomb friction, no gravity, and the registered
+# damping at a constant temperature, Coulomb friction, and the registered
 # effects that declare it.
-BUILT_IN_EFFECTS = 8191
+BUILT_IN_EFFECTS = 4095
 if BUILT_IN_EFFECTS + 1 != _registry.FIRST_BIT:
     raise ImportError("effects.FIRST_BIT must follow layout.BUILT_IN_EFFECTS")
 KERNEL_EFFECTS = BUILT_IN_EFFECTS | _registry.REGISTERED_BITS

@@ -211,8 +211,6 @@ def segment_effects(cw: FloatArray, m: int) -> int:
         effects &= ~L.ENGAGED_EFFECTS
     if sg[L.SG_EX0] <= 0.0 and (m == 1 or sg[L.SG_EX1] <= 0.0):
         effects &= ~L.EFFECT_STRIBECK
-    if par[L.GW] == 0.0:
-        effects &= ~L.EFFECT_GRAVITY
     return effects
 
 

@@ -14,11 +14,10 @@ import math
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.kernel import layout as L
-from ecdsim.dynamics.kernel.effects import registered_terms
+from ecdsim.dynamics.kernel.effects import registered_torque
 from ecdsim.dynamics.kernel.friction import projected_inverse, stuck_flags
 from ecdsim.physics.eddy import damper_side_torque
 from ecdsim.physics.gearing import power_flow_indicator
-from ecdsim.physics.gravity import gravity_torque
 
 Tables = tuple[
     FloatArray, FloatArray, FloatArray
@@ -139,9 +138,7 @@ def _flow(cw: FloatArray, y: FloatArray, factor: float, sigma: int) -> None:
     torque = damper_side_torque(
         law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], speed0, factor
     )[0]
-    felt = sigma * (sg[L.SG_T0] + registered_terms(cw, sg[L.SG_PHI], y[1])[0]) - par[L.FS]
-    if par[L.GW] != 0.0:
-        felt -= sigma * gravity_torque(sg[L.SG_PHI], par[L.GW], par[L.GTH])
+    felt = sigma * (sg[L.SG_T0] + registered_torque(cw, sg[L.SG_PHI], y[1])[0]) - par[L.FS]
     indicator = power_flow_indicator(par[L.JL], par[L.JD], torque + sg[L.SG_FQ], felt)
     flow = hint if hint != 0 else (1 if indicator >= 0.0 else -1)
     md[L.MD_FLOW] = flow
