@@ -29,7 +29,7 @@ from ecdsim.sizing.fluid import compare_fluid
 # A boom hinge with a fluid damper: linear spring 3 -> 1.5 N*m over 1.5 rad, Coulomb
 # friction 0.6 N*m, c = 5 N*m*(s/rad)^0.45 (T_r = 1.8 N*m at 0.1 rad/s), n = 0.45.
 J, T0, T1, TRAVEL, FRICTION, C, N = 0.05, 3.0, 1.5, 1.5, 0.6, 5.0, 0.45
-OMEGA_L = 1e-7  # the linear core: 1e-6 of omega_r = 0.1 rad/s (dynamics.fluid_damper)
+OMEGA_L = 1e-7  # the linear core: 1e-6 of omega_r = 0.1 rad/s (sizing.fluid_dynamic)
 ROOT = Path(__file__).resolve().parents[1]
 
 

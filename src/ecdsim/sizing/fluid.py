@@ -36,7 +36,6 @@ from ecdsim._types import ArrayLike, BoolArray, FloatArray, as_float
 from ecdsim._version import __version__
 from ecdsim.config.sizing_schema import FluidDamperSpec
 from ecdsim.deployment import predict
-from ecdsim.dynamics import fluid_damper
 from ecdsim.dynamics.params import DynamicParameters
 from ecdsim.dynamics.result import DynamicResult
 from ecdsim.model import DeploymentSystem
@@ -51,6 +50,7 @@ from ecdsim.physics.fluid import (
 # The power-law time is a physics function; its name is kept here too (re-exported).
 from ecdsim.physics.fluid import power_law_segment_duration as power_law_segment_duration
 from ecdsim.physics.quasistatic import locate_stall
+from ecdsim.sizing import fluid_dynamic as fluid_damper
 from ecdsim.solvers import EXACT, PAPER, QuasiStaticProblem
 
 KELVIN_OFFSET = 273.15
@@ -785,7 +785,7 @@ def compare_fluid(
 
     ``method`` is ``"quasi-static"`` (the closed-form times above) or ``"dynamic"``: both
     dampers' deployments integrated with inertia on the dynamic core
-    (:mod:`ecdsim.dynamics.fluid_damper`), with ``dynamics`` (the config's dynamic
+    (:mod:`ecdsim.sizing.fluid_dynamic`), with ``dynamics`` (the config's dynamic
     parameters, or only the load inertia) and the same load inertia as above (required).
     """
     if method not in METHODS:
