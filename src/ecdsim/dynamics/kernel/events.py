@@ -30,8 +30,7 @@ from ecdsim.dynamics.kernel import layout as L
 from ecdsim.dynamics.kernel.effects import registered_level, registered_torque
 from ecdsim.dynamics.kernel.friction import STICK_MARGIN, capacity, drives, stuck_flags
 from ecdsim.dynamics.kernel.hinge import factor_at, mesh_now
-from ecdsim.physics.eddy import damper_side_torque
-from ecdsim.physics.gearing import power_flow_indicator
+from ecdsim.dynamics.kernel.segment import flow_indicator
 
 
 def active_slots(cw: FloatArray, active: FloatArray, m: int) -> None:
@@ -84,20 +83,11 @@ def mesh_event(par: FloatArray, md: FloatArray, slot: int, delta: float, speed: 
 
 def indicator(cw: FloatArray, y: FloatArray, m: int, na: int) -> float:
     """A lossy gear's power-flow indicator times the segment's flow (> 0 while the flow
-    is the segment's): ``J_L (M_d + F_q) + J_D A`` along the motion
-    (:func:`ecdsim.physics.gearing.power_flow_indicator`)."""
-    par = md = sg = cw
-    sigma = md[L.MD_SLIDE0]
-    f = factor_at(par, y, m, na)
-    torque = damper_side_torque(
-        int(par[L.LAW]), par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], y[1], f
-    )[0]
-    x = y[0]
-    spring = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_torque(cw, sg[L.SG_PHI] + x, y[1])[0]
-    load = sigma * spring - par[L.FS]
-    damper = sigma * torque + sg[L.SG_FQ]
-    value: float = md[L.MD_FLOW] * power_flow_indicator(par[L.JL], par[L.JD], damper, load)
-    return value
+    is the segment's: :func:`ecdsim.dynamics.kernel.segment.flow_indicator`)."""
+    md = cw
+    value = flow_indicator(cw, y[0], y[1], factor_at(cw, y, m, na), int(md[L.MD_SLIDE0]))
+    flow: float = md[L.MD_FLOW]
+    return flow * value
 
 
 def held_value(

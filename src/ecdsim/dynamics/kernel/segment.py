@@ -120,6 +120,21 @@ def _frictions(cw: FloatArray, m: int) -> None:
     sg[L.SG_EX1] = max(par[L.FEB] - par[L.FE], 0.0) if stribeck else 0.0
 
 
+def flow_indicator(cw: FloatArray, x: float, speed: float, factor: float, sigma: int) -> float:
+    """A lossy gear's power-flow indicator ``J_L (M_d + F_q) + J_D A`` along the motion
+    (:func:`ecdsim.physics.gearing.power_flow_indicator`; > 0 forward) at displacement x
+    from the segment's start, load speed and law factor: the segment's choice of flow
+    and the power_flow event's value (:func:`ecdsim.dynamics.kernel.events.indicator`)."""
+    par = sg = cw
+    torque = damper_side_torque(
+        int(par[L.LAW]), par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG],
+        sigma * speed + 0.0, factor,
+    )[0]  # fmt: skip
+    spring = sg[L.SG_T0] + sg[L.SG_SLOPE] * x + registered_torque(cw, sg[L.SG_PHI] + x, speed)[0]
+    load = sigma * spring - par[L.FS]
+    return float(power_flow_indicator(par[L.JL], par[L.JD], torque + sg[L.SG_FQ], load))
+
+
 def _flow(cw: FloatArray, y: FloatArray, factor: float, sigma: int) -> None:
     """A lossy gear's power flow for the segment and its mesh factor m (``sg``): the
     sign of the mesh torque's indicator at the start (:mod:`ecdsim.physics.gearing`),
@@ -133,13 +148,7 @@ def _flow(cw: FloatArray, y: FloatArray, factor: float, sigma: int) -> None:
     md[L.MD_FLOW] = 0
     if md[L.MD_ENGAGED] == 0 or (par[L.ETAF] == 1.0 and par[L.ETAB] == 1.0):
         return
-    speed0 = sigma * y[1] + 0.0
-    law = int(par[L.LAW])
-    torque = damper_side_torque(
-        law, par[L.LA], par[L.LB], par[L.LC], par[L.RATIO], par[L.BG], speed0, factor
-    )[0]
-    felt = sigma * (sg[L.SG_T0] + registered_torque(cw, sg[L.SG_PHI], y[1])[0]) - par[L.FS]
-    indicator = power_flow_indicator(par[L.JL], par[L.JD], torque + sg[L.SG_FQ], felt)
+    indicator = flow_indicator(cw, 0.0, y[1], factor, sigma)
     flow = hint if hint != 0 else (1 if indicator >= 0.0 else -1)
     md[L.MD_FLOW] = flow
     sg[L.SG_MESH] = 1.0 / par[L.ETAF] if flow > 0 else par[L.ETAB]
