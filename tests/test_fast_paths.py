@@ -38,7 +38,7 @@ from ecdsim.dynamics.method import (
 from ecdsim.dynamics.problem import (
     _BASE_FIELDS,
     _CASE_FIELDS,
-    _NO_GRAVITY,
+    _REGISTERED_FIELDS,
     _SETTING_FIELDS,
     dynamic_problem,
 )
@@ -313,7 +313,7 @@ def _same_field(name: str, fast: object, general: object) -> None:
 def test_the_one_case_problem_covers_every_field() -> None:
     # _one_case_problem sets the fields it lists and nothing else: a field added to
     # DynamicProblem (or QuasiStaticProblem) without adding it there fails here.
-    listed = (*_BASE_FIELDS, *_NO_GRAVITY, *_CASE_FIELDS, *_SETTING_FIELDS)
+    listed = (*_BASE_FIELDS, *_REGISTERED_FIELDS, *_CASE_FIELDS, *_SETTING_FIELDS)
     names = [f.name for f in fields(DynamicProblem)]
     assert sorted(listed) == sorted(names)
     system = paper_system()

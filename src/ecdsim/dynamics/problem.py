@@ -27,6 +27,7 @@ from ecdsim._types import (
     one_case_views,
 )
 from ecdsim.dynamics.damping import EddyLaw, KlossEddy, LinearEddy
+from ecdsim.dynamics.kernel import effects as registry
 from ecdsim.dynamics.mesh_limits import DynamicDomainError as DynamicDomainError
 from ecdsim.dynamics.mesh_limits import _check_compliant
 from ecdsim.dynamics.params import DynamicParameters, Thermal
@@ -363,7 +364,8 @@ def _case_fields(
 # problem's breakpoints, friction and damping; the per-case numbers; the settings. A
 # field added to the class must be added here too (tests/test_fast_paths.py).
 _BASE_FIELDS = _QS_FIELDS
-_NO_GRAVITY = ("gravity_amplitude", "gravity_angle")
+# The registered effects' parameters that are fields (gravity's): predict sets them.
+_REGISTERED_FIELDS = tuple(p.name for p in registry.PARAMETERS if p.config is None)
 _SETTING_FIELDS = (
     "eddy",
     "resistance",
@@ -422,10 +424,9 @@ def _one_case_problem(
         torques=base.torques,
         friction=friction,
         damping_rate=damping,
-        # dynamic_problem never passes gravity on (predict adds it with replace()).
-        gravity_amplitude=None,
-        gravity_angle=None,
     )
+    # dynamic_problem never passes gravity on (predict adds it with replace()).
+    state.update(dict.fromkeys(_REGISTERED_FIELDS))
     state.update(zip(_CASE_FIELDS, rows, strict=True))
     state.update(settings)
     return problem
