@@ -17,7 +17,7 @@ integrator, the Monte Carlo sums) import numba through :func:`load`, never at st
   read-only package's kernels are compiled once and then loaded.
 * **The notice.** The first compilation on a machine takes a minute or more (one
   dynamic run's kernels: 83 s of CPU for the MSL brake's; all of ``ecdsim precompile``'s
-  320: 271 s on a loaded 2-core machine; docs/reproducibility.md), which looks
+  309: 251 s on a loaded 2-core machine; docs/reproducibility.md), which looks
   like a hang. When a kernel is about to be compiled because the cache has none for this
   CPU, one line on stderr says so, once per process. It is printed only when stderr is a
   terminal (``ECDSIM_COMPILE_NOTICE=1`` prints it always, ``=0`` never): what a command
