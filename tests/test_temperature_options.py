@@ -124,6 +124,18 @@ def test_every_bad_temperature_is_reported_at_once() -> None:
     assert len(lines) == 2
 
 
+@pytest.mark.parametrize("command", [["deploy"], ["report", "-o", "unused.html"]])
+def test_a_wing_files_bad_temperatures_are_reported_at_once(command: list[str]) -> None:
+    # The wing's loader (cli/wing.load_wing_run) reads -T with the hinge's helper.
+    wing = ROOT / "examples" / "wing_cc16_three_panel.toml"
+    result = runner.invoke(app, [command[0], str(wing), *command[1:], "-T", "-300", "-T", "x"])
+    assert result.exit_code == 2
+    lines = result.stderr.splitlines()
+    assert lines[0] == f"error: --temperature: '-300 degC' is below absolute zero; {EXPECTED}"
+    assert lines[1].startswith("error: --temperature: 'x' does not start with a finite number")
+    assert len(lines) == 2
+
+
 @pytest.mark.parametrize(
     ("text", "celsius"),
     [("-40", -40.0), ("233.15 K", -40.0), ("-40 degF", -40.0), ("-273.14", -273.14)],

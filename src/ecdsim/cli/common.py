@@ -213,6 +213,20 @@ def temperature_option(option: str, text: str) -> float:
         fail([f"{option}: {exc}"])
 
 
+def temperature_options(texts: list[str], problems: list[str]) -> tuple[float, ...]:
+    """Each ``--temperature`` parsed (:func:`parse_temperature`); a bad one adds its line
+    to ``problems`` (reported with the others, all at once) and is left out."""
+    from ecdsim.config.units import QuantityError
+
+    parsed = []
+    for text in texts:
+        try:
+            parsed.append(parse_temperature(text))
+        except QuantityError as exc:
+            problems.append(f"--temperature: {exc}")
+    return tuple(parsed)
+
+
 def load_run(
     config_path: Path, temperatures: list[str] | None, methods: list[str] | None
 ) -> Config:
@@ -224,7 +238,6 @@ def load_run(
     from dataclasses import replace
 
     from ecdsim.config import ConfigError, load_config
-    from ecdsim.config.units import QuantityError
     from ecdsim.methods import SOLVERS
 
     try:
@@ -234,13 +247,7 @@ def load_run(
     problems: list[str] = []
     temps = config.temperatures
     if temperatures:
-        parsed = []
-        for text in temperatures:
-            try:
-                parsed.append(parse_temperature(text))
-            except QuantityError as exc:
-                problems.append(f"--temperature: {exc}")
-        temps = tuple(parsed)
+        temps = temperature_options(temperatures, problems)
     chosen = config.methods
     if methods:
         unknown = [m for m in methods if m not in SOLVERS]

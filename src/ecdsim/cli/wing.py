@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from ecdsim.cli.common import fail, parse_temperature
+from ecdsim.cli.common import fail, temperature_options
 from ecdsim.wing.result import WingCase, WingResult
 
 if TYPE_CHECKING:
@@ -68,7 +68,6 @@ def load_wing_run(
     file's, a bad ``-T``, a ``--method``, which a wing does not take) exits with code 2,
     one line each."""
     from ecdsim.config import ConfigError
-    from ecdsim.config.units import QuantityError
     from ecdsim.config.wing_schema import load_wing_config
     from ecdsim.sizing.catalogue import load_catalogue
     from ecdsim.units_display import UnitSystemError, check_system
@@ -82,14 +81,9 @@ def load_wing_run(
         problems.append(
             "--method: not taken with a wing file (one solver: the wing's dynamics; docs/wing.md)"
         )
-    temps = list(config.temperatures)
+    temps = tuple(config.temperatures)
     if temperatures:
-        temps = []
-        for text in temperatures:
-            try:
-                temps.append(parse_temperature(text))
-            except QuantityError as exc:
-                problems.append(f"--temperature: {exc}")
+        temps = temperature_options(temperatures, problems)
     system: UnitSystem = "si"
     try:
         system = check_system(
@@ -99,7 +93,7 @@ def load_wing_run(
         problems.append(str(exc))
     if problems:
         fail(problems)
-    return WingRun(config, tuple(temps), system)
+    return WingRun(config, temps, system)
 
 
 def run_wing(path: Path, as_json: bool, plot: Path | None, temperatures: list[str] | None) -> None:
