@@ -27,6 +27,7 @@ sys.path.insert(0, str(ROOT))
 from ecdsim.dynamics.result import STATUSES  # noqa: E402
 from ecdsim.jsonrows import SCHEMA_DIR, SCHEMAS  # noqa: E402
 from ecdsim.tidy import unit_of  # noqa: E402
+from ecdsim.wing.result import EVENT_KINDS  # noqa: E402
 from tests.json_documents import CASES, document  # noqa: E402
 
 # Keys whose values are a closed vocabulary, by key name.
@@ -35,7 +36,30 @@ ENUMS: dict[str, list[str]] = {
     "method": ["paper", "exact", "dynamic"],
     "noise_model": ["torque", "timing"],
     "sampling": ["random", "lhs", "sobol"],
-    "status": list(STATUSES),
+    "status": list(STATUSES),  # a wing's statuses are a subset (ecdsim.wing.result)
+    "event": list(EVENT_KINDS),  # a wing's events; the single hinge's are under "kind"
+}
+# A kind's vocabularies where they differ from ENUMS: a wing file's documents name the
+# wing's solver as their method ("wing"), and a sweep may be a wing's.
+KIND_ENUMS: dict[str, dict[str, list[str]]] = {
+    "sweep": {"method": [*ENUMS["method"], "wing"]},
+    "wing_montecarlo": {"method": ["wing"]},
+}
+# Objects keyed by the user's hinge names, by document kind: each is a map (any name, every
+# value of one schema), not an object with fixed properties.
+MAPS: dict[str, frozenset[str]] = {
+    "wing_deploy": frozenset(
+        {
+            "final_angle_rad",
+            "max_speed_rad_s",
+            "peak_damper_temperature_C",
+            "spring_work",
+            "damper_dissipation",
+            "friction_dissipation",
+            "latch_dissipation",
+            "impact_loss",
+        }
+    ),
 }
 # Top-level keys a document of the kind may lack: summary.json is montecarlo --json without
 # display_units.
@@ -55,6 +79,8 @@ TITLES = {
     "reliability_weibull": "ecdsim reliability weibull --json",
     "fit_drive_test": "ecdsim fit drive-test --json",
     "fit_fluid_damper": "ecdsim fit fluid-damper --json",
+    "wing_deploy": "ecdsim deploy WING.toml --json",
+    "wing_montecarlo": "ecdsim montecarlo WING.toml --json (and OUT/summary.json)",
 }
 
 
@@ -74,8 +100,15 @@ def _type(value: Any) -> str:
     return "object"
 
 
-def infer(values: list[Any], key: str = "") -> dict[str, Any]:
-    """The schema of every value seen at one place of the documents."""
+def infer(
+    values: list[Any],
+    key: str = "",
+    maps: frozenset[str] = frozenset(),
+    enums: dict[str, list[str]] = ENUMS,
+) -> dict[str, Any]:
+    """The schema of every value seen at one place of the documents; ``maps`` names the
+    keys whose objects are keyed by hinge name (:data:`MAPS`), ``enums`` the vocabularies
+    (:data:`ENUMS` with the kind's :data:`KIND_ENUMS`)."""
     types = {_type(v) for v in values}
     if {"integer", "number"} <= types:
         types.discard("integer")
@@ -89,19 +122,28 @@ def infer(values: list[Any], key: str = "") -> dict[str, Any]:
         schema["description"] = f"unit: {unit}"
     objects = [v for v in values if isinstance(v, dict)]
     arrays = [v for v in values if isinstance(v, list)]
-    if objects:
+    if objects and key in maps:
+        entries = [v for o in objects for v in o.values()]
+        schema["description"] = "; ".join(
+            [*filter(None, [schema.get("description")]), "keyed by hinge name"]
+        )
+        schema["additionalProperties"] = infer(entries, key) if entries else {"type": "number"}
+        schema["additionalProperties"].pop("description", None)
+    elif objects:
         keys = sorted({k for o in objects for k in o})
-        schema["properties"] = {k: infer([o[k] for o in objects if k in o], k) for k in keys}
+        schema["properties"] = {
+            k: infer([o[k] for o in objects if k in o], k, maps, enums) for k in keys
+        }
         required = [k for k in keys if all(k in o for o in objects)]
         if required:
             schema["required"] = required
     if arrays:
         items = [item for a in arrays for item in a]
         if items:
-            schema["items"] = infer(items, key)
+            schema["items"] = infer(items, key, maps, enums)
             schema["items"].pop("description", None)
-    if key in ENUMS and types <= {"string", "null"}:
-        schema["enum"] = [*ENUMS[key], *([None] if "null" in types else [])]
+    if key in enums and types <= {"string", "null"}:
+        schema["enum"] = [*enums[key], *([None] if "null" in types else [])]
     ordered = sorted(types)
     schema["type"] = ordered[0] if len(ordered) == 1 else ordered
     return schema
@@ -125,7 +167,11 @@ def main() -> None:
                 "(temperatures degC), the unit in the key's suffix; consumers ignore keys "
                 "they do not know."
             ),
-            **infer(documents[name]),
+            **infer(
+                documents[name],
+                maps=MAPS.get(name, frozenset()),
+                enums={**ENUMS, **KIND_ENUMS.get(name, {})},
+            ),
         }
         schema["required"] = [k for k in schema["required"] if k not in OPTIONAL.get(name, [])]
         path = SCHEMA_DIR / f"{name}.schema.json"

@@ -133,6 +133,41 @@ def _placeholder(folder: Path) -> list[str]:
     return ["deploy", str(fitted), "--json"]
 
 
+WING = str(EXAMPLES / "wing_cc16_three_panel.toml")
+
+
+# The outer hinge's spring in the example wing, to the end of its end torque.
+OUTER_END = (
+    'name = "outer"\nstowed_angle = "180 deg"\ndeployed_angle = "0 deg"\n'
+    'start_torque = "3.73 N*m"                          # ILLUSTRATIVE, over 180 deg\n'
+    'end_torque = "1.58 N*m"'
+)
+
+
+def _wing_variant(folder: Path) -> list[str]:
+    """The example wing with a heated damper at every hinge, a compliant root latch and an
+    outer spring too weak to latch: the optional parts (peak temperatures, a latch's peak
+    torque, a stuck hinge)."""
+    path = _variant(
+        folder,
+        "wing_cc16_three_panel.toml",
+        "wing_variant.toml",
+        [
+            (
+                "[wing.ecds.cc16.gearbox]",
+                '[wing.ecds.cc16.damper.thermal]\nheat_capacity = "0.002 J/K"\n'
+                'thermal_resistance = "40 K/W"\n\n[wing.ecds.cc16.gearbox]',
+            ),
+            (
+                "latch = { restitution = 0.0 }                      # ILLUSTRATIVE: a rigid latch",
+                'latch = { stiffness = "200 N*m/rad", damping = "0.5 N*m*s/rad" }',
+            ),
+            (OUTER_END, OUTER_END.replace('"1.58 N*m"', '"0.2 N*m"')),
+        ],
+    )
+    return ["deploy", path, "-T", "25", "--json"]
+
+
 PAPER = str(EXAMPLES / "paper_cc16.toml")
 DYNAMIC = str(EXAMPLES / "paper_cc16_dynamic.toml")
 DROP = str(EXAMPLES / "drop_test.csv")
@@ -295,6 +330,31 @@ CASES: tuple[Case, ...] = (
         "sweep",
         lambda _: ["sweep", DYNAMIC, "--vary", "load.inertia=1,5", "-T", "25", "--json"],
     ),  # noqa: E501
+    # A wing file's documents (docs/wing.md): its deploy and Monte Carlo have their own
+    # schemas, its sweep is a sweep document (per-hinge columns hinge_J_...).
+    Case("wing deploy", "wing_deploy", lambda _: ["deploy", WING, "--json"]),
+    Case("wing deploy heated, compliant latch, stuck", "wing_deploy", _wing_variant),
+    Case(
+        "wing montecarlo",
+        "wing_montecarlo",
+        lambda f: [
+            "montecarlo",
+            WING,
+            "--samples",
+            "40",
+            "-T",
+            "25",
+            "--out",
+            str(f / "wing-mc"),
+            "--no-plot",
+            "--json",
+        ],
+    ),
+    Case(
+        "wing sweep",
+        "sweep",
+        lambda _: ["sweep", WING, "--vary", "wing.panels[2].mass=0.9,1.1 kg", "-T", "25", "--json"],
+    ),
 )
 
 

@@ -41,6 +41,9 @@ SCHEMAS = (
     "reliability_weibull",
     "fit_drive_test",
     "fit_fluid_damper",
+    # A wing file's documents (docs/wing.md); its sweep is a "sweep" document.
+    "wing_deploy",
+    "wing_montecarlo",
 )
 
 
@@ -49,7 +52,8 @@ def schema(name: str) -> dict[str, Any]:
     ``"fit_drop_test"``, ``"fit_trace"``, ``"size"``, ``"compare_fluid"``,
     ``"montecarlo"``, ``"repeat"``, ``"sweep"``, ``"margin"``,
     ``"reliability_demonstrated"``, ``"reliability_runs_needed"``, ``"reliability_weibull"``,
-    ``"fit_drive_test"`` or ``"fit_fluid_damper"``.
+    ``"fit_drive_test"``, ``"fit_fluid_damper"``, or a wing file's ``"wing_deploy"`` or
+    ``"wing_montecarlo"``.
 
     >>> schema("deploy")["title"]
     'ecdsim deploy --json'
