@@ -108,11 +108,7 @@ def run_wing(path: Path, as_json: bool, plot: Path | None, temperatures: list[st
     except WingUnsupported as exc:
         fail([f"{path}: {exc}"])
     if as_json:
-        from ecdsim._version import __version__
-
-        # The document names its kind and release (its schema: wing_deploy, docs/json.md).
-        document = {"ecdsim_version": __version__, "kind": "wing_deploy", **result.to_dict()}
-        typer.echo(json.dumps(document, indent=2, allow_nan=False))
+        typer.echo(json.dumps(result.to_dict(), indent=2, allow_nan=False))
     else:
         typer.echo(format_wing(result))
     if plot is not None:

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ecdsim._types import FloatArray
+from ecdsim._version import __version__
 
 # Every event a wing's run may record, with its meaning (docs/wing.md, results).
 EVENT_KINDS: dict[str, str] = {
@@ -353,6 +354,9 @@ class WingResult:
         ``series=True`` adds each case's sampled time series.
         """
         return {
+            # The document's release and kind (its JSON Schema: wing_deploy, docs/json.md).
+            "ecdsim_version": __version__,
+            "kind": "wing_deploy",
             "wing": self.wing,
             "source": self.source,
             "hinges": list(self.hinges),
