@@ -20,7 +20,7 @@ from ecdsim.config.wing_schema import load_wing_config
 from ecdsim.deployment import predict
 from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.dynamics.params import Rolloff, Thermal
-from ecdsim.model import LinearSpring, Load
+from ecdsim.model import ZERO_LAW, GearEfficiency, LinearSpring, Load
 from ecdsim.wing import Hinge, Panel, Wing
 from ecdsim.wing.model import HingeEcd
 from ecdsim.wing.solver import WingUnsupported, deploy_wing
@@ -301,3 +301,83 @@ def test_stop_time_ends_the_run_where_the_reference_does() -> None:
     assert mine.time[-1] == pytest.approx(10.0, rel=1e-12)
     np.testing.assert_allclose(mine.angle[-1], ref.final_angle, rtol=1e-7)
     assert mine.latches == ()
+
+
+def _lossy(wing: Wing, back_driven: bool) -> Wing:
+    """The one-panel wing with a lossy gear (eta_f 0.7, eta_b 0.6; FG 0, as the file's
+    rule wants). ``back_driven``: a weak damper (BD 1e-7), a heavy rotor (2e-6 kg*m^2:
+    0.29 kg*m^2 at the hinge, as much as the panel) and a spring falling from +3 to -3
+    N*m with no hinge friction, so that the panel decelerates hard, the rotor drives it
+    through the gear (back-driven), it swings back and sticks."""
+    hinge = wing.hinges[0]
+    ecd = hinge.ecd
+    assert ecd is not None
+    efficiency = GearEfficiency(forward=0.7, backward=0.6)
+    gearbox = replace(ecd.ecd.gearbox, efficiency=efficiency, coulomb_friction=0.0)
+    lossy = replace(ecd, ecd=replace(ecd.ecd, gearbox=gearbox))
+    if back_driven:
+        damper = replace(lossy.ecd.damper, damping_rate=1e-7)
+        lossy = replace(lossy, rotor_inertia=2e-6, ecd=replace(lossy.ecd, damper=damper))
+        load = replace(hinge.load, spring=LinearSpring(3.0, -3.0), system_friction=ZERO_LAW)
+        hinge = replace(hinge, load=load)
+    return replace(wing, hinges=(replace(hinge, ecd=lossy),))
+
+
+@pytest.mark.parametrize("back_driven", [False, True], ids=["forward", "back_driven"])
+def test_one_panel_with_a_lossy_gear_is_todays_hinge(back_driven: bool) -> None:
+    # A lossy gear (issue 25 item 1) on the one-panel wing against the single hinge's
+    # dynamic method (held to Modelica's LossyGear in validation/cases.py): the same
+    # power flows (the switches' times too), latch or stuck angle, and gear loss. Both
+    # integrate at rtol 1e-8 on different steppers' paths, so 1e-6 relative (seen: 1e-10
+    # on the latch times, 2e-10 on the stuck angles and the gear losses).
+    plain = load_wing_config(case("wing_one_panel").config).wing
+    wing = _lossy(plain, back_driven)
+    temperatures = [-40.0, 100.0]
+    mine = deploy_wing(wing, temperatures, backend="python")
+    system, dynamics = wing.as_single_hinge()
+    solution = predict(system, temperatures, ["dynamic"], dynamics=dynamics).solutions["dynamic"]
+    assert isinstance(solution, DynamicSolution)
+    single = solution.result
+    names = single.events.names()
+    for i, run in enumerate(mine.cases):
+        flows = [e.time for e in run.events if e.kind == "power_flow"]
+        theirs = [
+            float(t)
+            for t, k, c in zip(single.events.time, names, single.events.case, strict=True)
+            if k == "power_flow" and c == i
+        ]
+        assert flows == pytest.approx(theirs, rel=1e-6)
+        assert float(run.energy.mesh_loss[0]) == pytest.approx(
+            float(single.energy.gear_loss[i]), rel=1e-6
+        )
+        assert run.energy.error < 1e-6
+        if back_driven:
+            # It swings forward, is back-driven while it decelerates, swings back, and
+            # sticks short of its latch (one switch at -40 degC, two at 100 degC).
+            assert run.status == "stuck"
+            assert len(flows) == i + 1
+            assert run.angle[-1][0] == pytest.approx(float(single.final_angle[i]), rel=1e-6)
+        else:
+            # Driven forward all the way: the efficiency slows it (69.6 s against 48.1 s
+            # through an ideal gear at -40 degC), the loss is (1/eta_f - 1) of the power.
+            latch = run.latches[0]
+            assert flows == []
+            assert latch.time == pytest.approx(float(single.deployment_time[i]), rel=1e-6)
+            assert latch.speed == pytest.approx(float(single.arrival_speed[i]), rel=1e-6)
+            ideal = deploy_wing(plain, [temperatures[i]], backend="python").cases[0]
+            assert latch.time > ideal.latches[0].time * 1.1
+
+
+def test_a_lossy_gear_with_stribeck_friction_is_refused_in_one_line() -> None:
+    # The single hinge refuses the pair (docs/dynamics.md); so does the wing, naming the
+    # hinge and the key.
+    wing = _lossy(load_wing_config(case("wing_one_panel").config).wing, back_driven=False)
+    ecd = wing.hinges[0].ecd
+    assert ecd is not None
+    hinge = replace(wing.hinges[0], ecd=replace(ecd, stribeck_speed=0.03))
+    with pytest.raises(WingUnsupported) as info:
+        deploy_wing(replace(wing, hinges=(hinge,)), [25.0], backend="python")
+    message = str(info.value)
+    assert "\n" not in message
+    assert "wing.hinges[0]" in message
+    assert "gearbox.efficiency" in message

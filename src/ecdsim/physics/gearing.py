@@ -147,3 +147,37 @@ def power_flow_indicator(
     load_torque : A, the torque on the load other than the gear's [N*m]
     """
     return load_inertia * damper_torque + damper_inertia * load_torque
+
+
+def power_flow_mode(indicator: Real, hint: int) -> int:
+    """The power flow a lossy gear takes for a segment: +1 forward (the load drives the
+    damper), -1 back-driven.
+
+    ``indicator`` has the sign of the mesh torque along the motion
+    (:func:`power_flow_indicator`); at its zero, where a power_flow event has just
+    switched the flow, both flows are consistent and ``hint`` (the flow switched to; 0
+    none) decides. At rest or at an exact zero without a hint the load drives the damper
+    (breakaway always does: :func:`input_torque`). Source: the MSL LossyGear's mode
+    logic (module notes; Pelchen et al. 2002, section 3).
+
+    Parameters
+    ----------
+    indicator : a quantity with the sign of the mesh torque along the motion
+    hint : the flow a power_flow event has just switched to, or 0
+    """
+    if hint != 0:
+        return hint
+    return 1 if indicator >= 0.0 else -1
+
+
+def mesh_factor(flow: int, forward_efficiency: Real, backward_efficiency: Real) -> Real:
+    """The factor m on the damper side's torque and inertia seen at the input for a
+    power flow (:func:`input_torque`): ``1 / eta_f`` forward, ``eta_b`` back-driven.
+
+    Parameters
+    ----------
+    flow : +1 forward, -1 back-driven
+    forward_efficiency : eta_f in (0, 1] [-]
+    backward_efficiency : eta_b in (0, 1] [-]
+    """
+    return 1.0 / forward_efficiency if flow > 0 else backward_efficiency

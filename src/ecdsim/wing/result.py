@@ -39,6 +39,7 @@ EVENT_KINDS: dict[str, str] = {
     "creep": "the wing approaches rest asymptotically (time infinity)",
     "stop_time": "the run reached its stop time",
     "event_limit": "the run was cut short by its event limit",
+    "power_flow": "a hinge's lossy gear switched its power flow (forward or back-driven)",
 }
 
 # How a case ends.
@@ -106,7 +107,7 @@ class WingEnergy:
     """The energy account of one case [J]; per-hinge terms are arrays root first.
 
     Balance: ``spring_work + gravity_work + initial_kinetic = damper_dissipation +
-    friction_dissipation + latch_dissipation + impact_loss + final_kinetic +
+    friction_dissipation + latch_dissipation + impact_loss + gear_loss + final_kinetic +
     cable_elastic + latch_elastic`` (sums over the hinges), closing to the solver's
     accuracy (:attr:`error`).
 
@@ -123,6 +124,9 @@ class WingEnergy:
     final_kinetic : its kinetic energy at the end
     cable_elastic : the cables' elastic energy at the end less at release
     latch_elastic : the compliant latches' elastic energy at the end
+    gear_loss : energy each hinge's lossy gear lost in its mesh (``gearbox.efficiency``:
+        the power through the mesh times ``1/eta_f - 1`` forward, ``1 - eta_b``
+        back-driven); None: no lossy gear (zeros)
     """
 
     spring_work: FloatArray
@@ -135,6 +139,14 @@ class WingEnergy:
     final_kinetic: float = 0.0
     cable_elastic: float = 0.0
     latch_elastic: float = 0.0
+    gear_loss: FloatArray | None = None
+
+    @property
+    def mesh_loss(self) -> FloatArray:
+        """Each hinge's gear loss [J] (zeros without a lossy gear)."""
+        if self.gear_loss is None:
+            return np.zeros(np.shape(self.spring_work))
+        return self.gear_loss
 
     @property
     def supplied(self) -> float:
@@ -150,6 +162,7 @@ class WingEnergy:
                 + np.sum(self.friction_dissipation)
                 + np.sum(self.latch_dissipation)
                 + np.sum(self.impact_loss)
+                + np.sum(self.mesh_loss)
             )
             + self.final_kinetic
             + self.cable_elastic
@@ -165,6 +178,7 @@ class WingEnergy:
             *self.friction_dissipation,
             *self.latch_dissipation,
             *self.impact_loss,
+            *self.mesh_loss,
             abs(self.gravity_work),
             self.initial_kinetic,
             self.final_kinetic,
@@ -188,6 +202,7 @@ class WingEnergy:
             "friction_dissipation": per_hinge(self.friction_dissipation),
             "latch_dissipation": per_hinge(self.latch_dissipation),
             "impact_loss": per_hinge(self.impact_loss),
+            "gear_loss": per_hinge(self.mesh_loss),
             "gravity_work": self.gravity_work,
             "initial_kinetic": self.initial_kinetic,
             "final_kinetic": self.final_kinetic,

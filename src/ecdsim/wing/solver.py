@@ -11,10 +11,11 @@ hinge a spring (linear or table, less a resistive table), the ECD's damping thro
 gear ratio (Eq. 3 with the linear law or the Kloss roll-off, BG), its self-heating (one
 node, or rotor and housing; from a warm start or not), its Coulomb friction ``FECD_T``
 with the hinge friction ``FS_T`` and their breakaway (stick-slip; with the ECD's
-Stribeck speed, falling from the breakaway to the kinetic value with speed), the rotor and gear
+Stribeck speed, falling from the breakaway to the kinetic value with speed), a lossy gear
+(its efficiency forward or back-driven by the power flow at its hinge), the rotor and gear
 train reflected to the hinge, a rigid or compliant latch, the stowed stop; cables rigid
 or elastic; a ground test's gravity and offload. An ECD with an effect the wing's path
-does not model yet (lost motion, a lossy or compliant gear) is refused in one
+does not model yet (lost motion, a compliant gear) is refused in one
 line naming the hinge and the key (:class:`WingUnsupported`).
 """
 
@@ -94,7 +95,6 @@ def check_supported(wing: Wing) -> None:
         found = (
             ("gearbox.stiffness", ecd.gear_stiffness is not None),
             ("gearbox.lost_motion", ecd.lost_motion > 0.0),
-            ("gearbox.efficiency", ecd.ecd.gearbox.efficiency is not None),
         )
         for key, present in found:
             if present:
@@ -102,6 +102,13 @@ def check_supported(wing: Wing) -> None:
                     f"{at} {key} is not modelled by the wing's solver yet (docs/wing.md); "
                     "remove it to solve the wing without it"
                 )
+        if ecd.ecd.gearbox.efficiency is not None and ecd.stribeck_speed is not None:
+            # The single hinge refuses the pair too (its Stribeck excess mixes the ECD's
+            # friction, through the mesh, with the hinge's, not).
+            raise WingUnsupported(
+                f"{at} gearbox.efficiency with damper.stribeck_speed is not modelled (a "
+                "lossy gear takes Coulomb friction only, as on a single hinge); remove one"
+            )
 
 
 def _law(hinge: Hinge, temperature: float) -> dict[int, float]:
@@ -150,6 +157,21 @@ def _law(hinge: Hinge, temperature: float) -> dict[int, float]:
             values[W.H_HRHE] = float(np.asarray(thermal.housing_thermal_resistance))
             values[W.H_H0] = float(np.asarray(thermal.initial_housing_rise))
     return values
+
+
+def _gear(hinge: Hinge, temperature: float) -> dict[int, float]:
+    """Hinge j's lossy gear: eta_f, eta_b and FECD_T through an ideal gear (FT N); an
+    ideal gear's are 1, 1 and FECD_T."""
+    ecd = hinge.ecd
+    if ecd is None:
+        return {W.H_ETAF: 1.0, W.H_ETAB: 1.0, W.H_FQ: 0.0}
+    state = ecd.ecd.at(temperature)
+    forward = float(np.asarray(state.forward_efficiency))
+    return {
+        W.H_ETAF: forward,
+        W.H_ETAB: float(np.asarray(state.backward_efficiency)),
+        W.H_FQ: float(np.asarray(state.ecd_friction)) * forward,
+    }
 
 
 def _stribeck(hinge: Hinge, kinetic: float, breakaway: float) -> dict[int, float]:
@@ -219,6 +241,7 @@ def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) ->
             W.H_FACTOR: groups.factor[j],
             W.H_POINTS: np.asarray(tables[j][0]).shape[0],
             **_stribeck(hinge, float(state.kinetic_friction), float(state.breakaway_friction)),
+            **_gear(hinge, temperature),
         }
         for field, value in values.items():
             cw[W.hinge(field, j)] = value
@@ -253,8 +276,8 @@ def _run(
     run = substituted_run(backend)
     dm = (0,) * m
     da = (0,) * na
-    dq = (0,) * (3 * n)
-    atol = np.full(2 * m + na + 3 * n, rtol * ATOL_ANGLE)
+    dq = (0,) * (4 * n)
+    atol = np.full(2 * m + na + 4 * n, rtol * ATOL_ANGLE)
     atol[2 * m : 2 * m + na] = rtol * ATOL_LOG
     atol[2 * m + na :] = rtol * ATOL_ENERGY
     settings = np.array([rtol, 0.0 if backend != "scipy" else 1.0])
@@ -413,6 +436,7 @@ def _energy(
         damper_dissipation=y[e : e + n].copy(),
         friction_dissipation=y[e + n : e + 2 * n].copy(),
         latch_dissipation=y[e + 2 * n : e + 3 * n].copy(),
+        gear_loss=y[e + 3 * n : e + 4 * n].copy(),
         impact_loss=losses.copy(),
         gravity_work=float(gravity_work),
         final_kinetic=kinetic(words, y, m),

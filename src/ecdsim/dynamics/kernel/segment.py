@@ -17,7 +17,7 @@ from ecdsim.dynamics.kernel import layout as L
 from ecdsim.dynamics.kernel.effects import registered_torque
 from ecdsim.dynamics.kernel.friction import projected_inverse, stuck_flags
 from ecdsim.physics.eddy import damper_side_torque
-from ecdsim.physics.gearing import power_flow_indicator
+from ecdsim.physics.gearing import mesh_factor, power_flow_indicator, power_flow_mode
 
 Tables = tuple[
     FloatArray, FloatArray, FloatArray
@@ -149,9 +149,9 @@ def _flow(cw: FloatArray, y: FloatArray, factor: float, sigma: int) -> None:
     if md[L.MD_ENGAGED] == 0 or (par[L.ETAF] == 1.0 and par[L.ETAB] == 1.0):
         return
     indicator = flow_indicator(cw, 0.0, y[1], factor, sigma)
-    flow = hint if hint != 0 else (1 if indicator >= 0.0 else -1)
+    flow = power_flow_mode(indicator, hint)
     md[L.MD_FLOW] = flow
-    sg[L.SG_MESH] = 1.0 / par[L.ETAF] if flow > 0 else par[L.ETAB]
+    sg[L.SG_MESH] = mesh_factor(flow, par[L.ETAF], par[L.ETAB])
 
 
 def start_segment(

@@ -38,6 +38,7 @@ from ecdsim.physics.cable import cable_torque
 from ecdsim.physics.chain import gravity_forces, mass_matrix, velocity_terms
 from ecdsim.physics.eddy import damper_side_torque
 from ecdsim.physics.friction import stribeck_curve
+from ecdsim.physics.gearing import mesh_factor, power_flow_mode
 from ecdsim.physics.thermal import (
     damping_factor_from_log,
     factor_log_cooling,
@@ -157,9 +158,22 @@ def cable_deflection(cw: FloatArray, c: int, phi: FloatArray) -> float:
     return value
 
 
-def hinge_forces(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, FloatArray]:
+def mesh_of(cw: FloatArray, j: int) -> float:
+    """Hinge j's lossy gear's factor m on its damper side in its power flow
+    (:func:`ecdsim.physics.gearing.mesh_factor`; 1 for an ideal gear or at rest)."""
+    flow = int(cw[hinge_at(W.H_FLOW, j)])
+    if flow == 0:
+        return 1.0
+    return float(mesh_factor(flow, cw[hinge_at(W.H_ETAF, j)], cw[hinge_at(W.H_ETAB, j)]))
+
+
+def hinge_forces(
+    cw: FloatArray, y: FloatArray, m: int, lossy: bool
+) -> tuple[FloatArray, FloatArray]:
     """The mass matrix in deployed angles and the forces on them at state y, without
-    friction: ``(M_phi, F)`` (module notes)."""
+    friction: ``(M_phi, F)`` (module notes); with ``lossy`` each lossy gear's factor m
+    on its damper side's torque and inertia (else the ideal gears: the kinetic energy,
+    the latches' impulses)."""
     n = int(cw[W.W_N])
     phi, rate = hinge_angles(cw, y, m)
     q, dq = relative(cw, phi, rate)
@@ -172,15 +186,16 @@ def hinge_forces(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, Flo
     forces = np.empty(n)
     for j in range(n):
         s = cw[hinge_at(W.H_SIGN, j)]
+        mesh = mesh_of(cw, j) if lossy else 1.0
         forces[j] = (
             drive_torque(cw, j, phi[j])
-            - damper_torque(cw, j, rate[j], y)[0]
+            - mesh * damper_torque(cw, j, rate[j], y)[0]
             - latch_torque(cw, j, phi[j], rate[j])
             - s * velocity[j]
         )
         for k in range(n):
             matrix[j, k] *= s * cw[hinge_at(W.H_SIGN, k)]
-        matrix[j, j] += cw[hinge_at(W.H_JD, j)]
+        matrix[j, j] += mesh * cw[hinge_at(W.H_JD, j)]
     if cw[W.W_GX] != 0.0 or cw[W.W_GY] != 0.0:
         weight = gravity_forces(
             q, mass, cga, cgb, length, _panels(cw, W.H_OFFLOAD, n), cw[W.W_GX], cw[W.W_GY]
@@ -197,10 +212,13 @@ def hinge_forces(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, Flo
     return matrix, forces
 
 
-def group_system(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, FloatArray]:
-    """``M_psi`` and ``Q_psi`` (with the sliding groups' kinetic friction) at state y."""
+def group_system(
+    cw: FloatArray, y: FloatArray, m: int, lossy: bool
+) -> tuple[FloatArray, FloatArray]:
+    """``M_psi`` and ``Q_psi`` (with the sliding groups' kinetic friction) at state y;
+    ``lossy`` as :func:`hinge_forces`."""
     n = int(cw[W.W_N])
-    matrix, forces = hinge_forces(cw, y, m)
+    matrix, forces = hinge_forces(cw, y, m, lossy)
     mass = np.zeros((m, m))
     rhs = np.zeros(m)
     for j in range(n):
@@ -212,13 +230,88 @@ def group_system(cw: FloatArray, y: FloatArray, m: int) -> tuple[FloatArray, Flo
             mass[gj, gk] += fj * cw[hinge_at(W.H_FACTOR, k)] * matrix[j, k]
     for g in range(m):
         rhs[g] -= cw[group_at(W.G_DIR, g)] * cw[group_at(W.G_FRICTION, g)]
-    for j in range(n):  # the Stribeck excesses of the sliding groups' hinges
+    for j in range(n):  # the Stribeck excesses and the mesh factors of sliding hinges
         g = int(cw[hinge_at(W.H_GROUP, j)])
         direction = cw[group_at(W.G_DIR, g)]
+        factor = cw[hinge_at(W.H_FACTOR, j)]
         if direction != 0.0 and cw[hinge_at(W.H_EXCESS, j)] > 0.0:
-            factor = cw[hinge_at(W.H_FACTOR, j)]
             rhs[g] -= direction * factor * stribeck_part(cw, j, factor * y[m + g])
+        if lossy and direction != 0.0 and cw[hinge_at(W.H_FLOW, j)] != 0.0:
+            rhs[g] -= direction * factor * mesh_friction(cw, j)
     return mass, rhs
+
+
+def mesh_friction(cw: FloatArray, j: int) -> float:
+    """Hinge j's friction in its lossy gear's power flow less its kinetic friction
+    ``FECD_T + FS_T`` (which holds FT N / eta_f): ``(m - 1 / eta_f) FT N`` [N*m]."""
+    value: float = (mesh_of(cw, j) - 1.0 / cw[hinge_at(W.H_ETAF, j)]) * cw[hinge_at(W.H_FQ, j)]
+    return value
+
+
+def ideal_friction(cw: FloatArray, j: int) -> float:
+    """Hinge j's kinetic friction through an ideal gear, ``FS_T + FT N`` [N*m] (the
+    mesh's share, ``(m - 1) FT N``, is its gear loss)."""
+    value: float = cw[hinge_at(W.H_FRICTION, j)] - cw[hinge_at(W.H_FQ, j)] * (
+        1.0 / cw[hinge_at(W.H_ETAF, j)] - 1.0
+    )
+    return value
+
+
+def mesh_torque(cw: FloatArray, j: int, y: FloatArray, acc: FloatArray, m: int) -> float:
+    """The torque hinge j's damper side takes through its gear along the motion, as an
+    ideal gear passes it: ``d (D + J_D phi'') + FT N`` [N*m] (its damping, its rotor's
+    inertia at the accelerations ``acc``, its friction; d the direction of motion). Its
+    sign is the power flow's (> 0: the load drives the damper); it is continuous in the
+    state, and at its zero the flow does not change the motion (the mesh factor m
+    multiplies it): the wing's form of
+    :func:`ecdsim.physics.gearing.power_flow_indicator`, whose ``J_L D + J_D A`` is it
+    times ``J_L + m J_D`` on a single hinge."""
+    g = int(cw[hinge_at(W.H_GROUP, j)])
+    direction = cw[group_at(W.G_DIR, g)]
+    factor = cw[hinge_at(W.H_FACTOR, j)]
+    rate = factor * y[m + g]
+    torque = damper_torque(cw, j, rate, y)[0] + cw[hinge_at(W.H_JD, j)] * factor * acc[g]
+    value: float = direction * torque + cw[hinge_at(W.H_FQ, j)]
+    return value
+
+
+def lossy_gear(cw: FloatArray, j: int) -> bool:
+    """Hinge j has a lossy gear (an efficiency below 1 either way)."""
+    return bool(cw[hinge_at(W.H_ETAF, j)] != 1.0 or cw[hinge_at(W.H_ETAB, j)] != 1.0)
+
+
+def decide_flows(cw: FloatArray, y: FloatArray, m: int) -> None:
+    """Each lossy gear's power flow for the segment about to start: 0 at rest; else
+    :func:`ecdsim.physics.gearing.power_flow_mode` of its mesh torque under the flows
+    so far (or the flow a power_flow event switched it to), repeated until no flow
+    changes (one pass with one lossy hinge: its torque's sign does not depend on its
+    own flow), at most once per hinge and once more."""
+    n = int(cw[W.W_N])
+    acc = np.empty(m)
+    holding = np.empty(m)
+    for j in range(n):
+        g = int(cw[hinge_at(W.H_GROUP, j)])
+        if not lossy_gear(cw, j) or cw[group_at(W.G_DIR, g)] == 0.0:
+            cw[hinge_at(W.H_FLOW, j)] = 0.0
+            cw[hinge_at(W.H_HINT, j)] = 0.0
+        elif cw[hinge_at(W.H_FLOW, j)] == 0.0:
+            cw[hinge_at(W.H_FLOW, j)] = 1.0  # from rest the load drives the damper
+    for _ in range(n + 1):
+        accelerations(cw, y, acc, holding, m)
+        changed = False
+        for j in range(n):
+            flow = int(cw[hinge_at(W.H_FLOW, j)])
+            if flow == 0:
+                continue
+            hint = int(cw[hinge_at(W.H_HINT, j)])
+            wanted = power_flow_mode(mesh_torque(cw, j, y, acc, m), hint)
+            if wanted != flow:
+                cw[hinge_at(W.H_FLOW, j)] = wanted
+                changed = True
+        if not changed:
+            break
+    for j in range(n):
+        cw[hinge_at(W.H_HINT, j)] = 0.0
 
 
 def stribeck_part(cw: FloatArray, j: int, rate: float) -> float:
@@ -237,7 +330,7 @@ def accelerations(
 ) -> None:
     """The groups' accelerations (held ones 0) and the held groups' holding torques
     (``(M a)_g - Q_g``, what their friction or latch supplies; 0 for sliding ones)."""
-    mass, rhs = group_system(cw, y, m)
+    mass, rhs = group_system(cw, y, m, True)
     free = 0
     for g in range(m):
         if cw[group_at(W.G_DIR, g)] != 0.0:
@@ -302,7 +395,8 @@ def chain_derivatives(
     cw: FloatArray, y: FloatArray, dy: FloatArray, dm: tuple[int, ...], da: tuple[int, ...],
     dq: tuple[int, ...],
 ) -> None:  # fmt: skip
-    """``dy/dt`` of the wing at state y: ``[psi', psi'', dissipated powers]``."""
+    """``dy/dt`` of the wing at state y: ``[psi', psi'', heating, dissipated powers]``
+    (each hinge's damper, friction through an ideal gear, latch damper, gear mesh)."""
     m = len(dm)
     n = int(cw[W.W_N])
     acc = np.empty(m)
@@ -320,10 +414,14 @@ def chain_derivatives(
         dy[e + j] = torque * rate
         if int(cw[hinge_at(W.H_AUX, j)]) >= 0:
             heating_rates(cw, j, y, dy, power)
-        sliding = cw[hinge_at(W.H_FRICTION, j)] + stribeck_part(cw, j, rate)
+        sliding = ideal_friction(cw, j) + stribeck_part(cw, j, rate)
         dy[e + n + j] = cw[group_at(W.G_DIR, g)] * sliding * rate
         latch = cw[hinge_at(W.H_ENGAGED, j)] * cw[hinge_at(W.H_LATCH_C, j)]
         dy[e + 2 * n + j] = latch * rate * rate
+        dy[e + 3 * n + j] = 0.0
+        if cw[hinge_at(W.H_FLOW, j)] != 0.0:  # (m - 1) times the mesh's power, >= 0
+            own = mesh_torque(cw, j, y, acc, m) * abs(rate)
+            dy[e + 3 * n + j] = (mesh_of(cw, j) - 1.0) * own
 
 
 def chain_jacobian(
@@ -352,8 +450,9 @@ def chain_jacobian(
 
 
 def kinetic(cw: FloatArray, y: FloatArray, m: int) -> float:
-    """The wing's kinetic energy ``psi'^T M_psi psi' / 2`` [J] (the rotors' included)."""
-    mass, _ = group_system(cw, y, m)
+    """The wing's kinetic energy ``psi'^T M_psi psi' / 2`` [J] (the rotors' included,
+    through ideal gears: a lossy gear's factor is a loss, not an inertia)."""
+    mass, _ = group_system(cw, y, m, False)
     total = 0.0
     for g in range(m):
         for k in range(m):
@@ -395,6 +494,8 @@ def chain_event_value(
             return ahead
         behind: float = y[g]
         return behind
+    if slot >= W.FLOW_SLOTS:
+        return flow_value(cw, slot - W.FLOW_SLOTS, y, m)
     c = (slot - 2 * W.NMAX) // 2
     phi, _ = hinge_angles(cw, y, m)
     limit = cw[cable_at(W.C_SLACK, c)] / cw[cable_at(W.C_K, c)]
@@ -406,12 +507,26 @@ def chain_event_value(
     return other
 
 
+def flow_value(cw: FloatArray, j: int, y: FloatArray, m: int) -> float:
+    """Hinge j's power_flow event: its mesh torque times its flow (> 0 while the flow is
+    the segment's; :func:`mesh_torque`)."""
+    acc = np.empty(m)
+    holding = np.empty(m)
+    accelerations(cw, y, acc, holding, m)
+    value: float = cw[hinge_at(W.H_FLOW, j)] * mesh_torque(cw, j, y, acc, m)
+    return value
+
+
 def active_slots(cw: FloatArray, y: FloatArray, active: FloatArray, m: int) -> None:
     """The slots a segment arms: each unlocked group's motion; each sliding group's latch
     ahead (a rigid latch, or a compliant one not yet engaged) or stowed stop behind; both
-    slack points of each elastic cable, oriented to the side the cable starts on."""
+    slack points of each elastic cable, oriented to the side the cable starts on; each
+    lossy gear's power flow while its hinge moves."""
     for slot in range(W.SLOTS):
         active[slot] = 0.0
+    for j in range(int(cw[W.W_N])):
+        if cw[hinge_at(W.H_FLOW, j)] != 0.0:
+            active[W.FLOW_SLOTS + j] = 1.0
     for g in range(m):
         direction = cw[group_at(W.G_DIR, g)]
         if cw[group_at(W.G_LOCKED, g)] == 0.0:

@@ -6,10 +6,10 @@ wing's equations read is one float array ``cw``: a header, then per-hinge, per-g
 per-cable fields stored field by field (``cw[base + field * NMAX + j]``), then each
 hinge's drive table. Groups are the hinges joined by rigid cables (one coordinate psi
 each; ``phi_j = factor_j psi_group``); a wing without rigid cables has one group per
-hinge. The state is ``y = [psi (m), psi' (m), z (a), quadratures (3 n)]``: ``z`` the
+hinge. The state is ``y = [psi (m), psi' (m), z (a), quadratures (4 n)]``: ``z`` the
 heated dampers' log temperature states (:mod:`ecdsim.physics.thermal`), each followed by
 its housing's temperature rise where the damper has two nodes, the quadratures
-each hinge's damper, friction and latch-damper dissipation.
+each hinge's damper, friction, latch-damper and gear-mesh dissipation.
 """
 
 from __future__ import annotations
@@ -79,8 +79,13 @@ NMAX = 8  # the most hinges (and groups, and cables) a wing case holds
     H_H0,  # its housing's rise at release [K]
     H_WST,  # its ECD's Stribeck speed at the hinge [rad/s] (inf: none)
     H_EXCESS,  # its Stribeck excess, breakaway less kinetic friction [N*m] (0: none)
+    H_ETAF,  # its lossy gear's forward mesh efficiency [-] (1: ideal)
+    H_ETAB,  # its back-driven mesh efficiency [-] (1: ideal)
+    H_FQ,  # FECD_T through an ideal gear, FT N [N*m] (FECD_T without a lossy gear)
+    H_FLOW,  # its lossy gear's power flow: +1 forward, -1 back-driven, 0 ideal or at rest
+    H_HINT,  # the flow a power_flow event switched it to (0: decide from the state)
     HFIELDS,
-) = range(40)
+) = range(45)
 HINGES = HEADER
 
 # --- per group ------------------------------------------------------------------------------
@@ -146,8 +151,10 @@ def table_torque(cw_points: int, j: int, p: int) -> int:
 # --- events -------------------------------------------------------------------------------------
 # Slots of a segment: per group its motion (a sliding one's speed reaching zero, a stuck
 # one's holding torque reaching its breakaway), per group its geometric event (its latch
-# ahead, or the stowed stop behind), per elastic cable its two slack points.
-SLOTS = 4 * NMAX
+# ahead, or the stowed stop behind), per elastic cable its two slack points, per hinge
+# its lossy gear's power flow switching.
+FLOW_SLOTS = 4 * NMAX
+SLOTS = 5 * NMAX
 (
     EV_RELEASE,
     EV_BREAKAWAY,
@@ -163,7 +170,8 @@ SLOTS = 4 * NMAX
     EV_CREEP,
     EV_STOP_TIME,
     EV_EVENT_LIMIT,
-) = range(14)
+    EV_POWER_FLOW,
+) = range(15)
 # The names of :data:`ecdsim.wing.result.EVENT_KINDS`, in code order.
 EVENT_NAMES = (
     "release",
@@ -180,6 +188,7 @@ EVENT_NAMES = (
     "creep",
     "stop_time",
     "event_limit",
+    "power_flow",
 )
 (ST_RUNNING, ST_LATCHED, ST_STUCK, ST_CREEP, ST_STOP_TIME, ST_EVENT_LIMIT) = range(6)
 STATUS_NAMES = ("running", "latched", "stuck", "creep", "stop_time", "event_limit")

@@ -20,7 +20,11 @@ first event, located on the step's dense output by the kernel's locator
   of the first arrival's kinetic energy (the single hinge's rule, ``impacts.SETTLE_FRACTION``);
 * a compliant latch engages (its spring and damper act from then on, both ways);
 * the stowed stop: the returning group stops (a plastic impact);
-* an elastic cable's strand slackens or tightens again.
+* an elastic cable's strand slackens or tightens again;
+* a lossy gear's mesh torque passes zero (a power_flow event): its flow switches
+  (forward: the load drives the damper, the damper side's torque and inertia seen times
+  1/eta_f; back-driven: times eta_b), each lossy gear's flow decided at every segment's
+  start by :func:`~ecdsim.wing.kernel.equations.decide_flows`.
 
 The run ends when every group is held (latched, or at rest for good), at the stop time
 or at the event limit.
@@ -47,6 +51,7 @@ from ecdsim.wing.kernel.equations import (
     cable_deflection,
     chain_derivatives,
     chain_event_value,
+    decide_flows,
     group_system,
     hinge_angles,
     holding_margin,
@@ -127,7 +132,7 @@ def resolve_rest(cw: FloatArray, y: FloatArray, t: float, events: FloatArray, m:
 
 def inverse_mass(cw: FloatArray, y: FloatArray, m: int) -> FloatArray:
     """``M_psi^-1`` at state y, column by column (the friction machine's solver)."""
-    mass, _ = group_system(cw, y, m)
+    mass, _ = group_system(cw, y, m, False)
     inverse = np.empty((m, m))
     system = np.empty((m, m + 1))
     column = np.empty(m)
@@ -290,7 +295,7 @@ def _with_speed(y: FloatArray, before: FloatArray, m: int) -> FloatArray:
 def _free_inverse(cw: FloatArray, y: FloatArray, g: int, m: int) -> float:
     """Group g's entry of the inverse mass matrix of the unlocked groups (its effective
     inverse inertia with the latched groups held)."""
-    mass, _ = group_system(cw, y, m)
+    mass, _ = group_system(cw, y, m, False)
     count = 0
     for k in range(m):
         count += cw[group_at(W.G_LOCKED, k)] == 0.0 or k == g
@@ -379,6 +384,7 @@ def advance(
     f, f1, g0, g1, active, trial = rows[0], rows[1], rows[2], rows[3], rows[4], rows[5]
     dummy = ws[5]
     rtol = settings[0]
+    decide_flows(cw, y, m)
     chain_derivatives(cw, y, f, dm, da, dq)
     active_slots(cw, y, active, m)
     for slot in range(W.SLOTS):
@@ -492,6 +498,11 @@ def apply_event(
             cw[group_at(W.G_ARRIVED, g)] = 1.0
             _latch_rows(cw, latches, t, y, g, kinetic(cw, y, m), math.nan, m)
             _log_group(cw, events, t, W.EV_ENGAGE, g)
+        return
+    if slot >= W.FLOW_SLOTS:  # a lossy gear's power flow switches (module notes)
+        j = slot - W.FLOW_SLOTS
+        cw[hinge_at(W.H_HINT, j)] = -cw[hinge_at(W.H_FLOW, j)]
+        log_event(cw, events, t, W.EV_POWER_FLOW, j)
         return
     c = (slot - 2 * W.NMAX) // 2
     phi, rate = hinge_angles(cw, y, m)
