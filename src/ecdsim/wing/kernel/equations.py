@@ -62,15 +62,24 @@ ROUNDING = 1e-13
 
 def drive_torque(cw: FloatArray, j: int, phi: float) -> float:
     """Hinge j's net drive at phi: its table (spring less resistive torque), linear
-    between breakpoints and continued with its end slopes beyond them [N*m]."""
+    between breakpoints and continued with its end slopes beyond them [N*m]. Pieces of
+    no width (a breakpoint repeated where the spring's and the resistive table's
+    breakpoints meet, e.g. at 0 and at the travel) are stepped over."""
     k = int(cw[W.W_K])
     last = int(cw[hinge_at(W.H_POINTS, j)]) - 1
     p = 0
-    while p < last - 1 and phi > cw[table_angle(k, j, p + 1)]:
+    while p < last - 1 and (
+        phi > cw[table_angle(k, j, p + 1)]
+        or cw[table_angle(k, j, p + 1)] <= cw[table_angle(k, j, p)]
+    ):
         p += 1
+    while p > 0 and cw[table_angle(k, j, p + 1)] <= cw[table_angle(k, j, p)]:
+        p -= 1  # the end's piece of no width: continue the last real piece
     a0 = cw[table_angle(k, j, p)]
     a1 = cw[table_angle(k, j, p + 1)]
     t0 = cw[table_torque(k, j, p)]
+    if a1 <= a0:
+        return float(t0)
     t1 = cw[table_torque(k, j, p + 1)]
     value: float = t0 + (t1 - t0) * (phi - a0) / (a1 - a0)
     return value
