@@ -20,7 +20,7 @@ from ecdsim.config.wing_schema import load_wing_config
 from ecdsim.deployment import predict
 from ecdsim.dynamics.method import DynamicSolution
 from ecdsim.dynamics.params import Rolloff, Thermal
-from ecdsim.model import ZERO_LAW, GearEfficiency, LinearSpring, Load
+from ecdsim.model import ZERO_LAW, GearEfficiency, LinearSpring, Load, ResistiveTable
 from ecdsim.wing import Hinge, Panel, Wing
 from ecdsim.wing.model import HingeEcd
 from ecdsim.wing.solver import WingUnsupported, deploy_wing
@@ -37,6 +37,8 @@ EXAMPLE = ROOT / "examples" / "wing_cc16_three_panel.toml"
         "wing_two_panel_stick_slip",
         "wing_three_panel_stick_slip_ground_test",
         "wing_two_panel_latches",
+        # A lossy gear at both hinges: each hinge's power flow switches to back-driven.
+        "wing_two_panel_lossy_gear",
     ],
 )
 def test_solver_agrees_with_the_reference(name: str) -> None:
@@ -381,3 +383,27 @@ def test_a_lossy_gear_with_stribeck_friction_is_refused_in_one_line() -> None:
     assert "\n" not in message
     assert "wing.hinges[0]" in message
     assert "gearbox.efficiency" in message
+
+
+def test_one_panel_with_a_resistive_table_is_todays_hinge() -> None:
+    # A harness torque rising from 0 to 1 N*m over the travel: the drive's table then
+    # repeats its breakpoints at 0 and at the travel (the spring's and the table's meet),
+    # pieces of no width the wing's drive steps over (it read them as 0/0 and stuck at
+    # release). Against the single hinge's dynamic method: the same stuck angle (the
+    # harness outgrows the spring less the friction), both at rtol 1e-8, so 1e-6
+    # relative (seen: 1e-10).
+    wing = load_wing_config(case("wing_one_panel").config).wing
+    hinge = wing.hinges[0]
+    load = replace(hinge.load, resistance=ResistiveTable((0.0, hinge.travel), (0.0, 1.0)))
+    wing = replace(wing, hinges=(replace(hinge, load=load),))
+    temperatures = [-40.0, 100.0]
+    mine = deploy_wing(wing, temperatures, backend="python")
+    system, dynamics = wing.as_single_hinge()
+    solution = predict(system, temperatures, ["dynamic"], dynamics=dynamics).solutions["dynamic"]
+    assert isinstance(solution, DynamicSolution)
+    for i, run in enumerate(mine.cases):
+        assert run.status == "stuck"
+        final = float(solution.result.final_angle[i])
+        assert 0.5 < final < hinge.travel
+        assert run.angle[-1][0] == pytest.approx(final, rel=1e-6)
+        assert run.energy.error < 1e-6

@@ -38,6 +38,14 @@ from validation.wing_cases import (
 from validation.wing_reference import Hinge, Panel, Reference, Wing
 
 
+def _efficiencies(hinge: EcdsimHinge, temperature: float) -> tuple[float, float]:
+    """A hinge's gear's (eta_f, eta_b); (1, 1) for an ideal gear or no ECD."""
+    if hinge.ecd is None:
+        return 1.0, 1.0
+    state = hinge.ecd.ecd.at(temperature)
+    return float(state.forward_efficiency), float(state.backward_efficiency)
+
+
 @pytest.mark.parametrize("item", CASES, ids=[c.name for c in CASES])
 def test_the_case_file_is_the_reference_wing(item: WingValidationCase) -> None:
     config = load_wing_config(item.config)
@@ -55,9 +63,19 @@ def test_the_case_file_is_the_reference_wing(item: WingValidationCase) -> None:
             )
         for hinge, typed_hinge in zip(wing.hinges, ref.hinges, strict=True):
             state = hinge.at(temperature)
-            # Eq. 1-4 by ecdsim and by the reference's own arithmetic: rounding apart.
-            assert float(state.damping_rate) == pytest.approx(typed_hinge.damping, rel=1e-13)
-            assert float(state.kinetic_friction) == pytest.approx(typed_hinge.friction, rel=1e-13)
+            # Eq. 1-4 by ecdsim and by the reference's own arithmetic: rounding apart. A
+            # lossy gear: ecdsim's BECD_T and FECD_T are through the mesh driven forward
+            # (/ eta_f, physics.gearing), the reference's through an ideal gear with the
+            # efficiencies on top.
+            forward = typed_hinge.forward_efficiency
+            assert _efficiencies(hinge, temperature) == (forward, typed_hinge.backward_efficiency)
+            assert float(state.damping_rate) == pytest.approx(
+                typed_hinge.damping / forward, rel=1e-13
+            )
+            mesh = typed_hinge.gear_friction * (1.0 / forward - 1.0)
+            assert float(state.kinetic_friction) == pytest.approx(
+                typed_hinge.friction + mesh, rel=1e-13
+            )
             assert float(state.breakaway_friction) == pytest.approx(
                 typed_hinge.breakaway, rel=1e-13
             )

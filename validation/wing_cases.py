@@ -197,6 +197,48 @@ def _two_stribeck(t: float) -> Wing:
     return Wing((SMALL, SMALL_OFFSET), tuple(hinges))
 
 
+# validation/configs/wing_two_panel_lossy_gear.toml typed in SI: a weak damper behind a
+# heavy rotor, a lossy gear (eta_f 0.7, eta_b 0.6, no FG) and a large hinge friction.
+LOSSY = {
+    "bd": 1e-6,
+    "bd_coefficient": -0.004,
+    "bg_fraction": 0.26,
+    "fd": 1e-4,
+    "fl_slope": -2.12e-6,
+    "fl_at_0": 1e-4,
+    "fg": 0.0,
+    "ratio": 380.0,
+}
+LOSSY_ROTOR = 1e-5 * 380.0**2  # [kg*m^2] at the hinge
+LOSSY_EFFICIENCY = (0.7, 0.6)  # forward, back-driven
+LOSSY_HINGE_FRICTION = 2.5  # [N*m]
+
+
+def _two_lossy(t: float) -> Wing:
+    """Each hinge's damping and ECD friction through an ideal gear (Eq. 3-4 as printed,
+    BT N^2 and FT N), the gear's efficiencies on top; the breakaway at eta_f (from rest
+    the hinge drives the damper)."""
+    becd, fecd = ecd_at(t, **LOSSY)
+    forward, backward = LOSSY_EFFICIENCY
+    hinges = tuple(
+        Hinge(
+            stowed * DEG,
+            0.0,
+            3.73,
+            1.58,
+            damping=becd,
+            friction=fecd + LOSSY_HINGE_FRICTION,
+            breakaway=fecd / forward + LOSSY_HINGE_FRICTION,
+            inertia=LOSSY_ROTOR,
+            forward_efficiency=forward,
+            backward_efficiency=backward,
+            gear_friction=fecd,
+        )
+        for stowed in (90.0, -180.0)
+    )
+    return Wing((SMALL, SMALL_OFFSET), hinges)
+
+
 def _warm_start(wing: EcdsimWing) -> EcdsimWing:
     """The heating case's file with its warm start (ecdsim's Thermal initial rises)."""
     hinges = []
@@ -344,6 +386,13 @@ CASES: tuple[WingValidationCase, ...] = (
         (25.0, 100.0),
         _two_stribeck,
     ),
+    WingValidationCase(
+        "wing_two_panel_lossy_gear",
+        "Two panels, a lossy gear at each hinge (eta_f 0.7, eta_b 0.6): power flow switches",
+        CONFIGS / "wing_two_panel_lossy_gear.toml",
+        (-40.0, 100.0),
+        _two_lossy,
+    ),
 )
 
 
@@ -389,6 +438,7 @@ def as_result(item: WingValidationCase, hinges: tuple[str, ...]) -> WingResult:
             final_kinetic=solution.final_kinetic,
             cable_elastic=solution.cable_elastic,
             latch_elastic=solution.latch_elastic,
+            gear_loss=solution.gear_loss,
         )
         cases.append(
             WingCase(
@@ -548,6 +598,7 @@ def compare(item: WingValidationCase, ecdsim: WingResult) -> CaseResult:
                     PEAK_REASON,
                 )
             )
+        checks.extend(_gear_checks(item, ref, got, temperature))
         checks.append(
             Check(
                 f"energy balance of ecdsim {at}",
@@ -705,6 +756,56 @@ def rigid_cable_limit(panels: int = 3) -> CaseResult:
         ),
         checks=tuple(checks),
     )
+
+
+def _gear_checks(
+    item: WingValidationCase, ref: Solution, got: WingCase, temperature: float
+) -> list[Check]:
+    """Where a hinge has a lossy gear: its power flow's switches (their count exactly,
+    each time) and the energy its mesh lost."""
+    checks: list[Check] = []
+    at = f"at {temperature:+g} degC"
+    for j, hinge in enumerate(item.build(temperature).hinges):
+        if not hinge.lossy:
+            continue
+        theirs = [t for t, kind, h in ref.events if kind == "power_flow" and h == j]
+        mine = [e.time for e in got.events if e.kind == "power_flow" and e.hinge == j]
+        checks.append(
+            Check(
+                f"hinge {j + 1} power flow switches {at} (count difference)",
+                "-",
+                0.0,
+                f"reference {len(theirs)}",
+                float(abs(len(theirs) - len(mine))),
+                0.0,
+                "a switch happens or not",
+            )
+        )
+        for k, (time, other) in enumerate(zip(theirs, mine, strict=False)):
+            checks.append(
+                Check(
+                    f"hinge {j + 1} power flow switch {k + 1} time {at}",
+                    "s",
+                    time,
+                    "scipy Radau rtol 1e-11",
+                    other,
+                    INTEGRATED_RTOL * abs(time),
+                    INTEGRATED_REASON,
+                )
+            )
+        loss = float(ref.gear_loss[j])
+        checks.append(
+            Check(
+                f"hinge {j + 1} gear loss {at}",
+                "J",
+                loss,
+                "scipy Radau rtol 1e-11",
+                float(got.energy.mesh_loss[j]),
+                INTEGRATED_RTOL * abs(loss),
+                INTEGRATED_REASON,
+            )
+        )
+    return checks
 
 
 def solve(item: WingValidationCase, backend: str | None = None) -> WingResult:

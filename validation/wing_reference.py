@@ -39,7 +39,16 @@ hinge law is typed from its source:
   slack points; or rigid, the holonomic constraint ``phi_out = r phi_in`` eliminated by
   reduced coordinates (one coordinate per group of rigidly coupled hinges);
 - gravity in a ground test, with the fraction of each panel's weight carried at its
-  centre of gravity by the ground-support equipment.
+  centre of gravity by the ground-support equipment;
+- a lossy gear between a hinge and its damper (Modelica's LossyGear, Pelchen, Schweiger
+  and Otter 2002): Newton's law for the damper side (its reflected inertia, damping and
+  Coulomb friction) gives the torque the mesh passes, ``T = J_D phi'' + B phi' + F_G
+  sign(phi')``; the hinge sees ``T / eta_f`` while T and the motion agree (the hinge
+  drives the damper) and ``eta_b T`` while they oppose (the damper side drives the
+  hinge). Each lossy hinge's flow is decided at every event by enumerating the flows of
+  all of them and keeping the consistent one (T of each hinge's sign agreeing with its
+  flow, under the accelerations of those flows), an event where a T passes zero; the
+  mesh's loss ``(T / eta_f - T) |phi'|`` or ``(T - eta_b T) |phi'|`` is integrated.
 
 Conventions as docs/wing.md: relative hinge angles q (q_1 from the base's x axis),
 deployed angles phi = s (q - q_stowed) from 0 to each hinge's travel. Energy terms are
@@ -112,6 +121,11 @@ class Hinge:
         node) and its resistance to the environment [K/W]
     initial_rotor_rise, initial_housing_rise : the nodes' rises at release [K]
     stribeck_speed : w_St [rad/s] at the hinge; inf: Coulomb friction (no Stribeck curve)
+    forward_efficiency, backward_efficiency : a lossy gear's eta_f and eta_b [-] (1, 1:
+        ideal); ``damping`` and ``friction`` are then through an ideal gear (BT N^2 and
+        FS + FT N) and ``breakaway`` at eta_f (the hinge drives the damper from rest)
+    gear_friction : the ECD's Coulomb friction through an ideal gear, FT N [N*m] (part
+        of ``friction``; the share the mesh factor multiplies)
     """
 
     stowed: float
@@ -134,6 +148,22 @@ class Hinge:
     initial_rotor_rise: float = 0.0
     initial_housing_rise: float = 0.0
     stribeck_speed: float = math.inf
+    forward_efficiency: float = 1.0
+    backward_efficiency: float = 1.0
+    gear_friction: float = 0.0
+
+    @property
+    def lossy(self) -> bool:
+        """A gear with an efficiency below 1 either way."""
+        return self.forward_efficiency != 1.0 or self.backward_efficiency != 1.0
+
+    def factor(self, flow: float) -> float:
+        """What the hinge sees of the mesh's torque: 1/eta_f (flow > 0), eta_b (< 0), 1."""
+        if flow > 0.0:
+            return 1.0 / self.forward_efficiency
+        if flow < 0.0:
+            return self.backward_efficiency
+        return 1.0
 
     def sliding(self, speed: float) -> float:
         """The sliding friction's magnitude at the hinge speed ``speed`` [N*m]:
@@ -343,6 +373,7 @@ class Solution:
     cable_elastic: float = 0.0
     latch_elastic: float = 0.0
     peak_rise: FloatArray = field(default_factory=lambda: np.zeros(0))  # rotors' [K]
+    gear_loss: FloatArray = field(default_factory=lambda: np.zeros(0))  # lossy meshes' [J]
 
     @property
     def deployment_time(self) -> float:
@@ -378,6 +409,7 @@ class Solution:
                 + np.sum(self.friction)
                 + np.sum(self.latch_damping)
                 + np.sum(self.impact_loss)
+                + np.sum(self.gear_loss)
             )
             + self.final_kinetic
             + self.cable_elastic
@@ -443,28 +475,53 @@ class _Model:
         self.rigid_latch = [wing.hinges[g[0]].latch_stiffness is None for g in self.groups]
         # The rotors' rises over the environment [K], set from the state being evaluated.
         self.rise = np.array([h.initial_rotor_rise for h in wing.hinges])
+        # Each hinge's mesh factor in the current flows (1: ideal, or none decided).
+        self.mesh = np.ones(n)
 
     def phi(self, psi: FloatArray) -> FloatArray:
         return np.asarray(self.P @ psi, dtype=float)
 
     def sliding_friction(self, rate: FloatArray) -> FloatArray:
         """Each group's sliding friction limit in psi at the groups' speeds ``rate``:
-        ``P^T`` of each hinge's (its Stribeck curve at its speed; the breakaway at rest)."""
+        ``P^T`` of each hinge's (its Stribeck curve at its speed; the breakaway at rest),
+        its gear friction seen through its lossy mesh."""
         dphi = self.P @ rate
-        each = np.array([h.sliding(float(dphi[j])) for j, h in enumerate(self.wing.hinges)])
+        each = np.array(
+            [
+                h.sliding(float(dphi[j])) + (self.mesh[j] - 1.0) * h.gear_friction
+                for j, h in enumerate(self.wing.hinges)
+            ]
+        )
         return np.asarray(self.P.T @ each, dtype=float)
 
-    def matrices(self, psi: FloatArray, rate: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """M_psi and h_psi (Coriolis, centrifugal) at psi, psi'."""
+    def matrices(
+        self, psi: FloatArray, rate: FloatArray, lossy: bool = False
+    ) -> tuple[FloatArray, FloatArray]:
+        """M_psi and h_psi (Coriolis, centrifugal) at psi, psi'; with ``lossy`` each
+        rotor's inertia as the hinge sees it through its lossy mesh."""
         phi, dphi = self.P @ psi, self.P @ rate
         q = self.stowed + self.sign * phi
         dq = self.sign * dphi
         mq = np.array(self.chain.mass_matrix(q, dq, *self.params), dtype=float)
         hq = np.array(self.chain.velocity(q, dq, *self.params), dtype=float)
         s = np.diag(self.sign)
-        m_phi = s @ mq @ s + np.diag(self.reflected)
+        m_phi = s @ mq @ s + np.diag(self.reflected * (self.mesh if lossy else 1.0))
         h_phi = self.sign * hq
         return self.P.T @ m_phi @ self.P, self.P.T @ h_phi
+
+    def mesh_torques(
+        self, rate: FloatArray, acc: FloatArray, direction: FloatArray
+    ) -> FloatArray:
+        """Each sliding hinge's mesh torque along its motion, the damper side's Newton's
+        law ``d (J_D phi'' + B phi') + F_G`` through an ideal gear [N*m] (0 at rest)."""
+        dphi, ddphi = self.P @ rate, self.P @ acc
+        torques = np.zeros(self.n)
+        for j, h in enumerate(self.wing.hinges):
+            d = direction[self.group_of[j]]
+            if d != 0.0:
+                own = h.inertia * ddphi[j] + h.damping_at(self.rise[j]) * dphi[j]
+                torques[j] = d * own + h.gear_friction
+        return torques
 
     def kinetic(self, psi: FloatArray, rate: FloatArray) -> float:
         m, _ = self.matrices(psi, np.zeros_like(rate))
@@ -482,7 +539,7 @@ class _Model:
         phi, dphi = self.P @ psi, self.P @ rate
         forces = np.empty(self.n)
         for j, h in enumerate(self.wing.hinges):
-            forces[j] = h.spring(phi[j]) - h.damping_at(self.rise[j]) * dphi[j]
+            forces[j] = h.spring(phi[j]) - self.mesh[j] * h.damping_at(self.rise[j]) * dphi[j]
             if engaged[j]:
                 assert h.latch_stiffness is not None
                 forces[j] -= h.latch_stiffness * (phi[j] - h.travel) + h.latch_damping * dphi[j]
@@ -511,7 +568,7 @@ class _Model:
         ``sliding[g]`` is the direction of group g's friction (0 for a held group), with
         magnitude ``limits[g]``.
         """
-        m, h = self.matrices(psi, rate)
+        m, h = self.matrices(psi, rate, lossy=True)
         force = self.P.T @ self.smooth_forces(psi, rate, engaged) - sliding * limits
         free = [g for g in range(self.m) if not held[g]]
         hold = [g for g in range(self.m) if held[g]]
@@ -532,6 +589,7 @@ class _Mode:
     stuck: list[bool]
     direction: FloatArray  # +1 / -1 for sliding groups, 0 for held ones
     engaged: list[bool]  # per hinge: compliant latch engaged
+    flow: list[float] = field(default_factory=list)  # per hinge: lossy gear +1 / -1 / 0
 
     @property
     def held(self) -> list[bool]:
@@ -552,6 +610,43 @@ class Reference:
         self.peak_rise = np.zeros(n)
 
     # ------------------------------------------------------------------ decisions
+    def _flows(
+        self, psi: FloatArray, rate: FloatArray, mode: _Mode, switched: tuple[int, float] | None
+    ) -> None:
+        """Every lossy gear's power flow, decided together: each combination of the
+        sliding lossy hinges' flows is tried, and one whose mesh torques (under its own
+        accelerations) agree in sign with its flows kept, the one changing fewest flows;
+        ``switched`` (a hinge whose torque has just passed zero, and its new flow) fixes
+        that hinge's flow."""
+        model = self.model
+        lossy = [
+            j
+            for j, h in enumerate(self.wing.hinges)
+            if h.lossy and mode.direction[model.group_of[j]] != 0.0
+        ]
+        flow = [0.0] * model.n
+        best: tuple[int, list[float]] | None = None
+        for combo in itertools.product((1.0, -1.0), repeat=len(lossy)):
+            for j, value in zip(lossy, combo, strict=True):
+                flow[j] = value
+            if switched is not None and switched[0] in lossy and flow[switched[0]] != switched[1]:
+                continue
+            model.mesh = np.array([h.factor(flow[j]) for j, h in enumerate(self.wing.hinges)])
+            acc, _ = model.accelerations(
+                psi, rate, mode.engaged, mode.held, mode.direction, model.sliding_friction(rate)
+            )
+            torques = model.mesh_torques(rate, acc, mode.direction)
+            agree = all(
+                torques[j] * flow[j] >= 0.0 for j in lossy if switched is None or j != switched[0]
+            )
+            kept = sum(flow[j] == (mode.flow[j] if mode.flow else 0.0) for j in lossy)
+            if agree and (best is None or kept > best[0]):
+                best = (kept, list(flow))
+        if best is None:
+            raise RuntimeError("no consistent power flow of the lossy gears")
+        mode.flow = best[1]
+        model.mesh = np.array([h.factor(mode.flow[j]) for j, h in enumerate(self.wing.hinges)])
+
     def _decide(
         self, psi: FloatArray, rate: FloatArray, mode: _Mode, moving: int | None = None
     ) -> None:
@@ -647,10 +742,16 @@ class Reference:
         n, m = model.n, model.m
         psi = np.zeros(m)
         rate = np.zeros(m)
-        mode = _Mode([False] * m, [False] * m, np.zeros(m), [False] * n)
+        mode = _Mode([False] * m, [False] * m, np.zeros(m), [False] * n, [0.0] * n)
+        switched: tuple[int, float] | None = None
         out = Solution(wing)
         out.events.append((0.0, "release", None))
-        energy = {"damper": np.zeros(n), "friction": np.zeros(n), "latch": np.zeros(n)}
+        energy = {
+            "damper": np.zeros(n),
+            "friction": np.zeros(n),
+            "latch": np.zeros(n),
+            "gear": np.zeros(n),
+        }
         impact_loss = np.zeros(n)
         first_arrival: dict[int, Latching] = {}
         arrival_kinetic: dict[int, float] = {}
@@ -667,12 +768,19 @@ class Reference:
         for _ in range(self.max_events):
             if all(mode.locked) or all(mode.held) or t >= stop_time:
                 break
+            self._flows(psi, rate, mode, switched)
+            switched = None
             t, psi, rate, kind, group = self._segment(
                 t, psi, rate, mode, stop_time, out, energy, peak
             )
             if kind == "stop_time":
                 out.events.append((t, "stop_time", None))
                 break
+            if kind == "power_flow":
+                assert group is not None  # here: the hinge
+                switched = (group, -mode.flow[group])
+                out.events.append((t, "power_flow", group))
+                continue
             hinge = model.groups[group][0] if group is not None else None
             if kind == "zero_speed":
                 assert group is not None
@@ -787,6 +895,7 @@ class Reference:
         out.damper = energy["damper"]
         out.friction = energy["friction"]
         out.latch_damping = energy["latch"]
+        out.gear_loss = energy["gear"]
         out.impact_loss = impact_loss
         out.spring_work = np.array([h.spring_work(phi[j]) for j, h in enumerate(wing.hinges)])
         out.gravity_work = v0 - model.gravity_potential(psi)
@@ -847,6 +956,8 @@ class Reference:
             latch = np.array(
                 [h.latch_damping if engaged[j] else 0.0 for j, h in enumerate(self.wing.hinges)]
             )
+            torques = model.mesh_torques(rate, acc, direction)
+            gear = (model.mesh - 1.0) * torques * np.abs(dphi)
             return np.concatenate(
                 [
                     rate[free],
@@ -856,6 +967,7 @@ class Reference:
                     damping * dphi**2,
                     np.where(sliding > 0.0, friction * np.abs(dphi), 0.0),
                     latch * dphi**2,
+                    gear,
                 ]
             )
 
@@ -918,7 +1030,21 @@ class Reference:
             add(deflection_from(cable, limit), 0.0, "cable", None)
             add(deflection_from(cable, -limit), 0.0, "cable", None)
 
-        y0 = np.concatenate([psi0[free], rate0[free], self.thermal, np.zeros(3 * n)])
+        def flow_of(j: int) -> Callable[[float, FloatArray], float]:
+            def torque(_t: float, y: FloatArray) -> float:
+                psi, rate = unpack(y)
+                acc, _ = model.accelerations(
+                    psi, rate, engaged, held, direction, model.sliding_friction(rate)
+                )
+                return float(mode.flow[j] * model.mesh_torques(rate, acc, direction)[j])
+
+            return torque
+
+        for j in range(n):
+            if mode.flow[j] != 0.0:
+                add(flow_of(j), -1.0, "power_flow", j)
+
+        y0 = np.concatenate([psi0[free], rate0[free], self.thermal, np.zeros(4 * n)])
         end = min(stop_time, t0 + 1e4)
         sol = solve_ivp(
             rhs,
@@ -951,7 +1077,8 @@ class Reference:
         e = 2 * f + 2 * n
         energy["damper"] += y1[e : e + n]
         energy["friction"] += y1[e + n : e + 2 * n]
-        energy["latch"] += y1[e + 2 * n :]
+        energy["latch"] += y1[e + 2 * n : e + 3 * n]
+        energy["gear"] += y1[e + 3 * n :]
         # The rotors' peak rises: at the steps (Radau at rtol 1e-11) and at the end.
         last = np.searchsorted(sol.t, t1, side="right")
         steps = np.concatenate([sol.y[2 * f : 2 * f + n, :last], y1[2 * f : 2 * f + n, None]], 1)
