@@ -509,9 +509,7 @@ class _Model:
         h_phi = self.sign * hq
         return self.P.T @ m_phi @ self.P, self.P.T @ h_phi
 
-    def mesh_torques(
-        self, rate: FloatArray, acc: FloatArray, direction: FloatArray
-    ) -> FloatArray:
+    def mesh_torques(self, rate: FloatArray, acc: FloatArray, direction: FloatArray) -> FloatArray:
         """Each sliding hinge's mesh torque along its motion, the damper side's Newton's
         law ``d (J_D phi'' + B phi') + F_G`` through an ideal gear [N*m] (0 at rest)."""
         dphi, ddphi = self.P @ rate, self.P @ acc
