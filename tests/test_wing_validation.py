@@ -79,6 +79,14 @@ def test_the_case_file_is_the_reference_wing(item: WingValidationCase) -> None:
             assert float(state.breakaway_friction) == pytest.approx(
                 typed_hinge.breakaway, rel=1e-13
             )
+            gap = 0.0 if hinge.ecd is None else hinge.ecd.lost_motion
+            assert gap == pytest.approx(typed_hinge.lost_motion, rel=1e-15)
+            if gap > 0.0:  # the ECD's shares that idle in the lost motion
+                assert hinge.ecd is not None
+                fecd = float(state.ecd_friction)
+                assert fecd == pytest.approx(typed_hinge.ecd_friction, rel=1e-13)
+                breakaway = hinge.ecd.static_friction_factor * fecd
+                assert breakaway == pytest.approx(typed_hinge.ecd_breakaway, rel=1e-13)
             assert hinge.stowed_angle == pytest.approx(typed_hinge.stowed, rel=1e-15)
             assert hinge.deployed_angle == pytest.approx(typed_hinge.deployed, abs=1e-15)
             reflected = 0.0 if hinge.ecd is None else hinge.ecd.reflected_inertia

@@ -239,6 +239,25 @@ def _two_lossy(t: float) -> Wing:
     return Wing((SMALL, SMALL_OFFSET), hinges)
 
 
+LOST_MOTION = (2.0 * DEG, 10.0 * DEG)  # [rad] root, outer (the file's gearboxes)
+
+
+def _two_lost_motion(t: float) -> Wing:
+    """The free two-panel wing, each hinge's damper side idle in its gear's lost motion
+    (its FECD_T, the ECD's share of the friction and breakaway, idle with it)."""
+    _, fecd = ecd_at(t, **CC16)
+    hinges = tuple(
+        replace(
+            _cc16_hinge(t, stowed, 0.0),
+            lost_motion=gap,
+            ecd_friction=fecd,
+            ecd_breakaway=fecd,
+        )
+        for stowed, gap in zip((90.0, -180.0), LOST_MOTION, strict=True)
+    )
+    return Wing((SMALL, SMALL_OFFSET), hinges)
+
+
 def _warm_start(wing: EcdsimWing) -> EcdsimWing:
     """The heating case's file with its warm start (ecdsim's Thermal initial rises)."""
     hinges = []
@@ -393,6 +412,13 @@ CASES: tuple[WingValidationCase, ...] = (
         (-40.0, 100.0),
         _two_lossy,
     ),
+    WingValidationCase(
+        "wing_two_panel_lost_motion",
+        "Two panels, lost motion in each gear (2 deg root, 10 deg outer)",
+        CONFIGS / "wing_two_panel_lost_motion.toml",
+        (-40.0, 100.0),
+        _two_lost_motion,
+    ),
 )
 
 
@@ -439,6 +465,7 @@ def as_result(item: WingValidationCase, hinges: tuple[str, ...]) -> WingResult:
             cable_elastic=solution.cable_elastic,
             latch_elastic=solution.latch_elastic,
             gear_loss=solution.gear_loss,
+            engagement_loss=solution.engagement_loss,
         )
         cases.append(
             WingCase(
@@ -762,10 +789,13 @@ def _gear_checks(
     item: WingValidationCase, ref: Solution, got: WingCase, temperature: float
 ) -> list[Check]:
     """Where a hinge has a lossy gear: its power flow's switches (their count exactly,
-    each time) and the energy its mesh lost."""
+    each time) and the energy its mesh lost; where it has lost motion: its engagements
+    (count, times) and the kinetic energy they lost."""
     checks: list[Check] = []
     at = f"at {temperature:+g} degC"
     for j, hinge in enumerate(item.build(temperature).hinges):
+        if hinge.lost_motion > 0.0:
+            checks.extend(_engagement_checks(ref, got, j, at))
         if not hinge.lossy:
             continue
         theirs = [t for t, kind, h in ref.events if kind == "power_flow" and h == j]
@@ -805,6 +835,48 @@ def _gear_checks(
                 INTEGRATED_REASON,
             )
         )
+    return checks
+
+
+def _engagement_checks(ref: Solution, got: WingCase, j: int, at: str) -> list[Check]:
+    """Hinge j's lost motion closing: how often (exactly), when, and its loss."""
+    theirs = [t for t, kind, h in ref.events if kind == "gear_engage" and h == j]
+    mine = [e.time for e in got.events if e.kind == "gear_engage" and e.hinge == j]
+    checks = [
+        Check(
+            f"hinge {j + 1} gear engagements {at} (count difference)",
+            "-",
+            0.0,
+            f"reference {len(theirs)}",
+            float(abs(len(theirs) - len(mine))),
+            0.0,
+            "an engagement happens or not",
+        )
+    ]
+    for time, other in zip(theirs, mine, strict=False):
+        checks.append(
+            Check(
+                f"hinge {j + 1} gear engagement time {at}",
+                "s",
+                time,
+                "scipy Radau rtol 1e-11",
+                other,
+                INTEGRATED_RTOL * abs(time),
+                INTEGRATED_REASON,
+            )
+        )
+    loss = float(ref.engagement_loss[j])
+    checks.append(
+        Check(
+            f"hinge {j + 1} engagement loss {at}",
+            "J",
+            loss,
+            "scipy Radau rtol 1e-11",
+            float(got.energy.engagement_losses[j]),
+            INTEGRATED_RTOL * abs(loss),
+            INTEGRATED_REASON,
+        )
+    )
     return checks
 
 

@@ -48,7 +48,12 @@ hinge law is typed from its source:
   hinge). Each lossy hinge's flow is decided at every event by enumerating the flows of
   all of them and keeping the consistent one (T of each hinge's sign agreeing with its
   flow, under the accelerations of those flows), an event where a T passes zero; the
-  mesh's loss ``(T / eta_f - T) |phi'|`` or ``(T - eta_b T) |phi'|`` is integrated.
+  mesh's loss ``(T / eta_f - T) |phi'|`` or ``(T - eta_b T) |phi'|`` is integrated;
+- lost motion (backlash) in a rigid gear: until the hinge has turned through it from
+  release the damper side idles (no rotor inertia, damping or ECD friction at the
+  hinge); where it closes, the rotor at rest is caught by the moving chain in a plastic
+  impact, momentum ``M_before phi'-`` conserved with the rotor's inertia added (seen
+  through the gear driven forward, ``J_D / eta_f``), the kinetic energy lost booked.
 
 Conventions as docs/wing.md: relative hinge angles q (q_1 from the base's x axis),
 deployed angles phi = s (q - q_stowed) from 0 to each hinge's travel. Energy terms are
@@ -126,6 +131,9 @@ class Hinge:
         FS + FT N) and ``breakaway`` at eta_f (the hinge drives the damper from rest)
     gear_friction : the ECD's Coulomb friction through an ideal gear, FT N [N*m] (part
         of ``friction``; the share the mesh factor multiplies)
+    lost_motion : the gear's backlash at the hinge [rad] (0: engaged from release)
+    ecd_friction, ecd_breakaway : the ECD's shares of ``friction`` and ``breakaway``
+        [N*m], which idle while the lost motion is open
     """
 
     stowed: float
@@ -151,6 +159,9 @@ class Hinge:
     forward_efficiency: float = 1.0
     backward_efficiency: float = 1.0
     gear_friction: float = 0.0
+    lost_motion: float = 0.0
+    ecd_friction: float = 0.0
+    ecd_breakaway: float = 0.0
 
     @property
     def lossy(self) -> bool:
@@ -374,6 +385,7 @@ class Solution:
     latch_elastic: float = 0.0
     peak_rise: FloatArray = field(default_factory=lambda: np.zeros(0))  # rotors' [K]
     gear_loss: FloatArray = field(default_factory=lambda: np.zeros(0))  # lossy meshes' [J]
+    engagement_loss: FloatArray = field(default_factory=lambda: np.zeros(0))  # [J]
 
     @property
     def deployment_time(self) -> float:
@@ -410,6 +422,7 @@ class Solution:
                 + np.sum(self.latch_damping)
                 + np.sum(self.impact_loss)
                 + np.sum(self.gear_loss)
+                + np.sum(self.engagement_loss)
             )
             + self.final_kinetic
             + self.cable_elastic
@@ -477,6 +490,8 @@ class _Model:
         self.rise = np.array([h.initial_rotor_rise for h in wing.hinges])
         # Each hinge's mesh factor in the current flows (1: ideal, or none decided).
         self.mesh = np.ones(n)
+        # 1.0 where the hinge's damper side is engaged (its lost motion closed), else 0.0.
+        self.meshed = np.array([0.0 if h.lost_motion > 0.0 else 1.0 for h in wing.hinges])
 
     def phi(self, psi: FloatArray) -> FloatArray:
         return np.asarray(self.P @ psi, dtype=float)
@@ -488,7 +503,9 @@ class _Model:
         dphi = self.P @ rate
         each = np.array(
             [
-                h.sliding(float(dphi[j])) + (self.mesh[j] - 1.0) * h.gear_friction
+                h.sliding(float(dphi[j]))
+                + (self.mesh[j] - 1.0) * h.gear_friction
+                - (1.0 - self.meshed[j]) * h.ecd_friction
                 for j, h in enumerate(self.wing.hinges)
             ]
         )
@@ -505,7 +522,8 @@ class _Model:
         mq = np.array(self.chain.mass_matrix(q, dq, *self.params), dtype=float)
         hq = np.array(self.chain.velocity(q, dq, *self.params), dtype=float)
         s = np.diag(self.sign)
-        m_phi = s @ mq @ s + np.diag(self.reflected * (self.mesh if lossy else 1.0))
+        rotors = self.reflected * self.meshed * (self.mesh if lossy else 1.0)
+        m_phi = s @ mq @ s + np.diag(rotors)
         h_phi = self.sign * hq
         return self.P.T @ m_phi @ self.P, self.P.T @ h_phi
 
@@ -520,6 +538,14 @@ class _Model:
                 own = h.inertia * ddphi[j] + h.damping_at(self.rise[j]) * dphi[j]
                 torques[j] = d * own + h.gear_friction
         return torques
+
+    def breakaways(self) -> FloatArray:
+        """Each group's breakaway limit in psi (an open lost motion's ECD idles)."""
+        each = [
+            h.breakaway - (1.0 - self.meshed[j]) * h.ecd_breakaway
+            for j, h in enumerate(self.wing.hinges)
+        ]
+        return np.asarray(self.P.T @ np.array(each), dtype=float)
 
     def kinetic(self, psi: FloatArray, rate: FloatArray) -> float:
         m, _ = self.matrices(psi, np.zeros_like(rate))
@@ -537,7 +563,8 @@ class _Model:
         phi, dphi = self.P @ psi, self.P @ rate
         forces = np.empty(self.n)
         for j, h in enumerate(self.wing.hinges):
-            forces[j] = h.spring(phi[j]) - self.mesh[j] * h.damping_at(self.rise[j]) * dphi[j]
+            damping = self.mesh[j] * self.meshed[j] * h.damping_at(self.rise[j])
+            forces[j] = h.spring(phi[j]) - damping * dphi[j]
             if engaged[j]:
                 assert h.latch_stiffness is not None
                 forces[j] -= h.latch_stiffness * (phi[j] - h.travel) + h.latch_damping * dphi[j]
@@ -620,7 +647,7 @@ class Reference:
         lossy = [
             j
             for j, h in enumerate(self.wing.hinges)
-            if h.lossy and mode.direction[model.group_of[j]] != 0.0
+            if h.lossy and model.meshed[j] and mode.direction[model.group_of[j]] != 0.0
         ]
         flow = [0.0] * model.n
         best: tuple[int, list[float]] | None = None
@@ -678,7 +705,7 @@ class Reference:
             )
             ok = True
             for g, choice in zip(rest, combo, strict=True):
-                limit = model.breakaway[g] * (1.0 + STICK_MARGIN)
+                limit = model.breakaways()[g] * (1.0 + STICK_MARGIN)
                 if choice == "stuck":
                     low = -limit
                     high = math.inf if psi[g] == 0.0 else limit
@@ -732,6 +759,32 @@ class Reference:
             after[g] = constrained[g]
         return after, float(impulse[keys.index(group)])
 
+    def _engage(
+        self, psi: FloatArray, rate: FloatArray, mode: _Mode, j: int, losses: FloatArray
+    ) -> FloatArray:
+        """Hinge j's lost motion closes: its rotor, at rest, is caught in a plastic impact
+        (generalised momentum conserved over the unlocked groups, the rotor added through
+        the gear driven forward); returns the speeds after, sets the modes."""
+        model = self.model
+        g = model.group_of[j]
+        hinge = self.wing.hinges[j]
+        psi[g] = hinge.lost_motion / model.P[j, g]
+        before = model.kinetic(psi, rate)
+        m_before, _ = model.matrices(psi, np.zeros(model.m))
+        momentum = m_before @ rate
+        model.meshed[j] = 1.0
+        m_after, _ = model.matrices(psi, np.zeros(model.m))
+        m_after[g, g] += model.P[j, g] ** 2 * hinge.inertia / hinge.forward_efficiency
+        m_after[g, g] -= model.P[j, g] ** 2 * hinge.inertia  # (the ideal share is in M)
+        free = [k for k in range(model.m) if not mode.locked[k]]
+        after = rate.copy()
+        after[free] = np.linalg.solve(m_after[np.ix_(free, free)], momentum[free])
+        losses[j] += before - model.kinetic(psi, after)
+        for k in free:
+            mode.stuck[k] = False
+            mode.direction[k] = 0.0 if after[k] == 0.0 else math.copysign(1.0, after[k])
+        return after
+
     # ------------------------------------------------------------------ the run
     def run(self, stop_time: float = math.inf) -> Solution:
         """Integrate from release (rest, stowed) to the end; see :class:`Solution`."""
@@ -751,6 +804,7 @@ class Reference:
             "gear": np.zeros(n),
         }
         impact_loss = np.zeros(n)
+        engagement = np.zeros(n)
         first_arrival: dict[int, Latching] = {}
         arrival_kinetic: dict[int, float] = {}
         peak: dict[int, float] = {}
@@ -778,6 +832,12 @@ class Reference:
                 assert group is not None  # here: the hinge
                 switched = (group, -mode.flow[group])
                 out.events.append((t, "power_flow", group))
+                continue
+            if kind == "gear_engage":
+                assert group is not None  # here: the hinge
+                rate = self._engage(psi, rate, mode, group, engagement)
+                out.events.append((t, "gear_engage", group))
+                self._decide(psi, rate, mode)
                 continue
             hinge = model.groups[group][0] if group is not None else None
             if kind == "zero_speed":
@@ -894,6 +954,7 @@ class Reference:
         out.friction = energy["friction"]
         out.latch_damping = energy["latch"]
         out.gear_loss = energy["gear"]
+        out.engagement_loss = engagement
         out.impact_loss = impact_loss
         out.spring_work = np.array([h.spring_work(phi[j]) for j, h in enumerate(wing.hinges)])
         out.gravity_work = v0 - model.gravity_potential(psi)
@@ -946,11 +1007,16 @@ class Reference:
             damping = np.array([h.damping_at(model.rise[j]) for j, h in enumerate(hinges)])
             heat = np.array(
                 [
-                    h.heating(dphi[j], y[2 * f + j], y[2 * f + n + j])
+                    h.heating(model.meshed[j] * dphi[j], y[2 * f + j], y[2 * f + n + j])
                     for j, h in enumerate(self.wing.hinges)
                 ]
             )
-            friction = np.array([h.sliding(float(dphi[j])) for j, h in enumerate(hinges)])
+            friction = np.array(
+                [
+                    h.sliding(float(dphi[j])) - (1.0 - model.meshed[j]) * h.ecd_friction
+                    for j, h in enumerate(hinges)
+                ]
+            )
             latch = np.array(
                 [h.latch_damping if engaged[j] else 0.0 for j, h in enumerate(self.wing.hinges)]
             )
@@ -962,7 +1028,7 @@ class Reference:
                     acc[free],
                     heat[:, 0],
                     heat[:, 1],
-                    damping * dphi**2,
+                    model.meshed * damping * dphi**2,
                     np.where(sliding > 0.0, friction * np.abs(dphi), 0.0),
                     latch * dphi**2,
                     gear,
@@ -995,7 +1061,7 @@ class Reference:
                 _, holding = model.accelerations(
                     psi, rate, engaged, held, direction, model.sliding_friction(rate)
                 )
-                limit = model.breakaway[g] * (1.0 + STICK_MARGIN)
+                limit = model.breakaways()[g] * (1.0 + STICK_MARGIN)
                 if psi0[g] == 0.0:
                     return float(holding[g] + limit)  # the stowed stop holds a push back
                 return float(limit - abs(holding[g]))
@@ -1041,6 +1107,10 @@ class Reference:
         for j in range(n):
             if mode.flow[j] != 0.0:
                 add(flow_of(j), -1.0, "power_flow", j)
+            g = model.group_of[j]
+            if not model.meshed[j] and direction[g] > 0.0 and g in free:
+                gap = self.wing.hinges[j].lost_motion / model.P[j, g]
+                add(angle_of(free.index(g), gap), 1.0, "gear_engage", j)
 
         y0 = np.concatenate([psi0[free], rate0[free], self.thermal, np.zeros(4 * n)])
         end = min(stop_time, t0 + 1e4)

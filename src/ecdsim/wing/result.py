@@ -40,6 +40,7 @@ EVENT_KINDS: dict[str, str] = {
     "stop_time": "the run reached its stop time",
     "event_limit": "the run was cut short by its event limit",
     "power_flow": "a hinge's lossy gear switched its power flow (forward or back-driven)",
+    "gear_engage": "a hinge's lost motion closed: its damper side engages (a plastic impact)",
 }
 
 # How a case ends.
@@ -107,8 +108,8 @@ class WingEnergy:
     """The energy account of one case [J]; per-hinge terms are arrays root first.
 
     Balance: ``spring_work + gravity_work + initial_kinetic = damper_dissipation +
-    friction_dissipation + latch_dissipation + impact_loss + gear_loss + final_kinetic +
-    cable_elastic + latch_elastic`` (sums over the hinges), closing to the solver's
+    friction_dissipation + latch_dissipation + impact_loss + gear_loss + engagement_loss +
+    final_kinetic + cable_elastic + latch_elastic`` (sums over the hinges), closing to the solver's
     accuracy (:attr:`error`).
 
     Attributes
@@ -127,6 +128,8 @@ class WingEnergy:
     gear_loss : energy each hinge's lossy gear lost in its mesh (``gearbox.efficiency``:
         the power through the mesh times ``1/eta_f - 1`` forward, ``1 - eta_b``
         back-driven); None: no lossy gear (zeros)
+    engagement_loss : kinetic energy lost where each hinge's lost motion closed (the
+        plastic impact of its damper side); None: none (zeros)
     """
 
     spring_work: FloatArray
@@ -140,6 +143,14 @@ class WingEnergy:
     cable_elastic: float = 0.0
     latch_elastic: float = 0.0
     gear_loss: FloatArray | None = None
+    engagement_loss: FloatArray | None = None
+
+    @property
+    def engagement_losses(self) -> FloatArray:
+        """Each hinge's engagement loss [J] (zeros without lost motion)."""
+        if self.engagement_loss is None:
+            return np.zeros(np.shape(self.spring_work))
+        return self.engagement_loss
 
     @property
     def mesh_loss(self) -> FloatArray:
@@ -163,6 +174,7 @@ class WingEnergy:
                 + np.sum(self.latch_dissipation)
                 + np.sum(self.impact_loss)
                 + np.sum(self.mesh_loss)
+                + np.sum(self.engagement_losses)
             )
             + self.final_kinetic
             + self.cable_elastic
@@ -179,6 +191,7 @@ class WingEnergy:
             *self.latch_dissipation,
             *self.impact_loss,
             *self.mesh_loss,
+            *self.engagement_losses,
             abs(self.gravity_work),
             self.initial_kinetic,
             self.final_kinetic,
@@ -203,6 +216,7 @@ class WingEnergy:
             "latch_dissipation": per_hinge(self.latch_dissipation),
             "impact_loss": per_hinge(self.impact_loss),
             "gear_loss": per_hinge(self.mesh_loss),
+            "engagement_loss": per_hinge(self.engagement_losses),
             "gravity_work": self.gravity_work,
             "initial_kinetic": self.initial_kinetic,
             "final_kinetic": self.final_kinetic,

@@ -92,16 +92,16 @@ def check_supported(wing: Wing) -> None:
         if ecd is None:
             continue
         at = f"wing.hinges[{i}] ({hinge.name}): its ECD's"
-        found = (
-            ("gearbox.stiffness", ecd.gear_stiffness is not None),
-            ("gearbox.lost_motion", ecd.lost_motion > 0.0),
-        )
-        for key, present in found:
-            if present:
-                raise WingUnsupported(
-                    f"{at} {key} is not modelled by the wing's solver yet (docs/wing.md); "
-                    "remove it to solve the wing without it"
-                )
+        if ecd.gear_stiffness is not None:
+            raise WingUnsupported(
+                f"{at} gearbox.stiffness is not modelled by the wing's solver yet "
+                "(docs/wing.md); remove it to solve the wing without it"
+            )
+        if ecd.lost_motion > 0.0 and ecd.stribeck_speed is not None:
+            raise WingUnsupported(
+                f"{at} gearbox.lost_motion with damper.stribeck_speed is not modelled by "
+                "the wing's solver yet (docs/wing.md); remove one"
+            )
         if ecd.ecd.gearbox.efficiency is not None and ecd.stribeck_speed is not None:
             # The single hinge refuses the pair too (its Stribeck excess mixes the ECD's
             # friction, through the mesh, with the hinge's, not).
@@ -160,17 +160,23 @@ def _law(hinge: Hinge, temperature: float) -> dict[int, float]:
 
 
 def _gear(hinge: Hinge, temperature: float) -> dict[int, float]:
-    """Hinge j's lossy gear: eta_f, eta_b and FECD_T through an ideal gear (FT N); an
-    ideal gear's are 1, 1 and FECD_T."""
+    """Hinge j's gear: eta_f, eta_b and FECD_T through an ideal gear (FT N), an ideal
+    gear's 1, 1 and FECD_T; its lost motion, and the ECD's friction and breakaway
+    (which join the hinge's once the lost motion closes)."""
     ecd = hinge.ecd
     if ecd is None:
-        return {W.H_ETAF: 1.0, W.H_ETAB: 1.0, W.H_FQ: 0.0}
+        return {W.H_ETAF: 1.0, W.H_ETAB: 1.0, W.H_FQ: 0.0, W.H_MESHED: 1.0}
     state = ecd.ecd.at(temperature)
     forward = float(np.asarray(state.forward_efficiency))
+    friction = float(np.asarray(state.ecd_friction))
     return {
         W.H_ETAF: forward,
         W.H_ETAB: float(np.asarray(state.backward_efficiency)),
-        W.H_FQ: float(np.asarray(state.ecd_friction)) * forward,
+        W.H_FQ: friction * forward,
+        W.H_GAP: ecd.lost_motion,
+        W.H_MESHED: 0.0 if ecd.lost_motion > 0.0 else 1.0,
+        W.H_FE: friction,
+        W.H_FEB: ecd.static_friction_factor * friction,
     }
 
 
@@ -191,6 +197,60 @@ def _nodes(hinge: Hinge) -> int:
     return 2 if hinge.ecd.thermal.two_node else 1
 
 
+def _hinge_words(
+    cw: FloatArray,
+    wing: Wing,
+    j: int,
+    temperature: float,
+    groups: _Groups,
+    heated: int,
+    arrays: dict[str, FloatArray],
+    table_points: int,
+) -> int:
+    """Hinge j's fields at one temperature (``arrays``: the wing's chain arrays; its
+    drive table's points); returns the heating states so far."""
+    hinge = wing.hinges[j]
+    for field, value in _law(hinge, temperature).items():
+        cw[W.hinge(field, j)] = value
+    cw[W.hinge(W.H_AUX, j)] = -1.0
+    cw[W.hinge(W.H_HOUSING, j)] = -1.0
+    nodes = _nodes(hinge)
+    if nodes > 0:
+        cw[W.hinge(W.H_AUX, j)] = 2 * groups.count + heated
+    if nodes == 2:
+        cw[W.hinge(W.H_HOUSING, j)] = 2 * groups.count + heated + 1
+    state = hinge.at(temperature)
+    values = {
+        W.H_MASS: arrays["mass"][j],
+        W.H_CGA: arrays["cg_along"][j],
+        W.H_CGB: arrays["cg_across"][j],
+        W.H_INERTIA: arrays["inertia"][j],
+        W.H_LENGTH: arrays["length"][j],
+        W.H_OFFLOAD: arrays["offload"][j],
+        W.H_STOWED: hinge.stowed_angle,
+        W.H_SIGN: hinge.direction,
+        W.H_TRAVEL: hinge.travel,
+        W.H_JD: hinge.ecd.reflected_inertia if hinge.ecd is not None else 0.0,
+        W.H_DAMPING: float(state.damping_rate),
+        W.H_FRICTION: float(state.kinetic_friction),
+        W.H_BREAKAWAY: float(state.breakaway_friction),
+        W.H_LATCH_K: hinge.latch.stiffness or 0.0,
+        W.H_LATCH_C: hinge.latch.damping,
+        W.H_RESTITUTION: hinge.latch.restitution,
+        W.H_GROUP: groups.of[j],
+        W.H_FACTOR: groups.factor[j],
+        W.H_POINTS: table_points,
+        **_stribeck(hinge, float(state.kinetic_friction), float(state.breakaway_friction)),
+        **_gear(hinge, temperature),
+    }
+    for field, value in values.items():
+        cw[W.hinge(field, j)] = value
+    if values[W.H_MESHED] == 0.0:  # in its lost motion: the ECD's friction idles
+        cw[W.hinge(W.H_FRICTION, j)] -= values[W.H_FE]
+        cw[W.hinge(W.H_BREAKAWAY, j)] -= values[W.H_FEB]
+    return heated + nodes
+
+
 def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) -> FloatArray:
     """The wing's words at one temperature (:mod:`ecdsim.wing.kernel.layout`)."""
     n = wing.size
@@ -207,51 +267,27 @@ def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) ->
     cw[W.W_MAX_EVENTS] = max_events
     cw[W.W_STOP] = stop_time
     heated = 0
-    for j, hinge in enumerate(wing.hinges):
-        law = _law(hinge, temperature)
-        for field, value in law.items():
-            cw[W.hinge(field, j)] = value
-        cw[W.hinge(W.H_AUX, j)] = -1.0
-        cw[W.hinge(W.H_HOUSING, j)] = -1.0
-        nodes = _nodes(hinge)
-        if nodes > 0:
-            cw[W.hinge(W.H_AUX, j)] = 2 * groups.count + heated
-        if nodes == 2:
-            cw[W.hinge(W.H_HOUSING, j)] = 2 * groups.count + heated + 1
-        heated += nodes
-        state = hinge.at(temperature)
-        values = {
-            W.H_MASS: arrays["mass"][j],
-            W.H_CGA: arrays["cg_along"][j],
-            W.H_CGB: arrays["cg_across"][j],
-            W.H_INERTIA: arrays["inertia"][j],
-            W.H_LENGTH: arrays["length"][j],
-            W.H_OFFLOAD: arrays["offload"][j],
-            W.H_STOWED: hinge.stowed_angle,
-            W.H_SIGN: hinge.direction,
-            W.H_TRAVEL: hinge.travel,
-            W.H_JD: hinge.ecd.reflected_inertia if hinge.ecd is not None else 0.0,
-            W.H_DAMPING: float(state.damping_rate),
-            W.H_FRICTION: float(state.kinetic_friction),
-            W.H_BREAKAWAY: float(state.breakaway_friction),
-            W.H_LATCH_K: hinge.latch.stiffness or 0.0,
-            W.H_LATCH_C: hinge.latch.damping,
-            W.H_RESTITUTION: hinge.latch.restitution,
-            W.H_GROUP: groups.of[j],
-            W.H_FACTOR: groups.factor[j],
-            W.H_POINTS: np.asarray(tables[j][0]).shape[0],
-            **_stribeck(hinge, float(state.kinetic_friction), float(state.breakaway_friction)),
-            **_gear(hinge, temperature),
-        }
-        for field, value in values.items():
-            cw[W.hinge(field, j)] = value
+    for j in range(n):
         angles, torques = (np.asarray(a, dtype=float).reshape(-1) for a in tables[j])
+        heated = _hinge_words(cw, wing, j, temperature, groups, heated, arrays, angles.shape[0])
         for p in range(points):
             q = min(p, angles.shape[0] - 1)
             cw[W.table_angle(points, j, p)] = angles[q]
             cw[W.table_torque(points, j, p)] = torques[q]
+    _group_words(cw, wing, groups)
+    for c, item in enumerate(elastic):
+        cw[W.cable(W.C_IN, c)] = item.inboard
+        cw[W.cable(W.C_RATIO, c)] = item.ratio
+        cw[W.cable(W.C_K, c)] = item.stiffness
+        cw[W.cable(W.C_SLACK, c)] = item.slack_torque
+    return cw
+
+
+def _group_words(cw: FloatArray, wing: Wing, groups: _Groups) -> None:
+    """Each group's fields: its friction and breakaway (its hinges' through their
+    factors), travel in psi, latch kind and first hinge."""
     for g, first in enumerate(groups.first):
-        members = [j for j in range(n) if groups.of[j] == g]
+        members = [j for j in range(wing.size) if groups.of[j] == g]
         cw[W.group(W.G_FRICTION, g)] = sum(
             groups.factor[j] * cw[W.hinge(W.H_FRICTION, j)] for j in members
         )
@@ -261,12 +297,6 @@ def _words(wing: Wing, temperature: float, stop_time: float, max_events: int) ->
         cw[W.group(W.G_TRAVEL, g)] = wing.hinges[first].travel / groups.factor[first]
         cw[W.group(W.G_RIGID, g)] = 1.0 if wing.hinges[first].latch.rigid else 0.0
         cw[W.group(W.G_FIRST, g)] = first
-    for c, item in enumerate(elastic):
-        cw[W.cable(W.C_IN, c)] = item.inboard
-        cw[W.cable(W.C_RATIO, c)] = item.ratio
-        cw[W.cable(W.C_K, c)] = item.stiffness
-        cw[W.cable(W.C_SLACK, c)] = item.slack_torque
-    return cw
 
 
 def _run(
@@ -287,7 +317,7 @@ def _run(
         points = np.zeros((size, 1 + 2 * n))
         events = np.zeros((4 * MAX_EVENTS + 16, W.EVENT_FIELDS))
         latches = np.zeros((n, W.LATCH_FIELDS))
-        losses = np.zeros(n)
+        losses = np.zeros(2 * n)  # each hinge's latch impacts, then its engagement
         y = run(words, settings, atol, points, events, latches, losses, dm, da, dq)
         if words[W.W_OVERFLOW] == 0.0:
             return words, y, points, events, latches, losses
@@ -437,7 +467,8 @@ def _energy(
         friction_dissipation=y[e + n : e + 2 * n].copy(),
         latch_dissipation=y[e + 2 * n : e + 3 * n].copy(),
         gear_loss=y[e + 3 * n : e + 4 * n].copy(),
-        impact_loss=losses.copy(),
+        impact_loss=losses[:n].copy(),
+        engagement_loss=losses[n:].copy(),
         gravity_work=float(gravity_work),
         final_kinetic=kinetic(words, y, m),
         cable_elastic=float(cable_elastic),

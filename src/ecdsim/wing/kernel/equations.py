@@ -148,7 +148,8 @@ def damper_torque(cw: FloatArray, j: int, rate: float, y: FloatArray) -> tuple[f
         rate,
         factor,
     )
-    return float(torque), float(power)
+    meshed = cw[hinge_at(W.H_MESHED, j)]  # 0 in the lost motion: the damper side idles
+    return meshed * float(torque), meshed * float(power)
 
 
 def latch_torque(cw: FloatArray, j: int, phi: float, rate: float) -> float:
@@ -204,7 +205,7 @@ def hinge_forces(
         )
         for k in range(n):
             matrix[j, k] *= s * cw[hinge_at(W.H_SIGN, k)]
-        matrix[j, j] += mesh * cw[hinge_at(W.H_JD, j)]
+        matrix[j, j] += mesh * cw[hinge_at(W.H_MESHED, j)] * cw[hinge_at(W.H_JD, j)]
     if cw[W.W_GX] != 0.0 or cw[W.W_GY] != 0.0:
         weight = gravity_forces(
             q, mass, cga, cgb, length, _panels(cw, W.H_OFFLOAD, n), cw[W.W_GX], cw[W.W_GY]
@@ -260,9 +261,9 @@ def mesh_friction(cw: FloatArray, j: int) -> float:
 def ideal_friction(cw: FloatArray, j: int) -> float:
     """Hinge j's kinetic friction through an ideal gear, ``FS_T + FT N`` [N*m] (the
     mesh's share, ``(m - 1) FT N``, is its gear loss)."""
-    value: float = cw[hinge_at(W.H_FRICTION, j)] - cw[hinge_at(W.H_FQ, j)] * (
-        1.0 / cw[hinge_at(W.H_ETAF, j)] - 1.0
-    )
+    value: float = cw[hinge_at(W.H_FRICTION, j)] - cw[hinge_at(W.H_MESHED, j)] * cw[
+        hinge_at(W.H_FQ, j)
+    ] * (1.0 / cw[hinge_at(W.H_ETAF, j)] - 1.0)
     return value
 
 
@@ -300,7 +301,8 @@ def decide_flows(cw: FloatArray, y: FloatArray, m: int) -> None:
     holding = np.empty(m)
     for j in range(n):
         g = int(cw[hinge_at(W.H_GROUP, j)])
-        if not lossy_gear(cw, j) or cw[group_at(W.G_DIR, g)] == 0.0:
+        meshed = cw[hinge_at(W.H_MESHED, j)] != 0.0
+        if not lossy_gear(cw, j) or not meshed or cw[group_at(W.G_DIR, g)] == 0.0:
             cw[hinge_at(W.H_FLOW, j)] = 0.0
             cw[hinge_at(W.H_HINT, j)] = 0.0
         elif cw[hinge_at(W.H_FLOW, j)] == 0.0:
@@ -503,6 +505,11 @@ def chain_event_value(
             return ahead
         behind: float = y[g]
         return behind
+    if slot >= W.GAP_SLOTS:  # the lost motion ahead: gap - phi
+        j = slot - W.GAP_SLOTS
+        g = int(cw[hinge_at(W.H_GROUP, j)])
+        gap: float = cw[hinge_at(W.H_GAP, j)] - cw[hinge_at(W.H_FACTOR, j)] * y[g]
+        return gap
     if slot >= W.FLOW_SLOTS:
         return flow_value(cw, slot - W.FLOW_SLOTS, y, m)
     c = (slot - 2 * W.NMAX) // 2
@@ -530,12 +537,16 @@ def active_slots(cw: FloatArray, y: FloatArray, active: FloatArray, m: int) -> N
     """The slots a segment arms: each unlocked group's motion; each sliding group's latch
     ahead (a rigid latch, or a compliant one not yet engaged) or stowed stop behind; both
     slack points of each elastic cable, oriented to the side the cable starts on; each
-    lossy gear's power flow while its hinge moves."""
+    lossy gear's power flow while its hinge moves; each lost motion ahead of a hinge
+    moving forward in it."""
     for slot in range(W.SLOTS):
         active[slot] = 0.0
     for j in range(int(cw[W.W_N])):
         if cw[hinge_at(W.H_FLOW, j)] != 0.0:
             active[W.FLOW_SLOTS + j] = 1.0
+        forward = cw[group_at(W.G_DIR, int(cw[hinge_at(W.H_GROUP, j)]))] > 0.0
+        if cw[hinge_at(W.H_MESHED, j)] == 0.0 and forward:
+            active[W.GAP_SLOTS + j] = 1.0
     for g in range(m):
         direction = cw[group_at(W.G_DIR, g)]
         if cw[group_at(W.G_LOCKED, g)] == 0.0:

@@ -84,8 +84,12 @@ NMAX = 8  # the most hinges (and groups, and cables) a wing case holds
     H_FQ,  # FECD_T through an ideal gear, FT N [N*m] (FECD_T without a lossy gear)
     H_FLOW,  # its lossy gear's power flow: +1 forward, -1 back-driven, 0 ideal or at rest
     H_HINT,  # the flow a power_flow event switched it to (0: decide from the state)
+    H_GAP,  # its gear's lost motion at the hinge [rad] (0: none)
+    H_MESHED,  # 1 once its lost motion closed (the damper side engaged); 1 without one
+    H_FE,  # its ECD's kinetic friction FECD_T [N*m] (part of H_FRICTION once meshed)
+    H_FEB,  # its ECD's breakaway f_D FECD_T [N*m] (part of H_BREAKAWAY once meshed)
     HFIELDS,
-) = range(45)
+) = range(49)
 HINGES = HEADER
 
 # --- per group ------------------------------------------------------------------------------
@@ -152,9 +156,10 @@ def table_torque(cw_points: int, j: int, p: int) -> int:
 # Slots of a segment: per group its motion (a sliding one's speed reaching zero, a stuck
 # one's holding torque reaching its breakaway), per group its geometric event (its latch
 # ahead, or the stowed stop behind), per elastic cable its two slack points, per hinge
-# its lossy gear's power flow switching.
+# its lossy gear's power flow switching, per hinge its lost motion closing.
 FLOW_SLOTS = 4 * NMAX
-SLOTS = 5 * NMAX
+GAP_SLOTS = 5 * NMAX
+SLOTS = 6 * NMAX
 (
     EV_RELEASE,
     EV_BREAKAWAY,
@@ -171,7 +176,8 @@ SLOTS = 5 * NMAX
     EV_STOP_TIME,
     EV_EVENT_LIMIT,
     EV_POWER_FLOW,
-) = range(15)
+    EV_GEAR_ENGAGE,
+) = range(16)
 # The names of :data:`ecdsim.wing.result.EVENT_KINDS`, in code order.
 EVENT_NAMES = (
     "release",
@@ -189,6 +195,7 @@ EVENT_NAMES = (
     "stop_time",
     "event_limit",
     "power_flow",
+    "gear_engage",
 )
 (ST_RUNNING, ST_LATCHED, ST_STUCK, ST_CREEP, ST_STOP_TIME, ST_EVENT_LIMIT) = range(6)
 STATUS_NAMES = ("running", "latched", "stuck", "creep", "stop_time", "event_limit")

@@ -21,6 +21,8 @@ first event, located on the step's dense output by the kernel's locator
 * a compliant latch engages (its spring and damper act from then on, both ways);
 * the stowed stop: the returning group stops (a plastic impact);
 * an elastic cable's strand slackens or tightens again;
+* a hinge's lost motion closes while it moves forward: its damper side (rotor, damping,
+  ECD friction), idle in the gap, engages in a plastic impact with the chain;
 * a lossy gear's mesh torque passes zero (a power_flow event): its flow switches
   (forward: the load drives the damper, the damper side's torque and inertia seen times
   1/eta_f; back-driven: times eta_b), each lossy gear's flow decided at every segment's
@@ -434,6 +436,69 @@ def advance(
         h = h_next
 
 
+def _join_friction(cw: FloatArray, j: int) -> None:
+    """Hinge j's damper side engaged: its ECD's friction and breakaway join the hinge's
+    and its group's (and its Stribeck excess, where it has a Stribeck speed)."""
+    g = int(cw[hinge_at(W.H_GROUP, j)])
+    factor = cw[hinge_at(W.H_FACTOR, j)]
+    fe = cw[hinge_at(W.H_FE, j)]
+    feb = cw[hinge_at(W.H_FEB, j)]
+    cw[hinge_at(W.H_FRICTION, j)] += fe
+    cw[hinge_at(W.H_BREAKAWAY, j)] += feb
+    cw[group_at(W.G_FRICTION, g)] += factor * fe
+    cw[group_at(W.G_BREAKAWAY, g)] += factor * feb
+    if math.isfinite(cw[hinge_at(W.H_WST, j)]):
+        excess = cw[hinge_at(W.H_BREAKAWAY, j)] - cw[hinge_at(W.H_FRICTION, j)]
+        cw[hinge_at(W.H_EXCESS, j)] = max(excess, 0.0)
+
+
+def engage_gear(
+    cw: FloatArray, y: FloatArray, t: float, j: int, events: FloatArray, losses: FloatArray, m: int
+) -> None:
+    """Hinge j's lost motion closes: its damper side, idle in the gap, engages in a
+    plastic impact with the chain, ``M_after psi'+ = M_before psi'-`` over the unlocked
+    groups (the single hinge's engagement, its rotor seen through the gear driven
+    forward: ``J_D / eta_f``); the kinetic energy lost goes to ``losses[n + j]``."""
+    n = int(cw[W.W_N])
+    g = int(cw[hinge_at(W.H_GROUP, j)])
+    factor = cw[hinge_at(W.H_FACTOR, j)]
+    y[g] = cw[hinge_at(W.H_GAP, j)] / factor
+    before = kinetic(cw, y, m)
+    mass, _ = group_system(cw, y, m, False)
+    momentum = np.zeros(m)
+    for r in range(m):
+        for c in range(m):
+            momentum[r] += mass[r, c] * y[m + c]
+    cw[hinge_at(W.H_MESHED, j)] = 1.0
+    _join_friction(cw, j)
+    after, _ = group_system(cw, y, m, False)
+    inertia = cw[hinge_at(W.H_JD, j)] * (1.0 / cw[hinge_at(W.H_ETAF, j)] - 1.0)
+    after[g, g] += factor * factor * inertia
+    index = _indices(1.0 - _locked(cw, m))
+    count = index.shape[0]
+    system = np.empty((count, count + 1))
+    for r in range(count):
+        for c in range(count):
+            system[r, c] = after[index[r], index[c]]
+        system[r, count] = momentum[index[r]]
+    speeds = np.empty(count)
+    solve_small(system, speeds, count)
+    for r in range(count):
+        k = index[r]
+        y[m + k] = speeds[r]
+        cw[group_at(W.G_DIR, k)] = 0.0 if speeds[r] == 0.0 else _sign(speeds[r])
+    losses[n + j] += before - kinetic(cw, y, m)
+    log_event(cw, events, t, W.EV_GEAR_ENGAGE, j)
+
+
+def _locked(cw: FloatArray, m: int) -> FloatArray:
+    """1.0 for each latched group, 0.0 for the rest."""
+    flags = np.zeros(m)
+    for k in range(m):
+        flags[k] = cw[group_at(W.G_LOCKED, k)]
+    return flags
+
+
 def _all_held(cw: FloatArray, m: int) -> bool:
     """Every group at rest (stuck or latched)."""
     moving = 0
@@ -498,6 +563,10 @@ def apply_event(
             cw[group_at(W.G_ARRIVED, g)] = 1.0
             _latch_rows(cw, latches, t, y, g, kinetic(cw, y, m), math.nan, m)
             _log_group(cw, events, t, W.EV_ENGAGE, g)
+        return
+    if slot >= W.GAP_SLOTS:  # a hinge's lost motion closes (module notes)
+        engage_gear(cw, y, t, slot - W.GAP_SLOTS, events, losses, m)
+        resolve_rest(cw, y, t, events, m)
         return
     if slot >= W.FLOW_SLOTS:  # a lossy gear's power flow switches (module notes)
         j = slot - W.FLOW_SLOTS
