@@ -65,6 +65,8 @@ MAPS: dict[str, frozenset[str]] = {
             "friction_dissipation",
             "latch_dissipation",
             "impact_loss",
+            "gear_loss",
+            "engagement_loss",
         }
     ),
 }
