@@ -299,15 +299,18 @@ def decide_flows(cw: FloatArray, y: FloatArray, m: int) -> None:
     n = int(cw[W.W_N])
     acc = np.empty(m)
     holding = np.empty(m)
+    flowing = 0
     for j in range(n):
         g = int(cw[hinge_at(W.H_GROUP, j)])
         meshed = cw[hinge_at(W.H_MESHED, j)] != 0.0
         if not lossy_gear(cw, j) or not meshed or cw[group_at(W.G_DIR, g)] == 0.0:
             cw[hinge_at(W.H_FLOW, j)] = 0.0
             cw[hinge_at(W.H_HINT, j)] = 0.0
-        elif cw[hinge_at(W.H_FLOW, j)] == 0.0:
+            continue
+        flowing += 1
+        if cw[hinge_at(W.H_FLOW, j)] == 0.0:
             cw[hinge_at(W.H_FLOW, j)] = 1.0  # from rest the load drives the damper
-    for _ in range(n + 1):
+    for _ in range(n + 1 if flowing > 0 else 0):
         accelerations(cw, y, acc, holding, m)
         changed = False
         for j in range(n):
