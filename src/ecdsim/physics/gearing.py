@@ -162,8 +162,9 @@ def power_flow_mode(indicator: Real, hint: int) -> int:
 
     Parameters
     ----------
-    indicator : a quantity with the sign of the mesh torque along the motion
-    hint : the flow a power_flow event has just switched to, or 0
+    indicator : the sign of the mesh torque along the motion [N*m, or kg*m^2*N*m]: the
+        mesh torque itself, or :func:`power_flow_indicator`
+    hint : the flow a power_flow event has just switched to, +1 or -1, or 0 [-]
     """
     if hint != 0:
         return hint
@@ -173,10 +174,12 @@ def power_flow_mode(indicator: Real, hint: int) -> int:
 def mesh_factor(flow: int, forward_efficiency: Real, backward_efficiency: Real) -> Real:
     """The factor m on the damper side's torque and inertia seen at the input for a
     power flow (:func:`input_torque`): ``1 / eta_f`` forward, ``eta_b`` back-driven.
+    Source: the MSL LossyGear mesh law of the module notes on the paper's reflection
+    through N (Eq. 3-4).
 
     Parameters
     ----------
-    flow : +1 forward, -1 back-driven
+    flow : +1 forward, -1 back-driven [-]
     forward_efficiency : eta_f in (0, 1] [-]
     backward_efficiency : eta_b in (0, 1] [-]
     """
