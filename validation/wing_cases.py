@@ -795,68 +795,44 @@ def _gear_checks(
     at = f"at {temperature:+g} degC"
     for j, hinge in enumerate(item.build(temperature).hinges):
         if hinge.lost_motion > 0.0:
-            checks.extend(_engagement_checks(ref, got, j, at))
-        if not hinge.lossy:
-            continue
-        theirs = [t for t, kind, h in ref.events if kind == "power_flow" and h == j]
-        mine = [e.time for e in got.events if e.kind == "power_flow" and e.hinge == j]
-        checks.append(
-            Check(
-                f"hinge {j + 1} power flow switches {at} (count difference)",
-                "-",
-                0.0,
-                f"reference {len(theirs)}",
-                float(abs(len(theirs) - len(mine))),
-                0.0,
-                "a switch happens or not",
-            )
-        )
-        for k, (time, other) in enumerate(zip(theirs, mine, strict=False)):
-            checks.append(
-                Check(
-                    f"hinge {j + 1} power flow switch {k + 1} time {at}",
-                    "s",
-                    time,
-                    "scipy Radau rtol 1e-11",
-                    other,
-                    INTEGRATED_RTOL * abs(time),
-                    INTEGRATED_REASON,
-                )
-            )
-        loss = float(ref.gear_loss[j])
-        checks.append(
-            Check(
-                f"hinge {j + 1} gear loss {at}",
-                "J",
-                loss,
-                "scipy Radau rtol 1e-11",
-                float(got.energy.mesh_loss[j]),
-                INTEGRATED_RTOL * abs(loss),
-                INTEGRATED_REASON,
-            )
-        )
+            losses = (float(ref.engagement_loss[j]), float(got.energy.engagement_losses[j]))
+            checks.extend(_event_checks(ref, got, j, at, "gear_engage", losses))
+        if hinge.lossy:
+            losses = (float(ref.gear_loss[j]), float(got.energy.mesh_loss[j]))
+            checks.extend(_event_checks(ref, got, j, at, "power_flow", losses))
     return checks
 
 
-def _engagement_checks(ref: Solution, got: WingCase, j: int, at: str) -> list[Check]:
-    """Hinge j's lost motion closing: how often (exactly), when, and its loss."""
-    theirs = [t for t, kind, h in ref.events if kind == "gear_engage" and h == j]
-    mine = [e.time for e in got.events if e.kind == "gear_engage" and e.hinge == j]
+# What _event_checks calls an event of the kind, several, and the energy lost with them.
+_EVENT_WORDS = {
+    "power_flow": ("power flow switch", "power flow switches", "gear loss"),
+    "gear_engage": ("gear engagement", "gear engagements", "engagement loss"),
+}
+
+
+def _event_checks(
+    ref: Solution, got: WingCase, j: int, at: str, kind: str, losses: tuple[float, float]
+) -> list[Check]:
+    """Hinge j's events of ``kind``: how many (exactly), each one's time, and the energy
+    lost with them (``losses``: the reference's, ecdsim's)."""
+    event, events, lost = _EVENT_WORDS[kind]
+    theirs = [t for t, k, h in ref.events if k == kind and h == j]
+    mine = [e.time for e in got.events if e.kind == kind and e.hinge == j]
     checks = [
         Check(
-            f"hinge {j + 1} gear engagements {at} (count difference)",
+            f"hinge {j + 1} {events} {at} (count difference)",
             "-",
             0.0,
             f"reference {len(theirs)}",
             float(abs(len(theirs) - len(mine))),
             0.0,
-            "an engagement happens or not",
+            "an event happens or not",
         )
     ]
-    for time, other in zip(theirs, mine, strict=False):
+    for k, (time, other) in enumerate(zip(theirs, mine, strict=False)):
         checks.append(
             Check(
-                f"hinge {j + 1} gear engagement time {at}",
+                f"hinge {j + 1} {event} {k + 1} time {at}",
                 "s",
                 time,
                 "scipy Radau rtol 1e-11",
@@ -865,15 +841,14 @@ def _engagement_checks(ref: Solution, got: WingCase, j: int, at: str) -> list[Ch
                 INTEGRATED_REASON,
             )
         )
-    loss = float(ref.engagement_loss[j])
     checks.append(
         Check(
-            f"hinge {j + 1} engagement loss {at}",
+            f"hinge {j + 1} {lost} {at}",
             "J",
-            loss,
+            losses[0],
             "scipy Radau rtol 1e-11",
-            float(got.energy.engagement_losses[j]),
-            INTEGRATED_RTOL * abs(loss),
+            losses[1],
+            INTEGRATED_RTOL * abs(losses[0]),
             INTEGRATED_REASON,
         )
     )
