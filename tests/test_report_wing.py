@@ -163,3 +163,26 @@ def test_compliant_latch_peak_torque_in_us_units(tmp_path: Path) -> None:
             expected = latch["peak_torque_Nm"] * LBF_IN_PER_NM
             assert float(cell) == pytest.approx(expected, rel=CELL_REL)
     assert any(latch["peak_torque_Nm"] for latch in document["cases"][0]["latches"])
+
+
+LOSSY = ROOT / "validation" / "configs" / "wing_two_panel_lossy_gear.toml"
+
+
+def test_a_lossy_gear_and_lost_motion_have_their_energy_columns(tmp_path: Path) -> None:
+    # The lossy-gear case with lost motion added: the account's gear loss and lost-motion
+    # catch are columns of their own, each the JSON's per-hinge lines summed; a wing
+    # without either shows neither (the stick-slip case above).
+    text = LOSSY.read_text(encoding="utf-8")
+    anchor = "efficiency = { forward = 0.7, backward = 0.6 }"
+    assert anchor in text
+    config = tmp_path / "lossy_slack.toml"
+    config.write_text(text.replace(anchor, f'{anchor}\nlost_motion = "3 deg"'), "utf-8")
+    page = _report(tmp_path, config, "-T", "25")
+    document = _deploy(config, "-T", "25")
+    (case,) = document["cases"]
+    for key in ("gear_loss", "engagement_loss"):
+        total = sum(case["energy_J"][key].values())
+        assert total > 0.0  # both effects act in this case
+        assert float(page.cells[(0, None, key)]) == pytest.approx(total, rel=CELL_REL)
+    plain = _report(tmp_path / "plain", STICK_SLIP)
+    assert not any(key in ("gear_loss", "engagement_loss") for (_, _, key) in plain.cells)

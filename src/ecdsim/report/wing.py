@@ -30,6 +30,7 @@ from ecdsim.units_display import Shown
 if TYPE_CHECKING:
     from ecdsim.config.wing_schema import WingConfig
     from ecdsim.units_display import UnitSystem
+    from ecdsim.wing.model import Hinge, Wing
     from ecdsim.wing.result import LatchEvent, WingCase, WingResult
 
 # The energy account's columns: (key, header), each summed over the hinges [J].
@@ -40,12 +41,34 @@ ENERGY_COLUMNS = (
     ("friction_dissipation", "friction"),
     ("latch_dissipation", "latch damping"),
     ("impact_loss", "impact loss"),
+    ("gear_loss", "gear loss"),
+    ("engagement_loss", "lost-motion catch"),
     ("final_kinetic", "kinetic at the end"),
     ("elastic", "elastic at the end"),
 )
 
 
-def _energy_cells(case: WingCase, u: Shown) -> list[dict[str, str]]:
+# Columns shown only where some hinge's ECD has the effect: a lossy gear, lost motion.
+def _has_key(hinge: Hinge, key: str) -> bool:
+    ecd = hinge.ecd
+    if ecd is None:
+        return False
+    if key == "gear_loss":
+        return ecd.ecd.gearbox.efficiency is not None
+    return ecd.lost_motion > 0.0
+
+
+def _energy_columns(wing: Wing) -> list[tuple[str, str]]:
+    """The account's columns for this wing: the optional losses only where present."""
+    optional = ("gear_loss", "engagement_loss")
+    return [
+        (key, label)
+        for key, label in ENERGY_COLUMNS
+        if key not in optional or any(_has_key(h, key) for h in wing.hinges)
+    ]
+
+
+def _energy_cells(case: WingCase, u: Shown, columns: list[tuple[str, str]]) -> list[dict[str, str]]:
     energy = case.energy
     values = {
         "spring_work": float(energy.spring_work.sum()),
@@ -54,10 +77,12 @@ def _energy_cells(case: WingCase, u: Shown) -> list[dict[str, str]]:
         "friction_dissipation": float(energy.friction_dissipation.sum()),
         "latch_dissipation": float(energy.latch_dissipation.sum()),
         "impact_loss": float(energy.impact_loss.sum()),
+        "gear_loss": float(energy.mesh_loss.sum()),
+        "engagement_loss": float(energy.engagement_losses.sum()),
         "final_kinetic": energy.final_kinetic,
         "elastic": energy.cable_elastic + energy.latch_elastic,
     }
-    return [{"key": key, "text": u.num(values[key], "energy")} for key, _ in ENERGY_COLUMNS]
+    return [{"key": key, "text": u.num(values[key], "energy")} for key, _ in columns]
 
 
 def _hinge_rows(result: WingResult, u: Shown) -> list[dict[str, Any]]:
@@ -166,6 +191,7 @@ def build_wing_context(
             }
         )
     n = len(result.hinges)
+    columns = _energy_columns(config.wing)
     summary = (
         f"{n} hinges ({', '.join(result.hinges)}), solved by ecdsim's wing solver (the dynamic "
         f"core, validated against an independent Lagrangian; docs/wing.md) at rtol {config.rtol:g}."
@@ -184,11 +210,11 @@ def build_wing_context(
             {
                 "case": i,
                 "temperature": u.num(c.temperature, "temperature"),
-                "cells": _energy_cells(c, u),
+                "cells": _energy_cells(c, u, columns),
             }
             for i, c in enumerate(result.cases)
         ],
-        "energy_headers": [label for _, label in ENERGY_COLUMNS],
+        "energy_headers": [label for _, label in columns],
         "figures": _figures(result, config, u),
         "config_text": config_text,
         "t_unit": u.unit("temperature"),
