@@ -52,6 +52,8 @@ INLINE = frozenset(
         "jacobian",
         "hinge_forces",
         "stage_solve",
+        "attempt",  # one call site each (advance_integrated): inlined, a step passes
+        "_earliest",  # its arrays in registers, not as copies on the stack
         "factorize",
         "error_norm",
         "step_factor",
