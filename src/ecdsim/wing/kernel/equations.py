@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ecdsim._types import FloatArray
 from ecdsim.dynamics.kernel.friction import solve_small
@@ -339,6 +340,22 @@ def stribeck_part(cw: FloatArray, j: int, rate: float) -> float:
     return float(stribeck_curve(rate, excess, cw[hinge_at(W.H_WST, j)]))
 
 
+def solve_on(matrix: FloatArray, rhs: FloatArray, index: NDArray[np.int64]) -> FloatArray:
+    """``x`` of ``matrix[index][:, index] x = rhs[index]``: a system restricted to some
+    groups (the moving ones, the held ones, the unlocked ones), solved by the kernel's
+    :func:`~ecdsim.dynamics.kernel.friction.solve_small`; ``x[r]`` belongs to group
+    ``index[r]``."""
+    count = index.shape[0]
+    system = np.empty((count, count + 1))
+    for r in range(count):
+        for c in range(count):
+            system[r, c] = matrix[index[r], index[c]]
+        system[r, count] = rhs[index[r]]
+    solution = np.empty(count)
+    solve_small(system, solution, count)
+    return solution
+
+
 def accelerations(
     cw: FloatArray, y: FloatArray, acc: FloatArray, holding: FloatArray, m: int
 ) -> None:
@@ -357,13 +374,7 @@ def accelerations(
             index[i] = g
             i += 1
     if free > 0:
-        system = np.empty((free, free + 1))
-        for r in range(free):
-            for c in range(free):
-                system[r, c] = mass[index[r], index[c]]
-            system[r, free] = rhs[index[r]]
-        solution = np.empty(free)
-        solve_small(system, solution, free)
+        solution = solve_on(mass, rhs, index)
         for r in range(free):
             acc[index[r]] = solution[r]
     scale = 0.0

@@ -59,6 +59,7 @@ from ecdsim.wing.kernel.equations import (
     holding_margin,
     kinetic,
     latch_torque,
+    solve_on,
 )
 from ecdsim.wing.kernel.layout import cable as cable_at
 from ecdsim.wing.kernel.layout import group as group_at
@@ -170,14 +171,10 @@ def _impulses(
     other held groups' to 0: ``(E^T M^-1 E) lambda = v_target - E^T v``."""
     index = _indices(held)
     count = index.shape[0]
-    system = np.empty((count, count + 1))
-    for r in range(count):
-        for c in range(count):
-            system[r, c] = inverse[index[r], index[c]]
-        wanted = target if index[r] == g else 0.0
-        system[r, count] = wanted - before[index[r]]
-    solution = np.empty(count)
-    solve_small(system, solution, count)
+    change = np.empty(held.shape[0])
+    for k in range(held.shape[0]):
+        change[k] = (target if k == g else 0.0) - before[k]
+    solution = solve_on(inverse, change, index)
     impulse = np.zeros(held.shape[0])
     for r in range(count):
         impulse[index[r]] = solution[r]
@@ -307,13 +304,9 @@ def _free_inverse(cw: FloatArray, y: FloatArray, g: int, m: int) -> float:
         if cw[group_at(W.G_LOCKED, k)] == 0.0 or k == g:
             index[i] = k
             i += 1
-    system = np.empty((count, count + 1))
-    solution = np.empty(count)
-    for r in range(count):
-        for c in range(count):
-            system[r, c] = mass[index[r], index[c]]
-        system[r, count] = 1.0 if index[r] == g else 0.0
-    solve_small(system, solution, count)
+    unit = np.zeros(m)
+    unit[g] = 1.0
+    solution = solve_on(mass, unit, index)
     found = math.inf
     for r in range(count):
         if index[r] == g:
@@ -475,15 +468,8 @@ def engage_gear(
     inertia = cw[hinge_at(W.H_JD, j)] * (1.0 / cw[hinge_at(W.H_ETAF, j)] - 1.0)
     after[g, g] += factor * factor * inertia
     index = _indices(1.0 - _locked(cw, m))
-    count = index.shape[0]
-    system = np.empty((count, count + 1))
-    for r in range(count):
-        for c in range(count):
-            system[r, c] = after[index[r], index[c]]
-        system[r, count] = momentum[index[r]]
-    speeds = np.empty(count)
-    solve_small(system, speeds, count)
-    for r in range(count):
+    speeds = solve_on(after, momentum, index)
+    for r in range(index.shape[0]):
         k = index[r]
         y[m + k] = speeds[r]
         cw[group_at(W.G_DIR, k)] = 0.0 if speeds[r] == 0.0 else _sign(speeds[r])
