@@ -23,6 +23,7 @@ from ecdsim.dynamics.params import Rolloff, Thermal
 from ecdsim.model import ZERO_LAW, GearEfficiency, LinearSpring, Load, ResistiveTable
 from ecdsim.wing import Hinge, Panel, Wing
 from ecdsim.wing.model import HingeEcd
+from ecdsim.wing.result import WingResult
 from ecdsim.wing.solver import WingUnsupported, deploy_wing
 from validation.wing_cases import case, compare, solve
 from validation.wing_reference import Reference
@@ -186,6 +187,16 @@ def test_api_returns_the_wing_result() -> None:
     assert all(c.status == "latched" for c in result.cases)
 
 
+def _with_single_hinge(wing: Wing, temperatures: list[float]) -> tuple[WingResult, DynamicSolution]:
+    """A one-panel wing solved by the wing's solver (plain Python, the compiled kernel's
+    source) and as today's hinge (``Wing.as_single_hinge``, the dynamic method)."""
+    mine = deploy_wing(wing, temperatures, backend="python")
+    system, dynamics = wing.as_single_hinge()
+    solution = predict(system, temperatures, ["dynamic"], dynamics=dynamics).solutions["dynamic"]
+    assert isinstance(solution, DynamicSolution)
+    return mine, solution
+
+
 @pytest.mark.parametrize(
     ("rolloff", "thermal"),
     [
@@ -225,11 +236,7 @@ def test_one_panel_with_rolloff_and_heating_is_todays_hinge(
     hinge = replace(wing.hinges[0], ecd=replace(ecd, rolloff=rolloff, thermal=thermal))
     wing = replace(wing, hinges=(hinge,))
     temperatures = [-40.0, 100.0]
-    mine = deploy_wing(wing, temperatures, backend="python")
-    system, dynamics = wing.as_single_hinge()
-    single = predict(system, temperatures, ["dynamic"], dynamics=dynamics)
-    solution = single.solutions["dynamic"]
-    assert isinstance(solution, DynamicSolution)
+    mine, solution = _with_single_hinge(wing, temperatures)
     plain = load_wing_config(case("wing_one_panel").config).wing
     base = deploy_wing(plain, temperatures, backend="python")
     for i, wing_case in enumerate(mine.cases):
@@ -269,10 +276,7 @@ def test_one_panel_with_stribeck_friction_is_todays_hinge() -> None:
     stribeck = replace(ecd, stribeck_speed=0.03, static_friction_factor=1.5)
     wing = replace(wing, hinges=(replace(wing.hinges[0], ecd=stribeck),))
     temperatures = [25.0, 100.0]
-    mine = deploy_wing(wing, temperatures, backend="python")
-    system, dynamics = wing.as_single_hinge()
-    solution = predict(system, temperatures, ["dynamic"], dynamics=dynamics).solutions["dynamic"]
-    assert isinstance(solution, DynamicSolution)
+    mine, solution = _with_single_hinge(wing, temperatures)
     plain = deploy_wing(load_wing_config(case("wing_one_panel").config).wing, temperatures)
     for i, wing_case in enumerate(mine.cases):
         latch = wing_case.latches[0]
@@ -338,10 +342,7 @@ def test_one_panel_with_a_lossy_gear_is_todays_hinge(back_driven: bool) -> None:
     plain = load_wing_config(case("wing_one_panel").config).wing
     wing = _lossy(plain, back_driven)
     temperatures = [-40.0, 100.0]
-    mine = deploy_wing(wing, temperatures, backend="python")
-    system, dynamics = wing.as_single_hinge()
-    solution = predict(system, temperatures, ["dynamic"], dynamics=dynamics).solutions["dynamic"]
-    assert isinstance(solution, DynamicSolution)
+    mine, solution = _with_single_hinge(wing, temperatures)
     single = solution.result
     names = single.events.names()
     for i, run in enumerate(mine.cases):
@@ -400,10 +401,7 @@ def test_one_panel_with_a_resistive_table_is_todays_hinge() -> None:
     load = replace(hinge.load, resistance=ResistiveTable((0.0, hinge.travel), (0.0, 1.0)))
     wing = replace(wing, hinges=(replace(hinge, load=load),))
     temperatures = [-40.0, 100.0]
-    mine = deploy_wing(wing, temperatures, backend="python")
-    system, dynamics = wing.as_single_hinge()
-    solution = predict(system, temperatures, ["dynamic"], dynamics=dynamics).solutions["dynamic"]
-    assert isinstance(solution, DynamicSolution)
+    mine, solution = _with_single_hinge(wing, temperatures)
     for i, run in enumerate(mine.cases):
         assert run.status == "stuck"
         final = float(solution.result.final_angle[i])
@@ -425,10 +423,7 @@ def test_one_panel_with_lost_motion_is_todays_hinge(lossy: bool) -> None:
     assert ecd is not None
     wing = replace(wing, hinges=(replace(wing.hinges[0], ecd=_lost_motion(ecd, 0.05)),))
     temperatures = [-40.0, 100.0]
-    mine = deploy_wing(wing, temperatures, backend="python")
-    system, dynamics = wing.as_single_hinge()
-    solution = predict(system, temperatures, ["dynamic"], dynamics=dynamics).solutions["dynamic"]
-    assert isinstance(solution, DynamicSolution)
+    mine, solution = _with_single_hinge(wing, temperatures)
     single = solution.result
     for i, run in enumerate(mine.cases):
         engaged = [e.time for e in run.events if e.kind == "gear_engage"]
